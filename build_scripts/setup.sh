@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Installs what a fresh Debian 12 machine lacks to build and test quatcurve. Idempotent and quiet:
+# a second run changes nothing and takes a few seconds.
+#   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest for its Python), Xvfb
+#   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11); `import quatcurve` works in it
+#      once the module is built (a .pth file points at build/python)
+#   3. one venv per pinned bpy version in $VENV_CACHE
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+APT_PACKAGES="build-essential cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
+python3-pytest blender xvfb xauth"
+
+missing=()
+for pkg in $APT_PACKAGES; do
+  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  log "installing Debian packages: ${missing[*]}"
+  as_root apt-get update -qq
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+# pip_env VENV REQUIREMENTS… : create VENV if needed and install the pinned requirements, skipping
+# pip entirely when the stamp shows the same set was already installed.
+pip_env() {
+  local venv="$1"; shift
+  local stamp="$venv/.quatcurve-requirements" want="$*"
+  if [ -x "$venv/bin/python" ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then return; fi
+  log "preparing $venv ($want)"
+  [ -x "$venv/bin/python" ] || "$(base_python)" -m venv "$venv"
+  "$venv/bin/python" -m pip install -q --disable-pip-version-check "$@" 2>&1 \
+    | grep -v "^WARNING: Location" >&2 || true
+  # pip's exit status is hidden by the filter above: verify that every pin is really installed.
+  local req
+  for req in "$@"; do
+    [ "${req#-}" != "$req" ] && continue
+    "$venv/bin/python" -m pip show -q "${req%%==*}" >/dev/null 2>&1 || die "pip could not install $req into $venv"
+  done
+  echo "$want" > "$stamp"
+}
+
+mapfile -t dev_reqs < <(grep -v '^\s*#' "$ROOT/build_scripts/requirements-dev.txt" | grep -v '^\s*$')
+pip_env "$VENV" "${dev_reqs[@]}"
+site="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+echo "$BUILD_DIR/python" > "$site/quatcurve-build.pth"
+
+for v in $BPY_VERSIONS; do
+  pip_env "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3"
+done

@@ -1,0 +1,12 @@
+// One function per binding file; module.cpp calls them in order. Bindings only bind: they convert
+// arrays and call the native library, which holds every formula and every check.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace quatcurve::bindings {
+void bind_core(pybind11::module_& m);     // bind_core.cpp: quaternion algebra, matrices, Euler
+void bind_curve(pybind11::module_& m);    // bind_curve.cpp: the orientation curve engine
+void bind_reduce(pybind11::module_& m);   // bind_reduce.cpp: key reduction
+void bind_metrics(pybind11::module_& m);  // bind_metrics.cpp: comparison metrics
+}  // namespace quatcurve::bindings

@@ -1,0 +1,31 @@
+"""The add-on registers and unregisters cleanly and imports the native module inside Blender."""
+
+import sys
+
+import bpy
+
+import quatcurve_blender
+from quatcurve_blender import native
+
+
+def test_native_module_imports_inside_blender():
+    print("Blender %s, Python %d.%d" % ((bpy.app.version_string,) + sys.version_info[:2]))
+    assert native.available(), native.UNAVAILABLE_REASON
+    assert native.module.__version__
+
+
+def test_register_unregister_twice():
+    for _ in range(2):
+        quatcurve_blender.register()
+        assert hasattr(bpy.types, "QUATCURVE_PT_view3d")
+        quatcurve_blender.unregister()
+        assert not hasattr(bpy.types, "QUATCURVE_PT_view3d")
+
+
+def test_missing_module_reason_names_the_python(tmp_path):
+    running = "Python %d.%d" % sys.version_info[:2]
+    reason = native._diagnose(ImportError("No module named 'quatcurve'"), str(tmp_path))
+    assert "missing" in reason and running in reason
+    (tmp_path / "quatcurve.cpython-313-x86_64-linux-gnu.so").write_bytes(b"")
+    reason = native._diagnose(ImportError("No module named 'quatcurve'"), str(tmp_path))
+    assert "built for another Python" in reason and running in reason
