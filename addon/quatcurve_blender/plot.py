@@ -1,0 +1,419 @@
+"""Comparison plots drawn with numpy alone: Blender's bundled Python has no matplotlib.
+
+`render_comparison` draws two panels — angular speed over frames per source, and the deviation from
+SLERP over frames per source — with axes, tick labels, titles, axis labels and a legend with colour
+swatches, into an RGBA pixel buffer of the documented fixed size WIDTH × HEIGHT (1200 × 800,
+rows top to bottom). `encode_png` / `write_png` turn it into a PNG with zlib and struct only, so the
+same code runs inside every Blender and outside; `decode_png` reads such files back (tests, tools).
+
+Text uses the 7×13 "fixed" bitmap font of the X Window System (misc-fixed, public domain: "Public
+domain font. Share and enjoy."), embedded below for printable ASCII plus the degree sign, drawn at
+scale 1 for ticks and legend and 2 for the title. Lines are anti-aliased by coverage: the polyline is
+sampled every quarter pixel and each pixel takes the coverage of the nearest sample's disc.
+"""
+
+import struct
+import zlib
+
+import numpy as np
+
+WIDTH, HEIGHT = 1200, 800
+
+# ---- colours ----------------------------------------------------------------------------------------
+BACKGROUND = (255, 255, 255)
+INK = (33, 33, 33)
+GRID = (225, 225, 225)
+KEY_LINE = (170, 170, 170)
+# Distinct, print-safe colours (tab20's strong half first, then its light half), one per source in
+# order; pure grey is left out so lines never look like the grid. Sources beyond 20 reuse them.
+PALETTE = (
+    (31, 119, 180), (214, 39, 40), (44, 160, 44), (255, 127, 14), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (23, 190, 207), (188, 189, 34), (0, 0, 0),
+    (174, 199, 232), (255, 152, 150), (152, 223, 138), (255, 187, 120), (197, 176, 213),
+    (196, 156, 148), (247, 182, 210), (158, 218, 229), (219, 219, 141), (90, 90, 160),
+)
+
+# ---- font ---------------------------------------------------------------------------------------------
+GLYPH_W, GLYPH_H = 7, 13
+# 13 row bytes per glyph for ASCII 32..126 (bit 6 = leftmost column), then the degree sign.
+_FONT_HEX = (
+    "00000000000000000000000000000008080808080808000800000000141414000000000000000000000014143e143e1414000000"
+    "000000081e281c0a3c080000000000225224080810244a44000000000000304848304a443a000000000808080000000000000000"
+    "00000408081010100808040000000010080804040408081000000000000024187e1824000000000000000008083e080800000000"
+    "0000000000000000001c1820000000000000003e000000000000000000000000000000081c080000000202040408101020200000"
+    "00001824424242424224180000000008182808080808083e000000003c424202041820407e000000007e0204081c0202423c0000"
+    "0000040c142444447e0404000000007e40405c620202423c000000001c2040405c6242423c000000007e02040808101020200000"
+    "00003c4242423c4242423c000000003c4242463a02020438000000000000081c080000081c080000000000081c0800001c182000"
+    "0000020408102010080402000000000000007e00007e000000000000201008040204081020000000003c42420204080800080000"
+    "00003c42424e52564a403c0000000018244242427e424242000000007c2222223c2222227c000000003c424040404040423c0000"
+    "00007c222222222222227c000000007e404040784040407e000000007e4040407840404040000000003c424040404e42463a0000"
+    "0000424242427e42424242000000003e080808080808083e000000000e0404040404044438000000004244485060504844420000"
+    "000040404040404040407e000000004266665a5a4242424200000000424262524a46424242000000003c424242424242423c0000"
+    "00007c4242427c40404040000000003c4242424242524a3c020000007c4242427c50484442000000003c4240403c0202423c0000"
+    "00003e08080808080808080000000042424242424242423c0000000042424224242418181800000000424242425a5a6666420000"
+    "000042422424182424424200000000222214140808080808000000007e020408181020407e0000003c2020202020202020203c00"
+    "00002020101008040402020000003c0404040404040404043c000000081422000000000000000000000000000000000000007e00"
+    "0010080000000000000000000000000000003c023e42463a000000004040405c624242625c000000000000003c424040423c0000"
+    "00000202023a464242463a000000000000003c427e40423c000000001c2220207820202020000000000000003a444438403c423c"
+    "00004040405c62424242420000000000080018080808083e00000000000200060202020222221c00004040404448704844420000"
+    "000018080808080808083e00000000000000342a2a2a2a22000000000000005c6242424242000000000000003c424242423c0000"
+    "00000000005c6242625c40404000000000003a4642463a02020200000000005c2220202020000000000000003c42300c423c0000"
+    "000000202078202020221c0000000000000042424242463a000000000000002222221414080000000000000022222a2a2a140000"
+    "000000000042241818244200000000000000424242463a02423c00000000007e040810207e0000000e1010100830081010100e00"
+    "00000808080808080808080000003804040408060804040438000000122a240000000000000000"
+    "00001824241800000000000000"
+)
+_FONT = np.unpackbits(np.frombuffer(bytes.fromhex(_FONT_HEX), np.uint8).reshape(-1, GLYPH_H, 1),
+                      axis=2)[:, :, 1:].astype(bool)  # (96, 13, 7)
+_DEGREE_INDEX = 95
+
+
+def _glyph(ch):
+    code = ord(ch)
+    if 32 <= code <= 126:
+        return _FONT[code - 32]
+    if ch == "\u00b0":
+        return _FONT[_DEGREE_INDEX]
+    return _FONT[ord("?") - 32]
+
+
+def text_mask(text, scale=1):
+    """Boolean mask (13·scale, 7·scale·len) of `text` in the embedded font."""
+    if not text:
+        return np.zeros((GLYPH_H * scale, 0), bool)
+    mask = np.concatenate([_glyph(ch) for ch in text], axis=1)
+    if scale > 1:
+        mask = mask.repeat(scale, axis=0).repeat(scale, axis=1)
+    return mask
+
+
+def text_width(text, scale=1):
+    return GLYPH_W * scale * len(text)
+
+
+# ---- canvas -------------------------------------------------------------------------------------------
+class Canvas:
+    """RGBA uint8 pixels (height, width, 4), rows top to bottom, opaque."""
+
+    def __init__(self, width=WIDTH, height=HEIGHT, background=BACKGROUND):
+        self.pixels = np.empty((height, width, 4), np.uint8)
+        self.pixels[..., :3] = background
+        self.pixels[..., 3] = 255
+
+    @property
+    def width(self):
+        return self.pixels.shape[1]
+
+    @property
+    def height(self):
+        return self.pixels.shape[0]
+
+    def fill_rect(self, x0, y0, x1, y1, colour):
+        """Fills the pixels x0 ≤ x < x1, y0 ≤ y < y1 (clipped)."""
+        x0, x1 = max(int(x0), 0), min(int(x1), self.width)
+        y0, y1 = max(int(y0), 0), min(int(y1), self.height)
+        if x0 < x1 and y0 < y1:
+            self.pixels[y0:y1, x0:x1, :3] = colour
+
+    def blend(self, x0, y0, coverage, colour):
+        """Mixes `colour` over the pixels under `coverage` (floats 0..1) placed at (x0, y0), clipped."""
+        h, w = coverage.shape
+        cx0, cy0 = max(x0, 0), max(y0, 0)
+        cx1, cy1 = min(x0 + w, self.width), min(y0 + h, self.height)
+        if cx0 >= cx1 or cy0 >= cy1:
+            return
+        a = coverage[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0, None]
+        region = self.pixels[cy0:cy1, cx0:cx1, :3]
+        mixed = region * (1.0 - a) + np.asarray(colour, float) * a
+        region[...] = np.rint(mixed).astype(np.uint8)
+
+    def text(self, x, y, text, colour=INK, scale=1, align="left", valign="top", rotate=False):
+        """Draws `text` with its anchor at (x, y): align left/center/right, valign top/middle/bottom
+        (of the unrotated text box). rotate=True turns it 90° counter-clockwise (reads bottom to top);
+        then align/valign refer to the rotated box's horizontal/vertical extent."""
+        mask = text_mask(text, scale)
+        if rotate:
+            mask = np.rot90(mask)
+        h, w = mask.shape
+        x0 = int(round(x - {"left": 0, "center": w / 2, "right": w}[align]))
+        y0 = int(round(y - {"top": 0, "middle": h / 2, "bottom": h}[valign]))
+        self.blend(x0, y0, mask.astype(float), colour)
+
+    def polyline(self, xs, ys, colour, width=2.0):
+        """Anti-aliased polyline through pixel coordinates (xs, ys); NaN or inf breaks the line."""
+        xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+        ok = np.isfinite(xs) & np.isfinite(ys)
+        pts = []
+        for run in np.split(np.arange(len(xs)), np.flatnonzero(np.diff(ok.astype(np.int8))) + 1):
+            if len(run) == 0 or not ok[run[0]]:
+                continue
+            px, py = xs[run], ys[run]
+            if len(run) == 1:
+                pts.append(np.stack([px, py], 1))
+                continue
+            seg = np.hypot(np.diff(px), np.diff(py))
+            steps = np.maximum(np.ceil(seg * 4).astype(int), 1)  # a sample every ≤ 1/4 pixel
+            idx = np.repeat(np.arange(len(seg)), steps)
+            frac = np.concatenate([np.arange(n) / n for n in steps])
+            sx = px[idx] + frac * (px[idx + 1] - px[idx])
+            sy = py[idx] + frac * (py[idx + 1] - py[idx])
+            pts.append(np.stack([np.append(sx, px[-1]), np.append(sy, py[-1])], 1))
+        if pts:
+            self.dots(np.concatenate(pts), colour, width / 2.0)
+
+    def dots(self, points, colour, radius):
+        """Discs of `radius` around every point, anti-aliased; overlapping discs take the max coverage."""
+        points = points[(points[:, 0] > -radius - 2) & (points[:, 0] < self.width + radius + 2) &
+                        (points[:, 1] > -radius - 2) & (points[:, 1] < self.height + radius + 2)]
+        if len(points) == 0:
+            return
+        reach = int(np.ceil(radius + 1))
+        x0 = int(np.floor(points[:, 0].min())) - reach
+        y0 = int(np.floor(points[:, 1].min())) - reach
+        x1 = int(np.ceil(points[:, 0].max())) + reach + 1
+        y1 = int(np.ceil(points[:, 1].max())) + reach + 1
+        coverage = np.zeros((y1 - y0, x1 - x0))
+        base_x = np.floor(points[:, 0]).astype(int)
+        base_y = np.floor(points[:, 1]).astype(int)
+        for dy in range(-reach, reach + 1):
+            for dx in range(-reach, reach + 1):
+                px, py = base_x + dx, base_y + dy
+                # Pixel centres are at integer + 0.5.
+                d = np.hypot(px + 0.5 - points[:, 0], py + 0.5 - points[:, 1])
+                c = np.clip(radius + 0.5 - d, 0.0, 1.0)
+                np.maximum.at(coverage, (py - y0, px - x0), c)
+        self.blend(x0, y0, coverage, colour)
+
+
+# ---- axes -----------------------------------------------------------------------------------------------
+def nice_ticks(lo, hi, count=6):
+    """Round tick values (1, 2, 2.5 or 5 × 10^k steps) covering [lo, hi] with about `count` ticks."""
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= lo:
+        hi = lo + 1.0
+    raw = (hi - lo) / max(count - 1, 1)
+    power = 10.0 ** np.floor(np.log10(raw))
+    step = next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw * 0.999)
+    first = np.floor(lo / step + 1e-9) * step
+    last = np.ceil(hi / step - 1e-9) * step
+    return np.arange(round((last - first) / step) + 1) * step + first
+
+
+def format_tick(value, step):
+    """Tick label with as many decimals as the step needs."""
+    decimals = max(0, int(-np.floor(np.log10(step) + 1e-9))) if step > 0 else 0
+    if step * 10 ** decimals % 1 > 1e-6:  # 2.5 × 10^k needs one more
+        decimals += 1
+    text = "%.*f" % (decimals, value)
+    return "0" if text.strip("-0.") == "" else text
+
+
+class Panel:
+    """One plot area with data limits; maps data (x, y) to pixel coordinates."""
+
+    def __init__(self, canvas, box, x_range, y_range, title, x_label, y_label):
+        self.canvas, self.box = canvas, box  # box = (left, top, right, bottom) of the plot area
+        # Frames span exactly the data (ticks inside it); values extend to the next round tick.
+        self.x_lo, self.x_hi = float(x_range[0]), float(x_range[1])
+        ticks = nice_ticks(self.x_lo, self.x_hi, count=10)
+        self.x_step = ticks[1] - ticks[0]
+        self.x_ticks = ticks[(ticks >= self.x_lo - 1e-9 * self.x_step) & (ticks <= self.x_hi + 1e-9 * self.x_step)]
+        self.y_ticks = nice_ticks(*y_range, count=6)
+        self.y_step = self.y_ticks[1] - self.y_ticks[0]
+        self.y_lo, self.y_hi = self.y_ticks[0], self.y_ticks[-1]
+        self.title, self.x_label, self.y_label = title, x_label, y_label
+
+    def to_pixels(self, x, y):
+        left, top, right, bottom = self.box
+        px = left + (np.asarray(x, float) - self.x_lo) / (self.x_hi - self.x_lo) * (right - left)
+        py = bottom - (np.asarray(y, float) - self.y_lo) / (self.y_hi - self.y_lo) * (bottom - top)
+        return px, py
+
+    def draw_frame(self, key_frames=()):
+        c = self.canvas
+        left, top, right, bottom = self.box
+        for xv in self.x_ticks:
+            px = int(round(float(self.to_pixels(xv, 0)[0])))
+            c.fill_rect(px, top, px + 1, bottom, GRID)
+            c.fill_rect(px, bottom, px + 1, bottom + 5, INK)
+            c.text(px, bottom + 8, format_tick(xv, self.x_step), align="center")
+        for yv in self.y_ticks:
+            py = int(round(float(self.to_pixels(0, yv)[1])))
+            c.fill_rect(left, py, right, py + 1, GRID)
+            c.fill_rect(left - 5, py, left, py + 1, INK)
+            c.text(left - 8, py, format_tick(yv, self.y_step), align="right", valign="middle")
+        for kf in key_frames:  # dashed vertical lines at the keys
+            px = int(round(float(self.to_pixels(kf, 0)[0])))
+            for y in range(top, bottom, 8):
+                c.fill_rect(px, y, px + 1, min(y + 4, bottom), KEY_LINE)
+        c.fill_rect(left, top, right + 1, top + 1, INK)
+        c.fill_rect(left, bottom, right + 1, bottom + 1, INK)
+        c.fill_rect(left, top, left + 1, bottom, INK)
+        c.fill_rect(right, top, right + 1, bottom, INK)
+        c.text((left + right) / 2, top - 8, self.title, valign="bottom", align="center")
+        c.text((left + right) / 2, bottom + 26, self.x_label, align="center")
+        c.text(left - 62, (top + bottom) / 2, self.y_label, rotate=True, align="center", valign="middle")
+
+    def draw_series(self, xs, ys, colour, width=2.0):
+        px, py = self.to_pixels(xs, ys)
+        left, top, right, bottom = self.box
+        # Clip vertically to the plot area (values above the range are cut, not wrapped).
+        py = np.where((py < top - 1) | (py > bottom + 1), np.nan, py)
+        self.canvas.polyline(px, py, colour, width)
+
+
+# ---- the comparison figure --------------------------------------------------------------------------------
+def _finite_max(arrays, floor):
+    values = [np.max(a[np.isfinite(a)]) for a in arrays if np.any(np.isfinite(a))]
+    return max(values + [floor])
+
+
+def render_comparison(title, series, key_frames=(), subtitle=""):
+    """The comparison figure for one target as an RGBA uint8 array (HEIGHT, WIDTH, 4), rows top down.
+
+    series: list of dicts, one per source, drawn in order with PALETTE colours unless "colour" is given:
+      name            legend text
+      speed_frames    (M,) frames of the speed samples (interval midpoints)
+      speed           (M,) angular speed, degrees per frame
+      frames          (N,) sample frames
+      deviation       (N,) angle from the SLERP path, degrees
+    key_frames: frames of the keys, drawn as dashed vertical lines in both panels.
+    """
+    canvas = Canvas()
+    canvas.text(WIDTH / 2, 12, title, scale=2, align="center")
+    if subtitle:
+        canvas.text(WIDTH / 2, 44, subtitle, align="center")
+    legend_left = WIDTH - 230
+    left, right = 100, legend_left - 30
+    all_frames = [np.asarray(s["frames"], float) for s in series] + [np.asarray(key_frames, float)]
+    finite_frames = np.concatenate([f[np.isfinite(f)] for f in all_frames] + [np.zeros(0)])
+    x_range = (finite_frames.min(), finite_frames.max()) if finite_frames.size else (0.0, 1.0)
+    if x_range[1] <= x_range[0]:
+        x_range = (x_range[0], x_range[0] + 1.0)
+    speed_max = _finite_max([np.asarray(s["speed"], float) for s in series], 1e-3)
+    deviation_max = _finite_max([np.asarray(s["deviation"], float) for s in series], 1e-3)
+    panels = (
+        Panel(canvas, (left, 90, right, 380), x_range, (0.0, speed_max * 1.05),
+              "Angular speed", "frame", "speed (\u00b0/frame)"),
+        Panel(canvas, (left, 470, right, 740), x_range, (0.0, deviation_max * 1.05),
+              "Deviation from SLERP", "frame", "deviation (\u00b0)"),
+    )
+    for panel in panels:
+        panel.draw_frame(key_frames)
+    colours = []
+    for i, s in enumerate(series):
+        colour = tuple(s.get("colour", PALETTE[i % len(PALETTE)]))
+        colours.append(colour)
+        panels[0].draw_series(s["speed_frames"], s["speed"], colour)
+        panels[1].draw_series(s["frames"], s["deviation"], colour)
+    # Legend: a framed column to the right of the panels, one swatch and name per source.
+    row_h = 22
+    top = 90
+    bottom = top + 16 + row_h * len(series) + 20
+    canvas.fill_rect(legend_left, top, WIDTH - 14, top + 1, INK)
+    canvas.fill_rect(legend_left, bottom, WIDTH - 14, bottom + 1, INK)
+    canvas.fill_rect(legend_left, top, legend_left + 1, bottom, INK)
+    canvas.fill_rect(WIDTH - 15, top, WIDTH - 14, bottom, INK)
+    canvas.text(legend_left + 12, top + 10, "Sources")
+    for i, (s, colour) in enumerate(zip(series, colours)):
+        y = top + 34 + i * row_h
+        canvas.fill_rect(legend_left + 12, y, legend_left + 40, y + 12, colour)
+        label = s["name"] if len(s["name"]) <= 24 else s["name"][:23] + "~"
+        canvas.text(legend_left + 50, y + 6, label, valign="middle")
+    if len(key_frames):
+        y = bottom + 16
+        for yy in range(y, y + 14, 8):
+            canvas.fill_rect(legend_left + 26, yy, legend_left + 27, yy + 4, KEY_LINE)
+        canvas.text(legend_left + 50, y + 7, "key frames", valign="middle")
+    return canvas.pixels
+
+
+# ---- PNG ----------------------------------------------------------------------------------------------------
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def encode_png(pixels):
+    """PNG bytes of an RGBA (or RGB) uint8 array (height, width, 4|3), rows top to bottom. Filter 0 on
+    every row, zlib level 6: plots are mostly flat colour, which deflate packs well on its own."""
+    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
+    height, width, channels = pixels.shape
+    colour_type = {4: 6, 3: 2}[channels]
+    raw = np.zeros((height, 1 + width * channels), np.uint8)
+    raw[:, 1:] = pixels.reshape(height, -1)
+    header = struct.pack(">IIBBBBB", width, height, 8, colour_type, 0, 0, 0)
+    return (_PNG_SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
+            + _chunk(b"IEND", b""))
+
+
+def write_png(path, pixels):
+    with open(path, "wb") as f:
+        f.write(encode_png(pixels))
+
+
+def _unfilter(raw, height, stride, bpp):
+    """Reverses PNG's five row filters (none, sub, up, average, Paeth)."""
+    out = np.zeros((height, stride), np.uint8)
+    rows = raw.reshape(height, stride + 1)
+    prev = np.zeros(stride, np.int32)
+    for y in range(height):
+        kind, line = rows[y, 0], rows[y, 1:].astype(np.int32)
+        if kind == 0:
+            cur = line
+        elif kind == 2:
+            cur = (line + prev) & 0xFF
+        else:  # sub, average, Paeth depend on the pixel to the left: byte by byte
+            cur = np.zeros(stride, np.int32)
+            for i in range(stride):
+                a = cur[i - bpp] if i >= bpp else 0
+                b = prev[i]
+                c = prev[i - bpp] if i >= bpp else 0
+                if kind == 1:
+                    pred = a
+                elif kind == 3:
+                    pred = (a + b) // 2
+                elif kind == 4:
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+                else:
+                    raise ValueError("PNG: unknown filter type %d in row %d" % (kind, y))
+                cur[i] = (line[i] + pred) & 0xFF
+        out[y] = cur
+        prev = cur
+    return out
+
+
+def decode_png(data):
+    """(height, width, channels) uint8 array of an 8-bit, non-interlaced RGB or RGBA PNG."""
+    if data[:8] != _PNG_SIGNATURE:
+        raise ValueError("not a PNG file")
+    pos, idat, header = 8, [], None
+    while pos < len(data):
+        (length,) = struct.unpack(">I", data[pos:pos + 4])
+        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
+        (crc,) = struct.unpack(">I", data[pos + 8 + length:pos + 12 + length])
+        if zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
+            raise ValueError("PNG: bad CRC in chunk %r" % kind)
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat.append(body)
+        elif kind == b"IEND":
+            break
+        pos += 12 + length
+    if header is None:
+        raise ValueError("PNG: no IHDR chunk")
+    width, height, depth, colour_type, _, _, interlace = header
+    if depth != 8 or colour_type not in (2, 6) or interlace:
+        raise ValueError("PNG: only 8-bit non-interlaced RGB/RGBA is supported")
+    channels = 4 if colour_type == 6 else 3
+    raw = np.frombuffer(zlib.decompress(b"".join(idat)), np.uint8)
+    return _unfilter(raw, height, width * channels, channels).reshape(height, width, channels)
+
+
+def read_png(path):
+    with open(path, "rb") as f:
+        return decode_png(f.read())
