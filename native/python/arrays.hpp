@@ -3,12 +3,16 @@
 // shape. Shape errors raise ValueError naming the argument.
 #pragma once
 
+#include <pybind11/complex.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
+#include <complex>
 #include <cstddef>
 #include <initializer_list>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace quatcurve::bindings {
@@ -76,6 +80,138 @@ inline std::string element_name(const char* name, const Batch& b, std::size_t fl
     }
     for (std::size_t d = 0; d < idx.size(); ++d) s += (d ? ", " : "") + std::to_string(idx[d]);
     return s + "]";
+}
+
+// ---- additions for bind_core: broadcasting several inputs, complex arrays ----------------------
+
+// numpy broadcasting of the batch shapes of several inputs (their trailing element shapes are not
+// part of it): a single value broadcasts against any batch, (N, 1) against (1, M), and so on.
+// index(k, flat) is the flat batch index into input k for the output's flat batch index `flat`.
+struct Broadcast {
+    std::vector<py::ssize_t> shape;  // output batch shape
+    std::size_t count = 1;           // product of shape
+
+    std::size_t index(std::size_t input, std::size_t flat) const {
+        const Input& in = inputs_[input];
+        if (in.same) return flat;
+        if (in.count == 1) return 0;
+        std::size_t result = 0;
+        for (std::size_t d = shape.size(); d-- > 0;) {
+            const std::size_t n = static_cast<std::size_t>(shape[d]);
+            result += (flat % n) * in.strides[d];
+            flat /= n;
+        }
+        return result;
+    }
+
+    struct Input {
+        bool same = false;                  // batch shape equals the output's
+        std::size_t count = 1;              // number of elements in the input batch
+        std::vector<std::size_t> strides;   // per output dimension, 0 where broadcast
+    };
+    std::vector<Input> inputs_;
+};
+
+inline std::string batch_shape_string(const std::vector<py::ssize_t>& shape) {
+    std::string s = "(";
+    for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+    return s + (shape.size() == 1 ? ",)" : ")");
+}
+
+// Broadcast the batch shapes of `batches` (named by `names`, for the error message:
+// "a, b: batch shapes (3,) and (4,) do not broadcast").
+inline Broadcast broadcast(std::initializer_list<std::pair<const char*, const std::vector<py::ssize_t>*>> batches) {
+    Broadcast bc;
+    std::size_t ndim = 0;
+    for (const auto& b : batches) ndim = std::max(ndim, b.second->size());
+    bc.shape.assign(ndim, 1);
+    auto fail = [&batches]() {
+        std::string names, shapes;
+        for (const auto& b : batches) {
+            names += (names.empty() ? "" : ", ") + std::string(b.first);
+            shapes += (shapes.empty() ? "" : " and ") + batch_shape_string(*b.second);
+        }
+        throw py::value_error(names + ": batch shapes " + shapes + " do not broadcast");
+    };
+    for (const auto& b : batches) {
+        const std::size_t off = ndim - b.second->size();
+        for (std::size_t d = 0; d < b.second->size(); ++d) {
+            const py::ssize_t n = (*b.second)[d];
+            if (n == bc.shape[off + d] || n == 1) continue;
+            if (bc.shape[off + d] != 1) fail();
+            bc.shape[off + d] = n;
+        }
+    }
+    for (py::ssize_t n : bc.shape) bc.count *= static_cast<std::size_t>(n);
+    for (const auto& b : batches) {
+        Broadcast::Input in;
+        const std::size_t off = ndim - b.second->size();
+        in.same = b.second->size() == ndim && *b.second == bc.shape;
+        in.strides.assign(ndim, 0);
+        std::size_t stride = 1;
+        for (std::size_t d = b.second->size(); d-- > 0;) {
+            const std::size_t n = static_cast<std::size_t>((*b.second)[d]);
+            in.strides[off + d] = n == 1 ? 0 : stride;
+            stride *= n;
+        }
+        in.count = stride;
+        bc.inputs_.push_back(std::move(in));
+    }
+    return bc;
+}
+
+// Element name for messages from a batch shape ("m[2, 1]"; "m" for a single value).
+inline std::string element_name(const char* name, const std::vector<py::ssize_t>& batch_shape,
+                                std::size_t flat) {
+    Batch b;
+    b.batch_shape = batch_shape;
+    return element_name(name, b, flat);
+}
+
+// Complex128 counterpart of Batch / as_batch / make_output.
+using CArray = py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>;
+
+struct ComplexBatch {
+    CArray array;
+    std::vector<py::ssize_t> batch_shape;
+    std::size_t count = 0;
+    const std::complex<double>* data() const { return array.data(); }
+};
+
+inline ComplexBatch as_complex_batch(py::handle obj, std::initializer_list<py::ssize_t> tail,
+                                     const char* name) {
+    CArray arr;
+    try {
+        arr = CArray::ensure(obj);
+    } catch (const py::error_already_set&) {
+        arr = CArray();
+    }
+    if (!arr) throw py::value_error(std::string(name) + ": expected an array of (complex) numbers");
+    const py::ssize_t nt = static_cast<py::ssize_t>(tail.size());
+    bool ok = arr.ndim() >= nt;
+    py::ssize_t i = arr.ndim() - nt;
+    for (py::ssize_t t : tail) ok = ok && arr.shape(i++) == t;
+    if (!ok) {
+        std::string want = "(...";
+        for (py::ssize_t t : tail) want += ", " + std::to_string(t);
+        throw py::value_error(std::string(name) + ": expected shape " + want + "), got " +
+                              shape_string(arr));
+    }
+    ComplexBatch b;
+    b.count = 1;
+    for (py::ssize_t d = 0; d < arr.ndim() - nt; ++d) {
+        b.batch_shape.push_back(arr.shape(d));
+        b.count *= static_cast<std::size_t>(arr.shape(d));
+    }
+    b.array = std::move(arr);
+    return b;
+}
+
+inline CArray make_complex_output(const std::vector<py::ssize_t>& batch_shape,
+                                  std::initializer_list<py::ssize_t> tail) {
+    std::vector<py::ssize_t> shape = batch_shape;
+    shape.insert(shape.end(), tail.begin(), tail.end());
+    return CArray(shape);
 }
 
 }  // namespace quatcurve::bindings
