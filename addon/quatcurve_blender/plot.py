@@ -18,6 +18,12 @@ import zlib
 import numpy as np
 
 WIDTH, HEIGHT = 1200, 800
+# Layout (pixels): both panels span PLOT_LEFT..PLOT_RIGHT; the speed panel's plot area is rows
+# SPEED_ROWS, the deviation panel's DEVIATION_ROWS; the legend starts at LEGEND_LEFT.
+LEGEND_LEFT = WIDTH - 270
+PLOT_LEFT, PLOT_RIGHT = 100, LEGEND_LEFT - 30
+SPEED_ROWS = (90, 380)
+DEVIATION_ROWS = (470, 740)
 
 # ---- colours ----------------------------------------------------------------------------------------
 BACKGROUND = (255, 255, 255)
@@ -267,6 +273,24 @@ def _finite_max(arrays, floor):
     return max(values + [floor])
 
 
+def legend_labels(series):
+    """Legend text per series: its name, plus "= NAME" when its curves coincide with an earlier
+    series' (within 1e-6°), which it then hides — so a reader knows where the hidden one went."""
+    labels = []
+    for i, s in enumerate(series):
+        same = next((t["name"] for t in series[:i] if _same_curves(s, t)), None)
+        labels.append(s["name"] if same is None else "%s =%s" % (s["name"], same))
+    return labels
+
+
+def _same_curves(a, b):
+    for key in ("speed_frames", "speed", "frames", "deviation"):
+        x, y = np.asarray(a[key], float), np.asarray(b[key], float)
+        if x.shape != y.shape or not np.allclose(x, y, rtol=0.0, atol=1e-6, equal_nan=True):
+            return False
+    return True
+
+
 def render_comparison(title, series, key_frames=(), subtitle=""):
     """The comparison figure for one target as an RGBA uint8 array (HEIGHT, WIDTH, 4), rows top down.
 
@@ -282,8 +306,8 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
     canvas.text(WIDTH / 2, 12, title, scale=2, align="center")
     if subtitle:
         canvas.text(WIDTH / 2, 44, subtitle, align="center")
-    legend_left = WIDTH - 230
-    left, right = 100, legend_left - 30
+    legend_left = LEGEND_LEFT
+    left, right = PLOT_LEFT, PLOT_RIGHT
     all_frames = [np.asarray(s["frames"], float) for s in series] + [np.asarray(key_frames, float)]
     finite_frames = np.concatenate([f[np.isfinite(f)] for f in all_frames] + [np.zeros(0)])
     x_range = (finite_frames.min(), finite_frames.max()) if finite_frames.size else (0.0, 1.0)
@@ -292,9 +316,9 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
     speed_max = _finite_max([np.asarray(s["speed"], float) for s in series], 1e-3)
     deviation_max = _finite_max([np.asarray(s["deviation"], float) for s in series], 1e-3)
     panels = (
-        Panel(canvas, (left, 90, right, 380), x_range, (0.0, speed_max * 1.05),
+        Panel(canvas, (left, SPEED_ROWS[0], right, SPEED_ROWS[1]), x_range, (0.0, speed_max * 1.05),
               "Angular speed", "frame", "speed (\u00b0/frame)"),
-        Panel(canvas, (left, 470, right, 740), x_range, (0.0, deviation_max * 1.05),
+        Panel(canvas, (left, DEVIATION_ROWS[0], right, DEVIATION_ROWS[1]), x_range, (0.0, deviation_max * 1.05),
               "Deviation from SLERP", "frame", "deviation (\u00b0)"),
     )
     for panel in panels:
@@ -314,11 +338,12 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
     canvas.fill_rect(legend_left, top, legend_left + 1, bottom, INK)
     canvas.fill_rect(WIDTH - 15, top, WIDTH - 14, bottom, INK)
     canvas.text(legend_left + 12, top + 10, "Sources")
-    for i, (s, colour) in enumerate(zip(series, colours)):
+    for i, (label, colour) in enumerate(zip(legend_labels(series), colours)):
         y = top + 34 + i * row_h
         canvas.fill_rect(legend_left + 12, y, legend_left + 40, y + 12, colour)
-        label = s["name"] if len(s["name"]) <= 24 else s["name"][:23] + "~"
-        canvas.text(legend_left + 50, y + 6, label, valign="middle")
+        fits = (WIDTH - 20 - legend_left - 50) // GLYPH_W
+        canvas.text(legend_left + 50, y + 6, label if len(label) <= fits else label[:fits - 1] + "~",
+                    valign="middle")
     if len(key_frames):
         y = bottom + 16
         for yy in range(y, y + 14, 8):

@@ -112,9 +112,11 @@ double speed_at_sample(const std::vector<double>& t, const std::vector<double>& 
     return std::max(0.0, speeds[a] + w * (speeds[b] - speeds[a]));
 }
 
+// max/min speed. A minimum below 1e-12 of the maximum is a stop (rounding leaves a residue where
+// the true speed is 0, e.g. at a flat Bezier handle): +inf rather than a meaningless 1e15.
 double ratio_of(double lo, double hi) {
     if (hi == 0.0) return 1.0;  // no motion at all: constant (zero) speed
-    if (lo == 0.0) return kInf;
+    if (lo <= 1e-12 * hi) return kInf;
     return hi / lo;
 }
 

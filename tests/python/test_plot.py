@@ -73,13 +73,13 @@ def test_png_has_the_documented_size_and_is_not_blank(png):
 def test_every_legend_colour_appears_in_both_panels(png):
     _, _, pixels = read_png_with_zlib(png)
     rgb = pixels[..., :3]
-    legend_left = plot.WIDTH - 230
+    columns = slice(plot.PLOT_LEFT, plot.PLOT_RIGHT)
     for i, name in enumerate(NAMES):
         colour = np.array(plot.PALETTE[i], np.uint8)
         hit = (rgb == colour).all(axis=2)
-        assert hit[:, legend_left:].sum() >= 28 * 12, name          # the swatch
-        assert hit[90:380, 100:legend_left - 30].sum() > 100, name  # speed panel
-        assert hit[470:740, 100:legend_left - 30].sum() > 100, name  # deviation panel
+        assert hit[:, plot.LEGEND_LEFT:].sum() >= 28 * 12, name                   # the swatch
+        assert hit[slice(*plot.SPEED_ROWS), columns].sum() > 100, name          # speed panel
+        assert hit[slice(*plot.DEVIATION_ROWS), columns].sum() > 100, name      # deviation panel
 
 
 def test_png_round_trip_through_decode_png(png):
@@ -139,3 +139,9 @@ def test_non_finite_values_break_lines_instead_of_failing():
     series[1]["deviation"] = np.full_like(series[1]["deviation"], np.inf)
     pixels = plot.render_comparison("gaps", series)
     assert pixels.shape == (800, 1200, 4)
+
+
+def test_legend_names_coinciding_series():
+    series = example_series()[:3]
+    series[2] = dict(series[0], name="COPY")
+    assert plot.legend_labels(series) == ["BLENDER", "BLENDER_EULER_XYZ", "COPY =BLENDER"]

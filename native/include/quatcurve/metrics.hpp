@@ -34,8 +34,10 @@ std::vector<double> interval_speeds(const std::vector<double>& times, const std:
 
 // Per segment j: max/min of the speed at every sample in [k[j], k[j+1]], estimated from the interval
 // speeds of that segment only (interpolated between interval midpoints, extrapolated to the keys:
-// O(dt²), exact for constant speed). 1.0 means constant speed; a segment that does not move at all (max = 0) also gives 1.0; one whose
-// speed reaches 0 while moving elsewhere gives +inf. Returns K-1 ratios (none when K < 2).
+// O(dt²), exact for constant speed). 1.0 means constant speed; a segment that does not move at all
+// (max = 0) also gives 1.0; one whose speed reaches 0 (below 1e-12 of its maximum) while moving
+// elsewhere gives +inf, as Blender's Bezier keys do where all channels have flat handles.
+// Returns K-1 ratios (none when K < 2).
 std::vector<double> segment_speed_ratios(const std::vector<double>& times,
                                          const std::vector<Quat>& quats,
                                          const std::vector<double>& key_times);
