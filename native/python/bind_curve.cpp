@@ -1,5 +1,172 @@
+// quatcurve.Curve: the orientation curve engine (native/include/quatcurve/curve.hpp).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <vector>
+
+#include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/curve.hpp"
+#include "quatcurve/euler.hpp"
 
 namespace quatcurve::bindings {
-void bind_curve(pybind11::module_&) {}  // filled in by the curve issue
+
+namespace {
+
+std::vector<double> key_times(py::handle obj) {
+    const Batch b = as_batch(obj, {}, "times");
+    if (b.batch_shape.size() != 1) throw py::value_error("times: expected shape (K,), got " + shape_string(b.array));
+    return std::vector<double>(b.data(), b.data() + b.count);
+}
+
+// A (K, n) array of keys as K vectors of n doubles each.
+Batch key_rows(py::handle obj, py::ssize_t n, const char* name) {
+    Batch b = as_batch(obj, {n}, name);
+    if (b.batch_shape.size() != 1)
+        throw py::value_error(std::string(name) + ": expected shape (K, " + std::to_string(n) + "), got " +
+                              shape_string(b.array));
+    return b;
+}
+
+// **options → CurveOptions; names and values are checked by quatcurve::set_option.
+CurveOptions to_options(Method method, const py::kwargs& kwargs) {
+    CurveOptions options;
+    for (const auto& item : kwargs) {
+        const std::string name = py::str(item.first);
+        std::vector<double> values;
+        if (py::isinstance<py::bool_>(item.second)) {
+            values.push_back(item.second.cast<bool>() ? 1.0 : 0.0);
+        } else {
+            const Batch b = as_batch(item.second, {}, name.c_str());
+            if (b.batch_shape.size() > 1)
+                throw py::value_error(name + ": expected a number or a 1-D array, got shape " + shape_string(b.array));
+            values.assign(b.data(), b.data() + b.count);
+        }
+        set_option(options, method, name, values);
+    }
+    return options;
+}
+
+py::object per_key_value(const std::vector<double>& v) {
+    if (v.size() == 1) return py::float_(v[0]);
+    DArray a(static_cast<py::ssize_t>(v.size()));
+    std::copy(v.begin(), v.end(), a.mutable_data());
+    return std::move(a);
+}
+
+py::dict options_dict(const Curve& c) {
+    py::dict d;
+    const CurveOptions& o = c.options();
+    for (const std::string& name : option_names(c.method())) {
+        if (name == "shortest_path") d["shortest_path"] = o.shortest_path;
+        else if (name == "tension") d["tension"] = per_key_value(o.tension);
+        else if (name == "continuity") d["continuity"] = per_key_value(o.continuity);
+        else if (name == "bias") d["bias"] = per_key_value(o.bias);
+        else if (name == "ease_in") d["ease_in"] = per_key_value(o.ease_in);
+        else if (name == "ease_out") d["ease_out"] = per_key_value(o.ease_out);
+    }
+    return d;
+}
+
+DArray read_only(DArray a) {
+    py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+    return a;
+}
+
+}  // namespace
+
+void bind_curve(py::module_& m) {
+    py::tuple names(method_names().size());
+    for (std::size_t i = 0; i < method_names().size(); ++i) names[i] = method_names()[i];
+    m.attr("METHODS") = names;
+
+    py::class_<Curve>(m, "Curve",
+                      "Orientation curve through keys (times in frames, quaternions w, x, y, z).\n\n"
+                      "Curve(times, quats, method='SLERP', **options); Curve.from_euler(times, angles, "
+                      "order='XYZ', method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
+                      "(SLERP, bool); tension, continuity, bias in [-1, 1] and ease_in, ease_out in [0, 1] "
+                      "(TCB; a number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
+                      "(..., 3) in rad/frame, world frame; constant outside the keys.")
+        .def(py::init([](py::handle times, py::handle quats, const std::string& method, const py::kwargs& kwargs) {
+                 const Method meth = parse_method(method);
+                 CurveOptions options = to_options(meth, kwargs);
+                 std::vector<double> t = key_times(times);
+                 const Batch q = key_rows(quats, 4, "quats");
+                 std::vector<Quat> keys(q.count);
+                 for (std::size_t i = 0; i < q.count; ++i) keys[i] = from_wxyz(q.data() + 4 * i);
+                 return Curve(std::move(t), keys, meth, std::move(options));
+             }),
+             py::arg("times"), py::arg("quats"), py::arg("method") = "SLERP")
+        .def_static(
+            "from_euler",
+            [](py::handle times, py::handle angles, const std::string& order, const std::string& method,
+               const py::kwargs& kwargs) {
+                const Method meth = parse_method(method);
+                const EulerOrder ord = parse_euler_order(order);
+                CurveOptions options = to_options(meth, kwargs);
+                std::vector<double> t = key_times(times);
+                const Batch a = key_rows(angles, 3, "angles");
+                std::vector<Vec3> keys(a.count);
+                for (std::size_t i = 0; i < a.count; ++i)
+                    keys[i] = Vec3(a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]);
+                return Curve::from_euler(std::move(t), keys, ord, meth, std::move(options));
+            },
+            py::arg("times"), py::arg("angles"), py::arg("order") = "XYZ", py::arg("method") = "SLERP",
+            "Keys from Euler angles (radians, (ax, ay, az) in Blender's order semantics); every segment keeps "
+            "the turn of its Euler path (spins survive).")
+        .def(
+            "sample",
+            [](const Curve& c, py::handle times) {
+                const Batch t = as_batch(times, {}, "times");
+                DArray out = make_output(t.batch_shape, {4});
+                double* o = out.mutable_data();
+                {
+                    py::gil_scoped_release release;
+                    c.sample(t.data(), t.count, o);
+                }
+                return out;
+            },
+            py::arg("times"), "Orientations (w, x, y, z) at the given frames, shape times.shape + (4,).")
+        .def(
+            "angular_velocity",
+            [](const Curve& c, py::handle times) {
+                const Batch t = as_batch(times, {}, "times");
+                DArray out = make_output(t.batch_shape, {3});
+                double* o = out.mutable_data();
+                {
+                    py::gil_scoped_release release;
+                    c.angular_velocity(t.data(), t.count, o);
+                }
+                return out;
+            },
+            py::arg("times"), "World-frame angular velocity (rad/frame), exact, shape times.shape + (3,).")
+        .def_property_readonly("times",
+                               [](const Curve& c) {
+                                   const auto& t = c.times();
+                                   DArray a(static_cast<py::ssize_t>(t.size()));
+                                   std::copy(t.begin(), t.end(), a.mutable_data());
+                                   return read_only(std::move(a));
+                               })
+        .def_property_readonly("quats",
+                               [](const Curve& c) {
+                                   const auto& q = c.quats();
+                                   DArray a({static_cast<py::ssize_t>(q.size()), py::ssize_t(4)});
+                                   for (std::size_t i = 0; i < q.size(); ++i) to_wxyz(q[i], a.mutable_data() + 4 * i);
+                                   return read_only(std::move(a));
+                               })
+        .def_property_readonly("method", [](const Curve& c) { return std::string(method_name(c.method())); })
+        .def_property_readonly("options", &options_dict)
+        .def("__repr__", [](const Curve& c) {
+            std::string s = "quatcurve.Curve(method='" + std::string(method_name(c.method())) +
+                            "', keys=" + std::to_string(c.times().size());
+            if (c.has_euler_keys()) s += ", euler_order='" + std::string(euler_order_name(c.euler_order())) + "'";
+            s += ", frames=[" + py::repr(py::float_(c.times().front())).cast<std::string>() + ", " +
+                 py::repr(py::float_(c.times().back())).cast<std::string>() + "]";
+            for (const auto& item : options_dict(c))
+                s += ", " + py::str(item.first).cast<std::string>() + "=" + py::repr(item.second).cast<std::string>();
+            return s + ")";
+        });
+}
+
 }  // namespace quatcurve::bindings

@@ -1,0 +1,138 @@
+// The orientation curve engine: keys (times in frames, orientations) → a curve sampled anywhere.
+//
+// Prepare / evaluate: the constructor validates the keys, builds the per-segment data of the chosen
+// method once (O(keys)), and `sample` / `angular_velocity` then evaluate without allocating.
+//
+// Methods (the same identifier strings in C++, Python and the add-on):
+//   EULER            each Euler angle linear between keys (Blender's Euler mode, LINEAR keys);
+//                    only from Euler keys (Curve::from_euler).
+//   QUAT_COMPONENTS  w, x, y, z each linear between the keys as given, then normalized, no
+//                    hemisphere fix (Blender's quaternion mode, LINEAR keys, flips included).
+//   NLERP            normalized lerp after the hemisphere fix.
+//   SLERP            constant angular speed per segment; shortest path unless shortest_path = false
+//                    (then the keyed path: the arc from q[i] to q[i+1] as stored, up to 360°).
+//   SQUAD            Shoemake's spherical quadrangle; its inner control points are placed so that
+//                    the angular velocity is continuous also for non-uniform key spacing.
+//   CATMULL_ROM      spherical cubic Bezier by de Casteljau with slerp, tangents of the non-uniform
+//                    (Barry–Goldman) Catmull–Rom spline; C1.
+//   TCB              Kochanek–Bartels on quaternions as in 3ds Max's TCB rotation: tension,
+//                    continuity, bias (one value or one per key) and ease_in / ease_out per key.
+//   SPLINE_C2        cubic rotation vector per segment (local frame of its first key) with
+//                    continuous angular velocity and angular acceleration at every key, for any key
+//                    times; end velocities are the end segments' slerp velocities (as scipy's
+//                    RotationSpline).
+//
+// Representation: every segment stores its relative rotation as a rotation vector r[i] with
+// q[i+1] = q[i]·exp(r[i]/2), whose angle may exceed π. Keys from quaternions give |r| ≤ π (or up
+// to 2π on SLERP's keyed path); keys from Euler angles give the turn of the Euler path, so spins
+// survive. A segment turning more than π is split internally into equal sub-arcs of at most 2π/3
+// along its turn (sub-keys that are never reported), so every method keeps the full turn.
+//
+// Output: quaternions (w, x, y, z), sign-continuous along the curve (at a key the sample may be the
+// key's negative, the same rotation); angular velocity in radians per frame in the world frame,
+// computed analytically (q̇ = ½·ω·q). Outside [times.front(), times.back()] the curve is constant
+// (Blender's constant extrapolation) with zero velocity; one key gives a constant curve.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "quatcurve/euler.hpp"
+#include "quatcurve/types.hpp"
+
+namespace quatcurve {
+
+enum class Method { EULER, QUAT_COMPONENTS, NLERP, SLERP, SQUAD, CATMULL_ROM, TCB, SPLINE_C2 };
+
+// "EULER" … "SPLINE_C2"; anything else throws InvalidArgument listing the valid names.
+Method parse_method(const std::string& name);
+const char* method_name(Method method);
+// All identifiers, in the order of the enum.
+const std::vector<std::string>& method_names();
+
+// Options of the methods. A per-key option holds one value (global) or one value per key.
+struct CurveOptions {
+    bool shortest_path = true;                 // SLERP
+    std::vector<double> tension{0.0};          // TCB, each in [-1, 1]
+    std::vector<double> continuity{0.0};       // TCB, each in [-1, 1]
+    std::vector<double> bias{0.0};             // TCB, each in [-1, 1]
+    std::vector<double> ease_in{0.0};          // TCB, each in [0, 1] (3ds Max "Ease To" / 50)
+    std::vector<double> ease_out{0.0};         // TCB, each in [0, 1] (3ds Max "Ease From" / 50)
+};
+
+// Names of the options `method` takes ("shortest_path" for SLERP; "tension", "continuity", "bias",
+// "ease_in", "ease_out" for TCB; none for the others).
+std::vector<std::string> option_names(Method method);
+// Sets option `name` of `options` from `values` (a bool is {0} or {1}). Throws InvalidArgument for
+// an unknown name, a name `method` does not take, an empty or non-finite value, or a bool that is
+// not 0/1. Ranges and per-key lengths are checked by the Curve constructor.
+void set_option(CurveOptions& options, Method method, const std::string& name,
+                const std::vector<double>& values);
+
+class Curve {
+public:
+    // Keys from quaternions (w, x, y, z; normalized here). times strictly increasing and finite,
+    // quats finite and non-zero, same count ≥ 1. EULER throws (it needs Euler keys).
+    Curve(std::vector<double> times, const std::vector<Quat>& quats, Method method = Method::SLERP,
+          CurveOptions options = {});
+    // Raw form: n times, n quaternions as 4n doubles (w, x, y, z).
+    Curve(const double* times, const double* wxyz, std::size_t n, Method method,
+          CurveOptions options = {});
+
+    // Keys from Euler angles (ax, ay, az) in `order`. Every segment keeps the turn of its Euler
+    // path: its relative rotation is the rotation vector that follows the path continuously, so
+    // 0 → 720° about Z turns twice, and a path of at most 180° gives the shortest rotation.
+    static Curve from_euler(std::vector<double> times, const std::vector<Vec3>& angles,
+                            EulerOrder order, Method method = Method::SLERP,
+                            CurveOptions options = {});
+    static Curve from_euler(const double* times, const double* angles, std::size_t n,
+                            EulerOrder order, Method method, CurveOptions options = {});
+
+    // Orientation at each of n times into out (4n doubles, w, x, y, z). Any order of times (sorted
+    // times take the fast path); non-finite times throw.
+    void sample(const double* times, std::size_t n, double* out_wxyz) const;
+    std::vector<Quat> sample(const std::vector<double>& times) const;
+    // World-frame angular velocity (radians per frame) at each of n times into out (3n doubles).
+    // At a key the velocity of the segment that starts there (of the last segment at the last key).
+    void angular_velocity(const double* times, std::size_t n, double* out_xyz) const;
+    std::vector<Vec3> angular_velocity(const std::vector<double>& times) const;
+
+    Method method() const { return method_; }
+    const CurveOptions& options() const { return options_; }
+    const std::vector<double>& times() const { return times_; }
+    // The keys: normalized input quaternions, or for Euler keys the quaternion of each key with
+    // the sign that follows the Euler path.
+    const std::vector<Quat>& quats() const { return quats_; }
+    bool has_euler_keys() const { return !angles_.empty(); }
+    const std::vector<Vec3>& euler_angles() const { return angles_; }
+    EulerOrder euler_order() const { return order_; }
+    // Relative rotation vector of each key segment (local frame of its first key), size keys - 1.
+    const std::vector<Vec3>& segment_rotvecs() const { return rotvecs_; }
+
+    // Implementation data, defined in native/src/curve_impl.hpp.
+    struct Impl;
+    ~Curve();
+    Curve(const Curve&);
+    Curve(Curve&&) noexcept;
+    Curve& operator=(const Curve&);
+    Curve& operator=(Curve&&) noexcept;
+
+private:
+    Curve(Method method, CurveOptions options);
+    void build();
+
+    Method method_;
+    CurveOptions options_;
+    std::vector<double> times_;
+    std::vector<Quat> quats_;
+    std::vector<Quat> raw_;        // keys as given (QUAT_COMPONENTS lerps these)
+    std::vector<Vec3> angles_;     // Euler keys, empty for quaternion keys
+    EulerOrder order_ = EulerOrder::XYZ;
+    std::vector<Vec3> rotvecs_;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace quatcurve

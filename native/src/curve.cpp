@@ -1,0 +1,428 @@
+// The Curve: validation of keys and options, the relative rotation vector of every segment (spins
+// from Euler paths included), the split of segments that turn more than π, and dispatch to the
+// method families (curve_basic.cpp, curve_squad.cpp, curve_spline.cpp).
+#include "quatcurve/curve.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "curve_impl.hpp"
+#include "quatcurve/errors.hpp"
+#include "quatcurve/quat.hpp"
+
+namespace quatcurve {
+
+using detail::kPi;
+using detail::kTwoPi;
+
+namespace {
+
+const std::vector<std::string> kMethodNames = {"EULER", "QUAT_COMPONENTS", "NLERP", "SLERP",
+                                               "SQUAD", "CATMULL_ROM",     "TCB",   "SPLINE_C2"};
+const std::vector<std::string> kTcbOptions = {"tension", "continuity", "bias", "ease_in", "ease_out"};
+
+std::string join(const std::vector<std::string>& names) {
+    std::string s;
+    for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+    return s;
+}
+
+std::vector<double>* tcb_field(CurveOptions& o, const std::string& name) {
+    if (name == "tension") return &o.tension;
+    if (name == "continuity") return &o.continuity;
+    if (name == "bias") return &o.bias;
+    if (name == "ease_in") return &o.ease_in;
+    if (name == "ease_out") return &o.ease_out;
+    return nullptr;
+}
+
+bool is_default(const std::vector<double>& v) { return v.size() == 1 && v[0] == 0.0; }
+
+// Each value of a per-key option lies in [lo, hi] and the option has one value or one per key.
+void check_per_key(const std::vector<double>& v, const char* name, double lo, double hi, std::size_t keys) {
+    if (v.size() != 1 && v.size() != keys)
+        throw InvalidArgument(std::string(name) + ": expected one value or one per key (" +
+                              std::to_string(keys) + "), got " + std::to_string(v.size()));
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        if (!std::isfinite(v[i]) || v[i] < lo || v[i] > hi)
+            throw InvalidArgument(std::string(name) + "[" + std::to_string(i) + "]: " + std::to_string(v[i]) +
+                                  " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+}
+
+void check_times(const std::vector<double>& t) {
+    if (t.empty()) throw InvalidArgument("times: at least one key is needed");
+    for (std::size_t i = 0; i < t.size(); ++i) {
+        if (!std::isfinite(t[i])) throw InvalidArgument("times[" + std::to_string(i) + "]: not a finite number");
+        if (i > 0 && !(t[i] > t[i - 1]))
+            throw InvalidArgument("times[" + std::to_string(i) + "]: not increasing (" + std::to_string(t[i]) +
+                                  " after " + std::to_string(t[i - 1]) + ")");
+    }
+}
+
+// Rotation vector of the unit quaternion d on its keyed path: angle 2·atan2(|v|, w) ∈ [0, 2π].
+Vec3 rotvec_keyed(const Quat& d, std::size_t i) {
+    const Vec3 v(d.x, d.y, d.z);
+    const double n = std::sqrt(glm::dot(v, v));
+    if (n <= 1e-12 && d.w < 0.0) {
+        throw InvalidArgument("quats[" + std::to_string(i) + "], quats[" + std::to_string(i + 1) +
+                              "]: opposite keys have no keyed path axis (shortest_path=false)");
+    }
+    if (n == 0.0) return Vec3(0.0);
+    return (2.0 * std::atan2(n, d.w) / n) * v;
+}
+
+// The relative rotation vector of the Euler path a0 → a1 (linear in every angle), starting at the
+// rotation q0: the rotation vector of conj(q0)·q(a(s)) followed continuously in steps of at most
+// 0.5 rad (the Euler path turns at most ‖a1 − a0‖₁ in total), so whole turns are counted.
+Vec3 lift_euler_path(const Vec3& a0, const Vec3& a1, EulerOrder order, const Quat& q0) {
+    const Vec3 d = a1 - a0;
+    const double len = std::fabs(d.x) + std::fabs(d.y) + std::fabs(d.z);
+    const std::size_t steps = static_cast<std::size_t>(std::ceil(len / 0.5)) + 1;
+    const Quat c0 = detail::qconj(q0);
+    Vec3 r(0.0);
+    for (std::size_t k = 1; k <= steps; ++k) {
+        const Vec3 a = k == steps ? a1 : a0 + d * (static_cast<double>(k) / static_cast<double>(steps));
+        r = detail::rotvec_near(detail::qmul(c0, euler_to_quat(a, order)), r);
+    }
+    return r;
+}
+
+// Cumulative turning angle of the Euler path a0 → a1 at n + 1 equally spaced parameters (steps of
+// at most 0.05 rad in ‖Δa‖₁, which bounds each step's rotation): cum[k] at s = k/n.
+void euler_path_length(const Vec3& a0, const Vec3& a1, EulerOrder order, std::vector<double>& cum) {
+    const Vec3 d = a1 - a0;
+    const double len = std::fabs(d.x) + std::fabs(d.y) + std::fabs(d.z);
+    const std::size_t n = static_cast<std::size_t>(std::ceil(len / 0.05)) + 1;
+    cum.assign(n + 1, 0.0);
+    Quat prev = euler_to_quat(a0, order);
+    for (std::size_t k = 1; k <= n; ++k) {
+        const Quat q = euler_to_quat(a0 + d * (static_cast<double>(k) / static_cast<double>(n)), order);
+        cum[k] = cum[k - 1] + angle_between(prev, q);
+        prev = q;
+    }
+}
+
+// The path parameter s ∈ [0, 1] where the cumulative angle reaches `length` (linear between steps).
+double path_parameter(const std::vector<double>& cum, double length) {
+    const std::size_t n = cum.size() - 1;
+    const std::size_t k = static_cast<std::size_t>(std::lower_bound(cum.begin(), cum.end(), length) - cum.begin());
+    if (k == 0) return 0.0;
+    if (k > n) return 1.0;
+    const double span = cum[k] - cum[k - 1];
+    const double f = span > 0.0 ? (length - cum[k - 1]) / span : 0.0;
+    return (static_cast<double>(k - 1) + f) / static_cast<double>(n);
+}
+
+}  // namespace
+
+Method parse_method(const std::string& name) {
+    for (std::size_t i = 0; i < kMethodNames.size(); ++i)
+        if (kMethodNames[i] == name) return static_cast<Method>(i);
+    throw InvalidArgument("method: unknown method '" + name + "' (valid: " + join(kMethodNames) + ")");
+}
+
+const char* method_name(Method method) {
+    const auto i = static_cast<std::size_t>(method);
+    if (i >= kMethodNames.size()) throw InvalidArgument("method: invalid Method value");
+    return kMethodNames[i].c_str();
+}
+
+const std::vector<std::string>& method_names() { return kMethodNames; }
+
+std::vector<std::string> option_names(Method method) {
+    if (method == Method::SLERP) return {"shortest_path"};
+    if (method == Method::TCB) return kTcbOptions;
+    return {};
+}
+
+void set_option(CurveOptions& options, Method method, const std::string& name,
+                const std::vector<double>& values) {
+    const bool known = name == "shortest_path" || tcb_field(options, name) != nullptr;
+    if (!known)
+        throw InvalidArgument(name + ": unknown option (options: shortest_path for SLERP; " + join(kTcbOptions) +
+                              " for TCB)");
+    const auto valid = option_names(method);
+    if (std::find(valid.begin(), valid.end(), name) == valid.end())
+        throw InvalidArgument(name + ": not an option of method " + method_name(method) +
+                              (valid.empty() ? std::string(" (it takes none)") : " (it takes " + join(valid) + ")"));
+    if (values.empty()) throw InvalidArgument(name + ": no value given");
+    for (std::size_t i = 0; i < values.size(); ++i)
+        if (!std::isfinite(values[i]))
+            throw InvalidArgument(name + "[" + std::to_string(i) + "]: not a finite number");
+    if (name == "shortest_path") {
+        if (values.size() != 1 || (values[0] != 0.0 && values[0] != 1.0))
+            throw InvalidArgument("shortest_path: expected a bool");
+        options.shortest_path = values[0] != 0.0;
+        return;
+    }
+    *tcb_field(options, name) = values;
+}
+
+Curve::Curve(Method method, CurveOptions options) : method_(method), options_(std::move(options)) {
+    method_name(method);  // validates the enum value
+}
+
+Curve::Curve(std::vector<double> times, const std::vector<Quat>& quats, Method method, CurveOptions options)
+    : Curve(method, std::move(options)) {
+    if (method == Method::EULER)
+        throw InvalidArgument("method: EULER interpolates Euler angles; build it with Curve::from_euler");
+    check_times(times);
+    if (quats.size() != times.size())
+        throw InvalidArgument("quats: " + std::to_string(quats.size()) + " keys for " +
+                              std::to_string(times.size()) + " times");
+    times_ = std::move(times);
+    raw_ = quats;
+    quats_.reserve(quats.size());
+    for (std::size_t i = 0; i < quats.size(); ++i) {
+        check_finite(quats[i], "quats[" + std::to_string(i) + "]");
+        quats_.push_back(normalized_rotation(quats[i], "quats[" + std::to_string(i) + "]"));
+    }
+    build();
+}
+
+Curve::Curve(const double* times, const double* wxyz, std::size_t n, Method method, CurveOptions options)
+    : Curve(std::vector<double>(times, times + n),
+            [&] {
+                std::vector<Quat> q(n);
+                for (std::size_t i = 0; i < n; ++i) q[i] = from_wxyz(wxyz + 4 * i);
+                return q;
+            }(),
+            method, std::move(options)) {}
+
+Curve Curve::from_euler(std::vector<double> times, const std::vector<Vec3>& angles, EulerOrder order,
+                        Method method, CurveOptions options) {
+    Curve c(method, std::move(options));
+    euler_order_name(order);
+    check_times(times);
+    if (angles.size() != times.size())
+        throw InvalidArgument("angles: " + std::to_string(angles.size()) + " keys for " +
+                              std::to_string(times.size()) + " times");
+    for (std::size_t i = 0; i < angles.size(); ++i) check_finite(angles[i], "angles[" + std::to_string(i) + "]");
+    c.times_ = std::move(times);
+    c.angles_ = angles;
+    c.order_ = order;
+    c.build();
+    return c;
+}
+
+Curve Curve::from_euler(const double* times, const double* angles, std::size_t n, EulerOrder order,
+                        Method method, CurveOptions options) {
+    std::vector<Vec3> a(n);
+    for (std::size_t i = 0; i < n; ++i) a[i] = Vec3(angles[3 * i], angles[3 * i + 1], angles[3 * i + 2]);
+    return from_euler(std::vector<double>(times, times + n), a, order, method, std::move(options));
+}
+
+Curve::~Curve() = default;
+Curve::Curve(Curve&&) noexcept = default;
+Curve& Curve::operator=(Curve&&) noexcept = default;
+Curve::Curve(const Curve& o)
+    : method_(o.method_), options_(o.options_), times_(o.times_), quats_(o.quats_), raw_(o.raw_),
+      angles_(o.angles_), order_(o.order_), rotvecs_(o.rotvecs_),
+      impl_(o.impl_ ? std::make_unique<Impl>(*o.impl_) : nullptr) {}
+Curve& Curve::operator=(const Curve& o) {
+    if (this != &o) *this = Curve(o);
+    return *this;
+}
+
+// Validates the options, computes the sign-continuous key rotations and segment rotation vectors,
+// splits segments turning more than π into sub-arcs of at most 2π/3, and prepares the method.
+void Curve::build() {
+    const std::size_t K = times_.size();
+    // ---- options
+    if (method_ != Method::SLERP && !options_.shortest_path)
+        throw InvalidArgument(std::string("shortest_path: not an option of method ") + method_name(method_));
+    if (method_ == Method::TCB) {
+        check_per_key(options_.tension, "tension", -1.0, 1.0, K);
+        check_per_key(options_.continuity, "continuity", -1.0, 1.0, K);
+        check_per_key(options_.bias, "bias", -1.0, 1.0, K);
+        check_per_key(options_.ease_in, "ease_in", 0.0, 1.0, K);
+        check_per_key(options_.ease_out, "ease_out", 0.0, 1.0, K);
+    } else {
+        CurveOptions& o = options_;
+        for (const auto& name : kTcbOptions)
+            if (!is_default(*tcb_field(o, name)))
+                throw InvalidArgument(name + ": not an option of method " + method_name(method_));
+    }
+
+    impl_ = std::make_unique<Impl>();
+    Impl& m = *impl_;
+    rotvecs_.assign(K - 1, Vec3(0.0));
+    // Knots: the keys plus the sub-keys of segments that turn more than π (none for EULER and for
+    // QUAT_COMPONENTS on quaternion keys, which reproduce Blender's own channels).
+    auto add_knot = [&](double t, const Quat& q, int key, int seg) {
+        m.kt.push_back(t);
+        m.kq.push_back(q);
+        m.kkey.push_back(key);
+        if (seg >= 0) m.kseg.push_back(seg);
+    };
+    const bool split = method_ != Method::EULER && !(method_ == Method::QUAT_COMPONENTS && !has_euler_keys());
+    if (has_euler_keys()) {
+        // Each segment follows its Euler path: a path of at most π keeps the rotation vector that
+        // follows it continuously (the shortest rotation, or the path's side at exactly π); a longer
+        // path is cut at equal path length into m ≤ 2π/3 sub-arcs whose sub-keys lie on the Euler
+        // path, so every method turns as the path turns (0 → 720° about Z turns twice).
+        m.kq.reserve(K);
+        add_knot(times_[0], euler_to_quat(angles_[0], order_), 0, -1);
+        for (std::size_t i = 0; i + 1 < K; ++i) {
+            const Vec3 a0 = angles_[i], da = angles_[i + 1] - angles_[i];
+            const double h = times_[i + 1] - times_[i];
+            std::vector<double> cum;
+            euler_path_length(a0, angles_[i + 1], order_, cum);
+            const double L = cum.back();
+            const bool spin = L > kPi * (1.0 + 1e-9);
+            std::size_t parts = 1;
+            if (split && spin) parts = static_cast<std::size_t>(std::ceil(L / (kTwoPi / 3.0)));
+            const Quat q0 = m.kq.back();
+            for (std::size_t j = 1; j <= parts; ++j) {
+                const double f = j == parts ? 1.0 : path_parameter(cum, L * static_cast<double>(j) / static_cast<double>(parts));
+                const Vec3 a = j == parts ? angles_[i + 1] : a0 + f * da;
+                const Quat prev = m.kq.back();
+                const double fprev = j == 1 ? 0.0 : (m.kt.back() - times_[i]) / h;
+                const Vec3 r = lift_euler_path(a0 + fprev * da, a, order_, prev);
+                Quat q = euler_to_quat(a, order_);
+                if (detail::qdot(q, detail::qmul(prev, detail::qexp(r))) < 0.0) q = -q;
+                m.kr.push_back(r);
+                add_knot(j == parts ? times_[i + 1] : times_[i] + f * h, q, j == parts ? static_cast<int>(i + 1) : -1,
+                         static_cast<int>(i));
+            }
+            if (!spin) {
+                rotvecs_[i] = m.kr.back();
+            } else {  // the net rotation with the whole number of turns nearest the path length
+                const Vec3 net = detail::rotvec_principal(detail::qmul(detail::qconj(q0), m.kq.back()));
+                const double t0 = glm::length(net);
+                Vec3 u = t0 > 1e-12 ? net / t0 : Vec3(0.0);
+                if (t0 <= 1e-12) {
+                    Vec3 sum(0.0);
+                    for (std::size_t j = m.kr.size() - parts; j < m.kr.size(); ++j) sum += m.kr[j];
+                    if (parts == 1) sum = da;  // EULER keeps the keys only: the angles' direction
+                    u = glm::length(sum) > 0.0 ? glm::normalize(sum) : Vec3(0.0, 0.0, 1.0);
+                }
+                const double k_pos = std::nearbyint((L - t0) / kTwoPi), k_neg = std::nearbyint((L + t0) / kTwoPi);
+                rotvecs_[i] = std::fabs(t0 + kTwoPi * k_pos - L) <= std::fabs(kTwoPi * k_neg - t0 - L)
+                                  ? (t0 + kTwoPi * k_pos) * u
+                                  : -(kTwoPi * k_neg - t0) * u;
+            }
+        }
+        quats_.clear();
+        for (std::size_t j = 0; j < m.kq.size(); ++j)
+            if (m.kkey[j] >= 0) quats_.push_back(m.kq[j]);
+        raw_ = quats_;
+    } else {
+        // Quaternion keys: the shortest rotation after the hemisphere fix, or on the keyed path
+        // (QUAT_COMPONENTS, SLERP with shortest_path = false) the arc as stored, up to 2π, split
+        // along its own axis when it exceeds π.
+        const bool keyed = method_ == Method::QUAT_COMPONENTS || (method_ == Method::SLERP && !options_.shortest_path);
+        add_knot(times_[0], quats_[0], 0, -1);
+        for (std::size_t i = 0; i + 1 < K; ++i) {
+            const Quat q0 = m.kq.back();
+            Quat next = quats_[i + 1];
+            Vec3 r;
+            const Quat d = detail::qmul(detail::qconj(q0), next);
+            if (!keyed) {
+                if (detail::qdot(q0, next) < 0.0) next = -next;
+                r = detail::rotvec_principal(d);
+            } else if (method_ == Method::QUAT_COMPONENTS && d.w < 0.0 && glm::length(Vec3(d.x, d.y, d.z)) <= 1e-12) {
+                r = Vec3(kTwoPi, 0.0, 0.0);  // q, −q: Blender's lerp passes through zero
+            } else {
+                r = rotvec_keyed(d, i);
+            }
+            rotvecs_[i] = r;
+            const double theta = glm::length(r);
+            const std::size_t parts =
+                split && theta > kPi * (1.0 + 1e-12) ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0))) : 1;
+            const double h = times_[i + 1] - times_[i];
+            for (std::size_t j = 1; j <= parts; ++j) {
+                const double f = static_cast<double>(j) / static_cast<double>(parts);
+                m.kr.push_back(r / static_cast<double>(parts));
+                if (j == parts)
+                    add_knot(times_[i + 1], next, static_cast<int>(i + 1), static_cast<int>(i));
+                else
+                    add_knot(times_[i] + f * h, detail::qmul(q0, detail::qexp(f * r)), -1, static_cast<int>(i));
+            }
+        }
+    }
+    m.first_q = m.kq.front();
+    m.last_q = m.kq.back();
+    if (K == 1) return;
+
+    switch (method_) {
+        case Method::EULER: detail::build_euler(m, times_, angles_, order_); break;
+        case Method::QUAT_COMPONENTS:
+            if (has_euler_keys()) {
+                detail::build_lerp(m, m.kt, m.kq);
+            } else {
+                detail::build_lerp(m, times_, raw_);
+                m.first_q = quats_.front();
+                m.last_q = quats_.back();
+            }
+            break;
+        case Method::NLERP: detail::build_lerp(m, m.kt, m.kq); break;
+        case Method::SLERP: detail::build_slerp(m); break;
+        case Method::SQUAD: detail::build_squad(m, nullptr, K); break;
+        case Method::TCB: detail::build_squad(m, &options_, K); break;
+        case Method::CATMULL_ROM: detail::build_bezier(m); break;
+        case Method::SPLINE_C2: detail::build_spline(m); break;
+    }
+}
+
+void Curve::sample(const double* times, std::size_t n, double* out) const {
+    const Impl& m = *impl_;
+    if (times_.size() == 1) {
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!std::isfinite(times[i])) detail::bad_time(i);
+            detail::store(m.first_q, out + 4 * i);
+        }
+        return;
+    }
+    switch (method_) {
+        case Method::EULER: detail::sample_euler(m, times, n, out); break;
+        case Method::QUAT_COMPONENTS:
+        case Method::NLERP: detail::sample_lerp(m, times, n, out); break;
+        case Method::SLERP: detail::sample_slerp(m, times, n, out); break;
+        case Method::SQUAD:
+        case Method::TCB: detail::sample_squad(m, times_, times, n, out); break;
+        case Method::CATMULL_ROM: detail::sample_bezier(m, times, n, out); break;
+        case Method::SPLINE_C2: detail::sample_spline(m, times, n, out); break;
+    }
+}
+
+void Curve::angular_velocity(const double* times, std::size_t n, double* out) const {
+    const Impl& m = *impl_;
+    if (times_.size() == 1) {
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!std::isfinite(times[i])) detail::bad_time(i);
+            detail::store(Vec3(0.0), out + 3 * i);
+        }
+        return;
+    }
+    switch (method_) {
+        case Method::EULER: detail::velocity_euler(m, times, n, out); break;
+        case Method::QUAT_COMPONENTS:
+        case Method::NLERP: detail::velocity_lerp(m, times, n, out); break;
+        case Method::SLERP: detail::velocity_slerp(m, times, n, out); break;
+        case Method::SQUAD:
+        case Method::TCB: detail::velocity_squad(m, times_, times, n, out); break;
+        case Method::CATMULL_ROM: detail::velocity_bezier(m, times, n, out); break;
+        case Method::SPLINE_C2: detail::velocity_spline(m, times, n, out); break;
+    }
+}
+
+std::vector<Quat> Curve::sample(const std::vector<double>& times) const {
+    std::vector<double> buf(4 * times.size());
+    sample(times.data(), times.size(), buf.data());
+    std::vector<Quat> q(times.size());
+    for (std::size_t i = 0; i < q.size(); ++i) q[i] = from_wxyz(&buf[4 * i]);
+    return q;
+}
+
+std::vector<Vec3> Curve::angular_velocity(const std::vector<double>& times) const {
+    std::vector<double> buf(3 * times.size());
+    angular_velocity(times.data(), times.size(), buf.data());
+    std::vector<Vec3> w(times.size());
+    for (std::size_t i = 0; i < w.size(); ++i) w[i] = Vec3(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2]);
+    return w;
+}
+
+}  // namespace quatcurve

@@ -1,0 +1,205 @@
+// The one-segment-at-a-time methods: EULER (angles linear), QUAT_COMPONENTS and NLERP (components
+// linear, then normalized), SLERP (constant angular speed).
+#include <cmath>
+
+#include "curve_impl.hpp"
+
+namespace quatcurve::detail {
+
+namespace {
+
+int axis_index(char c) { return c - 'X'; }
+
+// Quaternion of Euler angles a with axes (first, middle, last): q = q_last·q_middle·q_first, each
+// q_axis(x) = (cos x/2, sin x/2 · e_axis). Continuous in a (no sign canonicalization), so the
+// quaternions of a linear Euler path are sign-continuous. Also returns the partial products for
+// the angular velocity.
+struct EulerEval {
+    Q4 q, q_last, q_last_mid;
+};
+inline Q4 axis_q4(int axis, double angle) {
+    const double h = 0.5 * angle;
+    Q4 q{std::cos(h), 0.0, 0.0, 0.0};
+    (&q.x)[axis] = std::sin(h);
+    return q;
+}
+inline EulerEval euler_eval(const int* ax, const Vec3& a) {
+    EulerEval e;
+    e.q_last = axis_q4(ax[2], a[ax[2]]);
+    e.q_last_mid = mul(e.q_last, axis_q4(ax[1], a[ax[1]]));
+    e.q = mul(e.q_last_mid, axis_q4(ax[0], a[ax[0]]));
+    return e;
+}
+inline Vec3 unit(int axis, double value) {
+    Vec3 v(0.0);
+    v[axis] = value;
+    return v;
+}
+
+}  // namespace
+
+// NLERP / QUAT_COMPONENTS: p(s) = p[i] + s·(p[i+1] − p[i]) on the knots kt.
+void build_lerp(Curve::Impl& m, const std::vector<double>& kt, const std::vector<Quat>& p) {
+    if (&kt != &m.kt) m.kt = kt;
+    m.lerp.resize(kt.size() - 1);
+    for (std::size_t i = 0; i + 1 < kt.size(); ++i) {
+        const Q4 a = q4(p[i]), b = q4(p[i + 1]);
+        m.lerp[i] = {kt[i], 1.0 / (kt[i + 1] - kt[i]), a, {b.w - a.w, b.x - a.x, b.y - a.y, b.z - a.z}};
+    }
+}
+
+// SLERP: q(s) = Q·exp(s·r/2) = Q·cos(sθ/2) + (Q·(0, r))·sin(sθ/2)/θ; ω = R(Q)·r/h.
+void build_slerp(Curve::Impl& m) {
+    const std::size_t S = m.kr.size();
+    m.slerp.resize(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        const double inv_h = 1.0 / (m.kt[i + 1] - m.kt[i]);
+        const Vec3& r = m.kr[i];
+        m.slerp[i] = {m.kt[i], inv_h, q4(m.kq[i]), mul(q4(m.kq[i]), {0.0, r.x, r.y, r.z}), glm::dot(r, r),
+                      rot(m.kq[i], r) * inv_h};
+    }
+}
+
+// EULER: angles linear between the keys as given (no wrapping: 0 → 720° turns twice).
+void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::vector<Vec3>& angles,
+                 EulerOrder order) {
+    const char* name = euler_order_name(order);
+    for (int k = 0; k < 3; ++k) m.euler_axes[k] = axis_index(name[k]);
+    m.kt = times;
+    m.euler.resize(times.size() - 1);
+    for (std::size_t i = 0; i + 1 < times.size(); ++i)
+        m.euler[i] = {times[i], 1.0 / (times[i + 1] - times[i]), angles[i], angles[i + 1] - angles[i]};
+    m.first_q = to_quat(euler_eval(m.euler_axes, angles.front()).q);
+    m.last_q = to_quat(euler_eval(m.euler_axes, angles.back()).q);
+}
+
+// q = p/|p|. A zero p (only at the middle of exactly opposite QUAT_COMPONENTS keys) gives
+// (0, 1, 0, 0), as Blender's normalize_qt does.
+void sample_lerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    const LerpSeg* seg = m.lerp.data();
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const LerpSeg& g = seg[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const Q4 p{g.p0.w + s * g.dp.w, g.p0.x + s * g.dp.x, g.p0.y + s * g.dp.y, g.p0.z + s * g.dp.z};
+            const double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
+            if (n2 > 0.0) {
+                const double k = 1.0 / std::sqrt(n2);
+                store(Q4{p.w * k, p.x * k, p.y * k, p.z * k}, out + 4 * i);
+            } else {
+                store(Q4{0.0, 1.0, 0.0, 0.0}, out + 4 * i);
+            }
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+// ω = 2·vec(ṗ·conj(p))/|p|² (the radial part of ṗ does not turn q); zero where p = 0.
+void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    const LerpSeg* seg = m.lerp.data();
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const LerpSeg& g = seg[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const Q4 p{g.p0.w + s * g.dp.w, g.p0.x + s * g.dp.x, g.p0.y + s * g.dp.y, g.p0.z + s * g.dp.z};
+            const double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
+            if (n2 > 0.0) {
+                const Q4 d = mul(g.dp, {p.w, -p.x, -p.y, -p.z});
+                const double k = 2.0 * g.inv_h / n2;
+                store(Vec3(d.x * k, d.y * k, d.z * k), out + 3 * i);
+            } else {
+                store(Vec3(0.0), out + 3 * i);
+            }
+        },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
+}
+
+QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    const SlerpSeg* seg = m.slerp.data();
+    auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
+    auto emit = [&](const SlerpSeg& g, double c, double k, double* o) {
+        o[0] = g.a.w * c + g.b.w * k;
+        o[1] = g.a.x * c + g.b.x * k;
+        o[2] = g.a.y * c + g.b.y * k;
+        o[3] = g.a.z * c + g.b.z * k;
+    };
+    double dt;
+    if (!uniform_times(times, n, dt)) {
+        drive(
+            m.kt, times, n,
+            [&](std::size_t i, std::size_t j, double t) {
+                const SlerpSeg& g = seg[j];
+                const double s = (t - g.t0) * g.inv_h;
+                double c, k;
+                exp_coeffs(s * s * g.r2, c, k);
+                emit(g, c, k * s, out + 4 * i);
+            },
+            outside);
+        return;
+    }
+    // Uniform times: within a segment the angle advances by dt·θ/h per sample (a rotor step).
+    const std::size_t S = m.slerp.size();
+    const double first = m.kt.front(), last = m.kt.back();
+    std::size_t hint = 0, cur = S;
+    int steps = 0;
+    Rotor rot;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double t = times[i];
+        if (t >= first && t <= last) {
+            const std::size_t j = locate(m.kt.data(), S, t, hint);
+            const SlerpSeg& g = seg[j];
+            if (j == cur && steps < kAnchorSteps) {
+                rot.step();
+                ++steps;
+            } else {
+                rot.set((t - g.t0) * g.inv_h, g.r2);
+                if (j != cur) rot.set_step(dt * g.inv_h, g.r2);
+                cur = j;
+                steps = 0;
+            }
+            emit(g, rot.C, rot.K, out + 4 * i);
+        } else {
+            if (!std::isfinite(t)) bad_time(i);
+            outside(i, t < first);
+            cur = S;
+        }
+    }
+}
+
+void velocity_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n, [&](std::size_t i, std::size_t j, double) { store(m.slerp[j].omega, out + 3 * i); },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
+}
+
+void sample_euler(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const EulerSeg& g = m.euler[j];
+            const double s = (t - g.t0) * g.inv_h;
+            store(euler_eval(m.euler_axes, g.a0 + s * g.da).q, out + 4 * i);
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+// R = R_last·R_middle·R_first, so ω = ȧ_last·e_last + R_last·(ȧ_middle·e_middle)
+//                                    + R_last·R_middle·(ȧ_first·e_first).
+void velocity_euler(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    const int* ax = m.euler_axes;
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const EulerSeg& g = m.euler[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const EulerEval e = euler_eval(ax, g.a0 + s * g.da);
+            const Vec3 rate = g.da * g.inv_h;
+            const Vec3 w = unit(ax[2], rate[ax[2]]) + rot(to_quat(e.q_last), unit(ax[1], rate[ax[1]])) +
+                           rot(to_quat(e.q_last_mid), unit(ax[0], rate[ax[0]]));
+            store(w, out + 3 * i);
+        },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
+}
+
+}  // namespace quatcurve::detail

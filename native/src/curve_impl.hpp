@@ -1,0 +1,205 @@
+// Private: the prepared data of a Curve and the sampling driver shared by native/src/curve*.cpp.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "curve_math.hpp"
+#include "quatcurve/curve.hpp"
+#include "quatcurve/errors.hpp"
+
+namespace quatcurve {
+
+namespace detail {
+
+// p(s) = p0 + s·dp, q = p/|p| (NLERP, QUAT_COMPONENTS).
+struct LerpSeg {
+    double t0, inv_h;
+    Q4 p0, dp;
+};
+// q(s) = a·cos(sθ/2) + b·sin(sθ/2)/θ with a = Q, b = Q·(0, r), θ² = r2 (SLERP).
+struct SlerpSeg {
+    double t0, inv_h;
+    Q4 a, b;
+    double r2;
+    Vec3 omega;  // constant world angular velocity R(Q)·r/h
+};
+// Shoemake's quadrangle with control rotations a = Q·exp(α/2), b' = Q'·exp(β/2):
+// A(s) = Q·exp(s r/2), B(s) = a·exp(s ψ/2), q = A·exp(g(s)·χ/2), χ = log(A⁻¹B), g = 2s(1−s).
+struct SquadSeg {
+    double t0, inv_h;
+    Q4 A, BA;  // Q and Q·(0, r)
+    Q4 a, Ba;  // a and a·(0, ψ)
+    double r2, psi2;
+    Vec3 r, psi;
+};
+// Spherical cubic Bezier b0..b3 (de Casteljau with slerp); d01, d12, d23 the rotation vectors
+// between consecutive control rotations (local frames).
+struct BezierSeg {
+    double t0, inv_h;
+    Quat b0, b1, b2;
+    Vec3 d01, d12, d23;
+};
+// q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2).
+struct SplineSeg {
+    double t0, inv_h;
+    Q4 Q;
+    Vec3 c1, c2, c3;
+};
+// Euler angles a0 + s·da (EULER).
+struct EulerSeg {
+    double t0, inv_h;
+    Vec3 a0, da;
+};
+
+// Index j of the segment with knots[j] ≤ t < knots[j+1] (the last segment for t = knots.back()),
+// for knots[0] ≤ t ≤ knots.back(); `hint` is the previous answer, so sorted times cost O(1) each.
+inline std::size_t locate(const double* knots, std::size_t segments, double t, std::size_t& hint) {
+    std::size_t j = hint;
+    if (t >= knots[j]) {
+        if (j + 1 >= segments || t < knots[j + 1]) {
+        } else if (j + 2 >= segments || t < knots[j + 2]) {
+            ++j;
+        } else {
+            j = static_cast<std::size_t>(std::upper_bound(knots + j + 2, knots + segments, t) - knots) - 1;
+        }
+    } else {
+        j = static_cast<std::size_t>(std::upper_bound(knots, knots + j, t) - knots) - 1;
+    }
+    hint = j;
+    return j;
+}
+
+[[noreturn]] inline void bad_time(std::size_t i) {
+    throw InvalidArgument("times[" + std::to_string(i) + "]: not a finite number");
+}
+
+// True when times[i] = times[0] + i·dt for all i, to within 64 ulps of the largest |time|: a sampler
+// may then step from sample to sample by a fixed rotation (error ≤ |ω|·that tolerance, re-anchored
+// every kAnchorSteps samples). Sets dt.
+constexpr int kAnchorSteps = 64;
+inline bool uniform_times(const double* t, std::size_t n, double& dt) {
+    if (n < 8) return false;
+    dt = (t[n - 1] - t[0]) / static_cast<double>(n - 1);
+    if (!(dt > 0.0) || !std::isfinite(dt)) return false;
+    const double tol = 64.0 * 2.220446049250313e-16 * std::fmax(std::fmax(std::fabs(t[0]), std::fabs(t[n - 1])), dt);
+    double err = 0.0;
+    for (std::size_t i = 0; i < n; ++i) err = std::fmax(err, std::fabs(t[i] - (t[0] + static_cast<double>(i) * dt)));
+    return err <= tol;
+}
+
+// A pair (C, K) = (cos φ, sin φ/θ) advanced by a fixed angle δ: (cd, sd) = (cos δ, sin δ/θ),
+// th2sd = θ²·sd. Used for slerps sampled at uniform steps (φ = sθ/2).
+struct Rotor {
+    double C = 1.0, K = 0.0, cd = 1.0, sd = 0.0, th2sd = 0.0;
+    void set(double s, double theta2) {  // φ = sθ/2
+        exp_coeffs(s * s * theta2, C, K);
+        K *= s;
+    }
+    void set_step(double ds, double theta2) {
+        exp_coeffs(ds * ds * theta2, cd, sd);
+        sd *= ds;
+        th2sd = theta2 * sd;
+    }
+    void step() {
+        const double c = C * cd - K * th2sd;
+        K = K * cd + C * sd;
+        C = c;
+    }
+};
+
+// Calls inside(i, j, t) for every time inside [knots.front(), knots.back()] (j its segment) and
+// outside(i, before) for the others; non-finite times throw.
+template <class Inside, class Outside>
+inline void drive(const std::vector<double>& knots, const double* times, std::size_t n, Inside&& inside,
+                  Outside&& outside) {
+    const std::size_t segments = knots.size() - 1;
+    const double first = knots.front(), last = knots.back();
+    std::size_t hint = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double t = times[i];
+        if (t >= first && t <= last) {
+            inside(i, locate(knots.data(), segments, t, hint), t);
+        } else {
+            if (!std::isfinite(t)) bad_time(i);
+            outside(i, t < first);
+        }
+    }
+}
+
+}  // namespace detail
+
+// Hot samplers get an x86-64-v3 (AVX2, FMA) clone next to the baseline x86-64 one, chosen at load
+// time (GCC function multi-versioning), so the module still runs on any x86-64.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define QUATCURVE_HOT
+#endif
+
+struct Curve::Impl {
+    // Knots after splitting the segments that turn more than π (keys plus sub-keys).
+    std::vector<double> kt;    // knot times
+    std::vector<Quat> kq;      // sign-continuous knot rotations, kq[i+1] = kq[i]·exp(kr[i]/2)
+    std::vector<Vec3> kr;      // relative rotation vector of each knot segment (local frame)
+    std::vector<int> kkey;     // key index of each knot, −1 for a sub-key
+    std::vector<int> kseg;     // key segment of each knot segment
+
+    std::vector<detail::LerpSeg> lerp;
+    std::vector<detail::SlerpSeg> slerp;
+    std::vector<detail::SquadSeg> squad;
+    std::vector<detail::BezierSeg> bezier;
+    std::vector<detail::SplineSeg> spline;
+    std::vector<detail::EulerSeg> euler;
+    int euler_axes[3] = {0, 1, 2};  // first, middle, last axis of the Euler order
+
+    // TCB ease: per key segment (ease_out of its first key, ease_in of its second key).
+    bool eased = false;
+    std::vector<double> ease_a, ease_b;
+
+    Quat first_q, last_q;  // constant extrapolation
+};
+
+namespace detail {
+// Builders and evaluators, one family per file.
+void build_lerp(Curve::Impl& m, const std::vector<double>& kt, const std::vector<Quat>& p);  // curve.cpp
+void build_slerp(Curve::Impl& m);                                                            // curve.cpp
+void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::vector<Vec3>& angles,
+                 EulerOrder order);                                                          // curve.cpp
+void build_squad(Curve::Impl& m, const CurveOptions* tcb, std::size_t keys);  // curve_squad.cpp
+void build_bezier(Curve::Impl& m);                                            // curve_squad.cpp
+void build_spline(Curve::Impl& m);                                            // curve_spline.cpp
+
+void sample_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void sample_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void sample_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void sample_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* t,
+                  std::size_t n, double* out);
+void velocity_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* t,
+                    std::size_t n, double* out);
+void sample_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void sample_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+
+inline void store(const Q4& q, double* out) {
+    out[0] = q.w;
+    out[1] = q.x;
+    out[2] = q.y;
+    out[3] = q.z;
+}
+inline void store(const Quat& q, double* out) { store(q4(q), out); }
+inline void store(const Vec3& v, double* out) {
+    out[0] = v.x;
+    out[1] = v.y;
+    out[2] = v.z;
+}
+}  // namespace detail
+
+}  // namespace quatcurve

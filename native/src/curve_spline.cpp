@@ -1,0 +1,139 @@
+// SPLINE_C2: per knot segment i a cubic rotation vector ρ_i(s) in the local frame of knot i,
+// q(s) = q_i·exp(ρ_i(s)/2), with ρ_i(0) = 0, ρ_i(1) = r_i. The unknowns are the body angular
+// velocities w_j at the knots (per frame); with a = h_i·w_i and b = h_i·J_r(r_i)⁻¹·w_{i+1},
+//   ρ_i(s) = a·s + (3r − 2a − b)·s² + (a + b − 2r)·s³,
+// which makes the angular velocity continuous by construction (ω_body = J_r(ρ)·ρ̇). Continuity of the
+// angular acceleration at every interior knot j,
+//   [D(r_{j−1}; b_{j−1})·b_{j−1} + J_r(r_{j−1})·ρ''_{j−1}(1)]/h_{j−1}² = ρ''_j(0)/h_j²
+// (D(r; v) the derivative of J_r at r along v), is a block-tridiagonal system, nonlinear through the
+// D-term, solved by Newton's method. End velocities: the end segments' slerp velocities r/h (as
+// scipy's RotationSpline), so two keys give SLERP.
+#include <cmath>
+
+#include "curve_impl.hpp"
+
+namespace quatcurve::detail {
+
+namespace {
+
+// N(b) = D(r; b)·b = −Ã(r·b)(r×b) + B̃(r·b)·r×(r×b) + B·b×(r×b) and its Jacobian dN/db.
+struct NTerm {
+    Vec3 value;
+    Mat3 jac;
+};
+NTerm n_term(const Vec3& r, const Vec3& b, const JacCoeffs& j) {
+    const Vec3 rb = glm::cross(r, b);
+    const double rdb = glm::dot(r, b);
+    NTerm out;
+    out.value = -j.At * rdb * rb + j.Bt * rdb * glm::cross(r, rb) + j.B * glm::cross(b, rb);
+    for (int k = 0; k < 3; ++k) {
+        Vec3 d(0.0);
+        d[k] = 1.0;
+        const Vec3 rd = glm::cross(r, d);
+        out.jac[k] = -j.At * (r[k] * rb + rdb * rd) + j.Bt * (r[k] * glm::cross(r, rb) + rdb * glm::cross(r, rd)) +
+                     j.B * (glm::cross(d, rb) + glm::cross(b, rd));
+    }
+    return out;
+}
+
+}  // namespace
+
+void build_spline(Curve::Impl& m) {
+    const std::size_t S = m.kr.size();
+    std::vector<double> h(S);
+    std::vector<Mat3> E(S), Jr(S);
+    std::vector<JacCoeffs> jc(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        h[i] = m.kt[i + 1] - m.kt[i];
+        E[i] = jr_inv_matrix(m.kr[i]);
+        Jr[i] = jr_matrix(m.kr[i]);
+        jc[i] = jac_coeffs(glm::dot(m.kr[i], m.kr[i]), false);
+    }
+    // knot velocities: ends fixed, interior from the chord average, then Newton
+    std::vector<Vec3> w(S + 1);
+    w[0] = m.kr[0] / h[0];
+    w[S] = m.kr[S - 1] / h[S - 1];
+    for (std::size_t j = 1; j < S; ++j) w[j] = (m.kr[j - 1] + m.kr[j]) / (h[j - 1] + h[j]);
+
+    const std::size_t n = S - 1;  // interior unknowns w[1..S-1]
+    if (n > 0) {
+        std::vector<Mat3> L(n), D(n), U(n);
+        std::vector<Vec3> F(n);
+        for (int iter = 0; iter < 50; ++iter) {
+            double wmax = 0.0;
+            for (const Vec3& v : w) wmax = std::fmax(wmax, glm::length(v));
+            // residuals and Jacobian blocks of F_j = G_{j−1} − S_j (row m = j − 1)
+            for (std::size_t j = 1; j < S; ++j) {
+                const std::size_t i = j - 1;  // segment arriving at knot j
+                const Vec3& r = m.kr[i];
+                const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[j]);
+                const NTerm nt = n_term(r, b, jc[i]);
+                const Vec3 G = (nt.value + Jr[i] * (-6.0 * r + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
+                const Vec3& r1 = m.kr[j];
+                const Vec3 a1 = h[j] * w[j], b1 = h[j] * (E[j] * w[j + 1]);
+                const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
+                F[j - 1] = G - Sj;
+                L[j - 1] = (2.0 / h[i]) * Jr[i];
+                D[j - 1] = (1.0 / h[i]) * (nt.jac * E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
+                U[j - 1] = (2.0 / h[j]) * E[j];
+            }
+            // block Thomas: J·Δ = −F
+            std::vector<Mat3> Dp(n);
+            std::vector<Vec3> y(n);
+            Dp[0] = D[0];
+            y[0] = -F[0];
+            for (std::size_t k = 1; k < n; ++k) {
+                const Mat3 f = L[k] * glm::inverse(Dp[k - 1]);
+                Dp[k] = D[k] - f * U[k - 1];
+                y[k] = -F[k] - f * y[k - 1];
+            }
+            double step = 0.0;
+            Vec3 x = glm::inverse(Dp[n - 1]) * y[n - 1];
+            for (std::size_t k = n; k-- > 0;) {
+                if (k < n - 1) x = glm::inverse(Dp[k]) * (y[k] - U[k] * x);
+                w[k + 1] += x;
+                step = std::fmax(step, glm::length(x));
+            }
+            if (!(step > 1e-15 * (1.0 + wmax))) break;
+        }
+    }
+    m.spline.resize(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        const Vec3& r = m.kr[i];
+        const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[i + 1]);
+        m.spline[i] = {m.kt[i], 1.0 / h[i], q4(m.kq[i]), a, 3.0 * r - 2.0 * a - b, a + b - 2.0 * r};
+    }
+}
+
+QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    const SplineSeg* seg = m.spline.data();
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const SplineSeg& g = seg[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const double rx = ((g.c3.x * s + g.c2.x) * s + g.c1.x) * s;
+            const double ry = ((g.c3.y * s + g.c2.y) * s + g.c1.y) * s;
+            const double rz = ((g.c3.z * s + g.c2.z) * s + g.c1.z) * s;
+            double c, k;
+            exp_coeffs(rx * rx + ry * ry + rz * rz, c, k);
+            store(mul(g.Q, {c, k * rx, k * ry, k * rz}), out + 4 * i);
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+// ω = R(q_i)·J_l(ρ)·ρ'(s)/h.
+void velocity_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const SplineSeg& g = m.spline[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const Vec3 rho = ((g.c3 * s + g.c2) * s + g.c1) * s;
+            const Vec3 drho = (3.0 * s * g.c3 + 2.0 * g.c2) * s + g.c1;
+            store(rot(to_quat(g.Q), jl_apply(rho, drho * g.inv_h)), out + 3 * i);
+        },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
+}
+
+}  // namespace quatcurve::detail

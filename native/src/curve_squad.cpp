@@ -1,0 +1,323 @@
+// SQUAD and TCB (Shoemake's spherical quadrangle with tangents from the neighbouring keys) and
+// CATMULL_ROM (spherical cubic Bezier by de Casteljau with slerp).
+//
+// Tangents are rotation vectors per unit segment parameter s in the local frame of their knot.
+// A segment's incoming rotation g1 = r[j−1] and outgoing g2 = r[j] are the same vector in the knot's
+// frame (a rotation leaves its own axis fixed), so they combine directly.
+#include <cmath>
+
+#include "curve_impl.hpp"
+
+namespace quatcurve::detail {
+
+namespace {
+
+double per_key(const std::vector<double>& v, int key) {
+    return v.size() == 1 ? v[0] : v[static_cast<std::size_t>(key)];
+}
+
+// 3ds Max's ease curve of a segment: u ↦ u' with zero slope at u = 0 when a > 0 (ease out of the
+// first key) and at u = 1 when b > 0 (ease in to the second key): parabola on [0, a], line, parabola
+// on [1 − b, 1]; a + b > 1 is scaled down to 1. Returns u' and du'/du.
+void ease(double u, double a, double b, double& e, double& de) {
+    const double sum = a + b;
+    if (sum <= 0.0) {
+        e = u;
+        de = 1.0;
+        return;
+    }
+    if (sum > 1.0) {
+        a /= sum;
+        b /= sum;
+    }
+    const double k = 1.0 / (2.0 - a - b);
+    if (u < a) {
+        e = k / a * u * u;
+        de = 2.0 * k / a * u;
+    } else if (u < 1.0 - b || b == 0.0) {
+        e = k * (2.0 * u - a);
+        de = 2.0 * k;
+    } else {
+        const double v = 1.0 - u;
+        e = 1.0 - k / b * v * v;
+        de = 2.0 * k / b * v;
+    }
+}
+
+// Shoemake's quadrangle at s from A = Q·exp(s r/2) = A·C1 + (Q·(0, r))·K1 and
+// B = a·exp(s ψ/2) = a·C2 + (a·(0, ψ))·K2: X = A⁻¹B in A's hemisphere, q = A·X^g, g = 2s(1−s);
+// log and exp by polynomial (curve_math.hpp).
+inline Q4 squad_from(const SquadSeg& g, double s, double C1, double K1, double C2, double K2) {
+    const Q4 A{g.A.w * C1 + g.BA.w * K1, g.A.x * C1 + g.BA.x * K1, g.A.y * C1 + g.BA.y * K1,
+               g.A.z * C1 + g.BA.z * K1};
+    const Q4 B{g.a.w * C2 + g.Ba.w * K2, g.a.x * C2 + g.Ba.x * K2, g.a.y * C2 + g.Ba.y * K2,
+               g.a.z * C2 + g.Ba.z * K2};
+    const Q4 X = cmul(A, B);
+    const double sign = X.w < 0.0 ? -1.0 : 1.0;
+    const double n2 = X.x * X.x + X.y * X.y + X.z * X.z;
+    const double n = std::sqrt(n2);
+    const double f = 2.0 * atan2_over_n(n, sign * X.w) * sign;  // χ = f·vec(X)
+    const double gf = 2.0 * s * (1.0 - s) * f;
+    double c3, k3;
+    exp_coeffs(gf * gf * n2, c3, k3);
+    k3 *= gf;
+    return mul(A, {c3, k3 * X.x, k3 * X.y, k3 * X.z});
+}
+inline Q4 squad_at(const SquadSeg& g, double s) {
+    double c1, k1, c2, k2;
+    exp_coeffs(s * s * g.r2, c1, k1);
+    exp_coeffs(s * s * g.psi2, c2, k2);
+    return squad_from(g, s, c1, k1 * s, c2, k2 * s);
+}
+
+// The same construction with jets: exact world angular velocity; s advances at sd per frame.
+inline RJet squad_jet(const SquadSeg& g, double s, double sd) {
+    const RJet A = jmul(jconst(to_quat(g.A)), jexp({s * g.r, sd * g.r}));
+    const RJet B = jmul(jconst(to_quat(g.a)), jexp({s * g.psi, sd * g.psi}));
+    const VJet chi = jlog(jmul(jinv(A), B));
+    return jmul(A, jexp(jscale(2.0 * s * (1.0 - s), (2.0 - 4.0 * s) * sd, chi)));
+}
+
+// Spherical cubic Bezier by de Casteljau with slerp, with jets. Each slerp's rotation vector takes
+// the branch nearest the Euclidean de Casteljau's difference vector, so it stays continuous in s.
+inline RJet bezier_jet(const BezierSeg& g, double s, double sd) {
+    const RJet P01 = jmul(jconst(g.b0), jexp({s * g.d01, sd * g.d01}));
+    const RJet P12 = jmul(jconst(g.b1), jexp({s * g.d12, sd * g.d12}));
+    const RJet P23 = jmul(jconst(g.b2), jexp({s * g.d23, sd * g.d23}));
+    const VJet L = jlog_near(jmul(jinv(P01), P12), (1.0 - s) * g.d01 + s * g.d12);
+    const VJet R = jlog_near(jmul(jinv(P12), P23), (1.0 - s) * g.d12 + s * g.d23);
+    const RJet P012 = jmul(P01, jexp(jscale(s, sd, L)));
+    const RJet P123 = jmul(P12, jexp(jscale(s, sd, R)));
+    const VJet M = jlog_near(jmul(jinv(P012), P123), (1.0 - s) * L.v + s * R.v);
+    return jmul(P012, jexp(jscale(s, sd, M)));
+}
+
+// Runs inside(i, segment, s, ds/dt) over the knot segments; for an eased TCB curve the time is first
+// warped per key segment by the ease curve (chain rule on ds/dt).
+template <class Inside, class Outside>
+void drive_eased(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
+                 std::size_t n, Inside&& inside, Outside&& outside, const double* seg_t0,
+                 const double* seg_inv_h) {
+    if (!m.eased) {
+        drive(
+            m.kt, times, n,
+            [&](std::size_t i, std::size_t j, double t) {
+                inside(i, j, (t - seg_t0[j]) * seg_inv_h[j], seg_inv_h[j]);
+            },
+            outside);
+        return;
+    }
+    const std::size_t S = m.kt.size() - 1;
+    std::size_t hint = 0;
+    drive(
+        key_times, times, n,
+        [&](std::size_t i, std::size_t k, double t) {
+            const double t0 = key_times[k], h = key_times[k + 1] - t0;
+            double e, de;
+            ease((t - t0) / h, m.ease_a[k], m.ease_b[k], e, de);
+            const double tw = std::fmin(t0 + e * h, key_times[k + 1]);
+            const std::size_t j = locate(m.kt.data(), S, tw, hint);
+            inside(i, j, (tw - seg_t0[j]) * seg_inv_h[j], seg_inv_h[j] * de);
+        },
+        outside);
+}
+
+}  // namespace
+
+// Kochanek–Bartels tangents at every knot (tension t, continuity c, bias b; all 0 for SQUAD and at
+// sub-keys), scaled for the neighbouring segment lengths (KB's adjustment for unequal spacing):
+//   out_j = [(1−t)(1+c)(1+b)/2·g1 + (1−t)(1−c)(1−b)/2·g2] · 2h_j/(h_{j−1}+h_j)
+//   in_j  = [(1−t)(1−c)(1+b)/2·g1 + (1−t)(1+c)(1−b)/2·g2] · 2h_{j−1}/(h_{j−1}+h_j)
+// so with c = 0 both give the angular velocity (g1+g2)/(h_{j−1}+h_j)·(1−t)(…) per frame: C1. End
+// keys take (1−t)·(their segment's rotation). The quadrangle's control rotations then are
+// a_i = q_i·exp(α/2), α = (out_i − r_i)/2 and b_{i+1} = q_{i+1}·exp(β/2), β = (r_i − in_{i+1})/2,
+// which gives q'(0) = out_i and q'(1) = in_{i+1} (per s). At uniform spacing with t = c = b = 0 this
+// is Shoemake's a_i = q_i·exp(−(log(q_i⁻¹q_{i+1}) + log(q_i⁻¹q_{i−1}))/4).
+void build_squad(Curve::Impl& m, const CurveOptions* tcb, std::size_t keys) {
+    const std::size_t S = m.kr.size();
+    std::vector<Vec3> out(S + 1), in(S + 1);
+    for (std::size_t j = 0; j <= S; ++j) {
+        double t = 0.0, c = 0.0, b = 0.0;
+        if (tcb && m.kkey[j] >= 0) {
+            t = per_key(tcb->tension, m.kkey[j]);
+            c = per_key(tcb->continuity, m.kkey[j]);
+            b = per_key(tcb->bias, m.kkey[j]);
+        }
+        if (j == 0) {
+            out[j] = (1.0 - t) * m.kr[0];
+            continue;
+        }
+        if (j == S) {
+            in[j] = (1.0 - t) * m.kr[S - 1];
+            continue;
+        }
+        const Vec3& g1 = m.kr[j - 1];
+        const Vec3& g2 = m.kr[j];
+        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
+        const Vec3 td = 0.5 * (1.0 - t) * ((1.0 + c) * (1.0 + b) * g1 + (1.0 - c) * (1.0 - b) * g2);
+        const Vec3 ts = 0.5 * (1.0 - t) * ((1.0 - c) * (1.0 + b) * g1 + (1.0 + c) * (1.0 - b) * g2);
+        out[j] = td * (2.0 * h1 / (h0 + h1));
+        in[j] = ts * (2.0 * h0 / (h0 + h1));
+    }
+    m.squad.resize(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        const Vec3& r = m.kr[i];
+        const Vec3 alpha = 0.5 * (out[i] - r);
+        const Vec3 beta = 0.5 * (r - in[i + 1]);
+        const Quat a = qmul(m.kq[i], qexp(alpha));
+        const Quat b = qmul(m.kq[i + 1], qexp(beta));
+        // the inner slerp a → b takes the shortest arc, as the textbook formula
+        const Vec3 psi = rotvec_principal(qmul(qconj(a), b));
+        SquadSeg& g = m.squad[i];
+        g.t0 = m.kt[i];
+        g.inv_h = 1.0 / (m.kt[i + 1] - m.kt[i]);
+        g.A = q4(m.kq[i]);
+        g.BA = mul(g.A, {0.0, r.x, r.y, r.z});
+        g.a = q4(a);
+        g.Ba = mul(g.a, {0.0, psi.x, psi.y, psi.z});
+        g.r2 = glm::dot(r, r);
+        g.psi2 = glm::dot(psi, psi);
+        g.r = r;
+        g.psi = psi;
+    }
+    if (tcb) {
+        m.ease_a.resize(keys - 1);
+        m.ease_b.resize(keys - 1);
+        for (std::size_t k = 0; k + 1 < keys; ++k) {
+            m.ease_a[k] = per_key(tcb->ease_out, static_cast<int>(k));
+            m.ease_b[k] = per_key(tcb->ease_in, static_cast<int>(k + 1));
+            if (m.ease_a[k] > 0.0 || m.ease_b[k] > 0.0) m.eased = true;
+        }
+    }
+}
+
+// Non-uniform Catmull–Rom (Barry–Goldman) velocity at each knot, the derivative of the parabola
+// through the neighbours: V_j = (h_j/h_{j−1}·g1 + h_{j−1}/h_j·g2)/(h_{j−1}+h_j) per frame; end knots
+// take their segment's slerp velocity. Bezier controls: b1 = q_i·exp(h·V_i/6), b2 = q_{i+1}·exp(−h·V_{i+1}/6),
+// so the curve leaves q_i with velocity V_i and reaches q_{i+1} with V_{i+1}: C1.
+void build_bezier(Curve::Impl& m) {
+    const std::size_t S = m.kr.size();
+    std::vector<Vec3> V(S + 1);
+    V[0] = m.kr[0] / (m.kt[1] - m.kt[0]);
+    V[S] = m.kr[S - 1] / (m.kt[S] - m.kt[S - 1]);
+    for (std::size_t j = 1; j < S; ++j) {
+        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
+        V[j] = (h1 / h0 * m.kr[j - 1] + h0 / h1 * m.kr[j]) / (h0 + h1);
+    }
+    m.bezier.resize(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        const double h = m.kt[i + 1] - m.kt[i];
+        BezierSeg& g = m.bezier[i];
+        g.t0 = m.kt[i];
+        g.inv_h = 1.0 / h;
+        g.d01 = h / 3.0 * V[i];
+        g.d23 = h / 3.0 * V[i + 1];
+        g.b0 = m.kq[i];
+        g.b1 = qmul(m.kq[i], qexp(g.d01));
+        g.b2 = qmul(m.kq[i + 1], qexp(-g.d23));
+        g.d12 = rotvec_near(qmul(qconj(g.b1), g.b2), m.kr[i] - g.d01 - g.d23);
+    }
+}
+
+QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
+                  std::size_t n, double* out) {
+    const SquadSeg* seg = m.squad.data();
+    auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
+    double dt;
+    if (!m.eased && uniform_times(times, n, dt)) {  // the hot loop: A and B advance by rotor steps
+        const std::size_t S = m.squad.size();
+        const double first = m.kt.front(), last = m.kt.back();
+        std::size_t hint = 0, cur = S;
+        int steps = 0;
+        Rotor ra, rb;
+        double s = 0.0, ds = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const double t = times[i];
+            if (t >= first && t <= last) {
+                const std::size_t j = locate(m.kt.data(), S, t, hint);
+                const SquadSeg& g = seg[j];
+                if (j == cur && steps < kAnchorSteps) {
+                    ra.step();
+                    rb.step();
+                    s += ds;
+                    ++steps;
+                } else {
+                    s = (t - g.t0) * g.inv_h;
+                    ra.set(s, g.r2);
+                    rb.set(s, g.psi2);
+                    if (j != cur) {
+                        ds = dt * g.inv_h;
+                        ra.set_step(ds, g.r2);
+                        rb.set_step(ds, g.psi2);
+                    }
+                    cur = j;
+                    steps = 0;
+                }
+                store(squad_from(g, s, ra.C, ra.K, rb.C, rb.K), out + 4 * i);
+            } else {
+                if (!std::isfinite(t)) bad_time(i);
+                outside(i, t < first);
+                cur = S;
+            }
+        }
+        return;
+    }
+    if (!m.eased) {
+        drive(
+            m.kt, times, n,
+            [&](std::size_t i, std::size_t j, double t) {
+                const SquadSeg& g = seg[j];
+                store(squad_at(g, (t - g.t0) * g.inv_h), out + 4 * i);
+            },
+            outside);
+        return;
+    }
+    std::vector<double> t0(m.squad.size()), ih(m.squad.size());
+    for (std::size_t j = 0; j < t0.size(); ++j) {
+        t0[j] = seg[j].t0;
+        ih[j] = seg[j].inv_h;
+    }
+    drive_eased(
+        m, key_times, times, n,
+        [&](std::size_t i, std::size_t j, double s, double) { store(squad_at(seg[j], s), out + 4 * i); }, outside,
+        t0.data(), ih.data());
+}
+
+void velocity_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
+                    std::size_t n, double* out) {
+    std::vector<double> t0(m.squad.size()), ih(m.squad.size());
+    for (std::size_t j = 0; j < t0.size(); ++j) {
+        t0[j] = m.squad[j].t0;
+        ih[j] = m.squad[j].inv_h;
+    }
+    drive_eased(
+        m, key_times, times, n,
+        [&](std::size_t i, std::size_t j, double s, double sd) { store(squad_jet(m.squad[j], s, sd).w, out + 3 * i); },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); }, t0.data(), ih.data());
+}
+
+// The output takes the hemisphere of the segment's slerp, Q·exp(s r/2), so it is sign-continuous.
+void sample_bezier(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const BezierSeg& g = m.bezier[j];
+            const double s = (t - g.t0) * g.inv_h;
+            const Quat q = bezier_jet(g, s, 0.0).q;
+            const Quat anchor = qmul(m.kq[j], qexp(s * m.kr[j]));
+            store(qdot(q, anchor) < 0.0 ? -q : q, out + 4 * i);
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+void velocity_bezier(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const BezierSeg& g = m.bezier[j];
+            store(bezier_jet(g, (t - g.t0) * g.inv_h, g.inv_h).w, out + 3 * i);
+        },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
+}
+
+}  // namespace quatcurve::detail
