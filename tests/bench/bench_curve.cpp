@@ -98,11 +98,36 @@ LQ lintermediate(const LQ& p, const LQ& q, const LQ& n) {
     return lmul(q, lexp(-(ax + bx) / 4, -(ay + by) / 4, -(az + bz) / 4));
 }
 
-struct Row {
-    std::string name;
-    double msps;
-    std::string note;
-};
+// The GLM loops get the same x86-64-v3 clone as the library's hot samplers (fair comparison).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define BENCH_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define BENCH_HOT
+#endif
+
+BENCH_HOT void glm_slerp_loop(const std::vector<double>& kt, const std::vector<Quat>& keys,
+                              const std::vector<double>& times, std::vector<glm::dquat>& out) {
+    const std::size_t K = kt.size();
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        const double t = times[i];
+        while (j + 2 < K && t >= kt[j + 1]) ++j;
+        out[i] = glm::slerp(keys[j], keys[j + 1], t - kt[j]);
+    }
+}
+
+BENCH_HOT void glm_squad_loop(const std::vector<double>& kt, const std::vector<glm::dquat>& chain,
+                              const std::vector<double>& times, std::vector<glm::dquat>& out) {
+    const std::size_t K = kt.size();
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        const double t = times[i];
+        while (j + 2 < K && t >= kt[j + 1]) ++j;
+        const glm::dquat s1 = j == 0 ? chain[0] : glm::intermediate(chain[j - 1], chain[j], chain[j + 1]);
+        const glm::dquat s2 = j + 2 >= K ? chain[j + 1] : glm::intermediate(chain[j], chain[j + 1], chain[j + 2]);
+        out[i] = glm::squad(chain[j], chain[j + 1], s1, s2, t - kt[j]);
+    }
+}
 
 }  // namespace
 
@@ -125,30 +150,12 @@ int main() {
     for (std::size_t i = 0; i < N; ++i) times[i] = static_cast<double>(i) / static_cast<double>(per);
     std::vector<double> out(4 * N);
 
-    std::vector<Row> rows;
     auto msps = [&](double sec) { return static_cast<double>(N) / sec * 1e-6; };
 
     // ---- GLM loops -----------------------------------------------------------------------------------
     std::vector<glm::dquat> glm_out(N);
-    const double t_glm_slerp = seconds_per_call([&] {
-        std::size_t j = 0;
-        for (std::size_t i = 0; i < N; ++i) {
-            const double t = times[i];
-            while (j + 2 < K && t >= kt[j + 1]) ++j;
-            glm_out[i] = glm::slerp(keys[j], keys[j + 1], t - kt[j]);
-        }
-    });
-    const double t_glm_squad = seconds_per_call([&] {
-        std::size_t j = 0;
-        for (std::size_t i = 0; i < N; ++i) {
-            const double t = times[i];
-            while (j + 2 < K && t >= kt[j + 1]) ++j;
-            const glm::dquat s1 = j == 0 ? chain[0] : glm::intermediate(chain[j - 1], chain[j], chain[j + 1]);
-            const glm::dquat s2 =
-                j + 2 >= K ? chain[j + 1] : glm::intermediate(chain[j], chain[j + 1], chain[j + 2]);
-            glm_out[i] = glm::squad(chain[j], chain[j + 1], s1, s2, t - kt[j]);
-        }
-    });
+    const double t_glm_slerp = seconds_per_call([&] { glm_slerp_loop(kt, keys, times, glm_out); });
+    const double t_glm_squad = seconds_per_call([&] { glm_squad_loop(kt, chain, times, glm_out); });
 
     // ---- ours ------------------------------------------------------------------------------------------
     auto bench_method = [&](const char* name) {
@@ -206,8 +213,6 @@ int main() {
         double glm_err = 0;
         for (std::size_t i = 0; i < N; ++i) {
             const std::size_t j = std::min<std::size_t>(static_cast<std::size_t>(times[i]), K - 2);
-            const double g[4] = {glm_out[i].w, glm_out[i].x, glm_out[i].y, glm_out[i].z};
-            (void)g;
             const glm::dquat q = glm::slerp(keys[j], keys[j + 1], times[i] - kt[j]);
             const double gq[4] = {q.w, q.x, q.y, q.z};
             glm_err = std::max(glm_err, angle_to(lslerp(lq(keys[j]), lq(keys[j + 1]), times[i] - kt[j]), gq));
