@@ -133,8 +133,10 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
 }  // namespace detail
 
 // Hot samplers get an x86-64-v3 (AVX2, FMA) clone next to the baseline x86-64 one, chosen at load
-// time (GCC function multi-versioning), so the module still runs on any x86-64.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+// time (GCC function multi-versioning), so the module still runs on any x86-64. Define
+// QUATCURVE_NO_MULTIVERSION to build the baseline only.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(QUATCURVE_NO_MULTIVERSION)
 #define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define QUATCURVE_HOT
