@@ -1,5 +1,172 @@
+// Bindings of key reduction (reduce.hpp). Bindings only bind: arrays in, the native reducer, arrays
+// out; every check and formula lives in native/src/reduce*.cpp.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/euler.hpp"
+#include "quatcurve/reduce.hpp"
 
 namespace quatcurve::bindings {
-void bind_reduce(pybind11::module_&) {}  // filled in by the reduce issue
+
+namespace {
+
+using IArray = py::array_t<std::int64_t>;
+
+std::vector<double> read_times(py::handle obj) {
+    const Batch b = as_batch(obj, {}, "times");
+    if (b.batch_shape.size() != 1)
+        throw py::value_error("times: expected a 1-D array, got shape " + shape_string(b.array));
+    return std::vector<double>(b.data(), b.data() + b.count);
+}
+
+// An (N, width) array as N rows; width 4 for quaternions, 3 for Euler angles.
+Batch read_rows(py::handle obj, py::ssize_t width, const char* name, std::size_t n) {
+    Batch b = as_batch(obj, {width}, name);
+    if (b.batch_shape.size() != 1)
+        throw py::value_error(std::string(name) + ": expected shape (N, " + std::to_string(width) +
+                              "), got " + shape_string(b.array));
+    if (b.count != n)
+        throw py::value_error(std::string(name) + ": " + std::to_string(b.count) +
+                              " rows for " + std::to_string(n) + " times");
+    return b;
+}
+
+IArray index_array(const std::vector<std::size_t>& indices) {
+    IArray out(static_cast<py::ssize_t>(indices.size()));
+    auto* p = out.mutable_data();
+    for (std::size_t a = 0; a < indices.size(); ++a) p[a] = static_cast<std::int64_t>(indices[a]);
+    return out;
+}
+
+DArray vector_array(const std::vector<double>& v) {
+    DArray out(static_cast<py::ssize_t>(v.size()));
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+}
+
+DArray pair_array(const std::vector<double>& v) {
+    DArray out({static_cast<py::ssize_t>(v.size() / 2), static_cast<py::ssize_t>(2)});
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return out;
+}
+
+// LINEAR: the indices (synchronized) or one index array per channel; BEZIER: the ReducedKeys.
+py::object linear_or_full(const ReducedKeys& r, bool synchronized) {
+    if (r.interpolation == KeyInterpolation::BEZIER) return py::cast(r);
+    if (synchronized) return index_array(r.channels[0].indices);
+    py::list per_channel;
+    for (const ReducedChannel& ch : r.channels) per_channel.append(index_array(ch.indices));
+    return per_channel;
+}
+
+}  // namespace
+
+void bind_reduce(py::module_& m) {
+    py::class_<ReducedChannel>(m, "ReducedChannel",
+                               "The keys of one F-curve as Blender stores them (float32 values).")
+        .def_property_readonly("indices", [](const ReducedChannel& c) { return index_array(c.indices); },
+                               "kept sample indices (int64), first and last included")
+        .def_property_readonly("frames", [](const ReducedChannel& c) { return vector_array(c.frames); },
+                               "key frames (float32 values as float64)")
+        .def_property_readonly("values", [](const ReducedChannel& c) { return vector_array(c.values); },
+                               "key values (float32 values as float64)")
+        .def_property_readonly("handle_left",
+                               [](const ReducedChannel& c) { return pair_array(c.handle_left); },
+                               "(K, 2) absolute (frame, value) left handles; (0, 2) for LINEAR")
+        .def_property_readonly("handle_right",
+                               [](const ReducedChannel& c) { return pair_array(c.handle_right); },
+                               "(K, 2) absolute (frame, value) right handles; (0, 2) for LINEAR")
+        .def("__len__", [](const ReducedChannel& c) { return c.indices.size(); })
+        .def("__repr__", [](const ReducedChannel& c) {
+            return "<ReducedChannel " + std::to_string(c.indices.size()) + " keys>";
+        });
+
+    py::class_<ReducedKeys>(m, "ReducedKeys",
+                            "Result of a BEZIER reduction: per-channel keys and handles (w, x, y, z "
+                            "or X, Y, Z). Handles are broken at keys: set handle types to 'FREE'.")
+        .def_property_readonly("interpolation",
+                               [](const ReducedKeys& r) { return key_interpolation_name(r.interpolation); })
+        .def_readonly("synchronized", &ReducedKeys::synchronized,
+                      "True when every channel has the same key indices")
+        .def_readonly("channels", &ReducedKeys::channels)
+        .def_readonly("max_error", &ReducedKeys::max_error,
+                      "largest error (radians) over all input samples under Blender's evaluation")
+        .def_property_readonly("key_count", &ReducedKeys::key_count,
+                               "keys summed over channels (Blender's keyframe_points)")
+        .def("__repr__", [](const ReducedKeys& r) {
+            return std::string("<ReducedKeys ") + key_interpolation_name(r.interpolation) + ", " +
+                   std::to_string(r.channels.size()) + " channels, " + std::to_string(r.key_count()) +
+                   " keys, max_error " + std::to_string(r.max_error) + " rad>";
+        });
+
+    m.def(
+        "reduce_keys",
+        [](py::handle times, py::handle quats, double tolerance, const std::string& interpolation,
+           bool synchronized) {
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const std::vector<double> t = read_times(times);
+            const Batch q = read_rows(quats, 4, "quats", t.size());
+            std::vector<Quat> qs(t.size());
+            for (std::size_t k = 0; k < t.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
+            ReducedKeys r;
+            {
+                py::gil_scoped_release release;
+                r = reduce_keys(t, qs, tolerance, ipo, synchronized);
+            }
+            return linear_or_full(r, synchronized);
+        },
+        py::arg("times"), py::arg("quats"), py::arg("tolerance"), py::arg("interpolation") = "LINEAR",
+        py::arg("synchronized") = true,
+        R"doc(Reduce dense quaternion samples to the fewest keys Blender can evaluate within `tolerance`.
+
+times: (N,) strictly increasing frames; quats: (N, 4) (w, x, y, z), kept as given (pass a
+hemisphere-continuous sequence: a sign flip between samples forces keys on both sides);
+tolerance: radians (geodesic angle, sign-invariant), >= 0.
+
+Blender's evaluation of the kept keys — each channel linear (LINEAR) or Bezier with the returned
+handles (BEZIER), in float32, then normalized — stays within `tolerance` of every input sample
+(verified by emulating Blender's F-curve evaluation). The first and last samples are always kept;
+tolerance 0 keeps every sample.
+
+Returns, for LINEAR: the kept indices (int64 array) when synchronized, else a list of four index
+arrays (w, x, y, z). For BEZIER: a ReducedKeys with per-channel indices, frames, values,
+handle_left/handle_right (K, 2) absolute (frame, value), max_error and key_count.
+synchronized=False lets each channel keep its own keys where that saves keys.)doc");
+
+    m.def(
+        "reduce_keys_euler",
+        [](py::handle times, py::handle angles, const std::string& order, double tolerance,
+           const std::string& interpolation, bool synchronized) {
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const EulerOrder ord = parse_euler_order(order);
+            const std::vector<double> t = read_times(times);
+            const Batch a = read_rows(angles, 3, "angles", t.size());
+            std::vector<Vec3> as(t.size());
+            for (std::size_t k = 0; k < t.size(); ++k) {
+                const double* p = a.data() + 3 * k;
+                as[k] = Vec3(p[0], p[1], p[2]);
+            }
+            ReducedKeys r;
+            {
+                py::gil_scoped_release release;
+                r = reduce_keys_euler(t, as, ord, tolerance, ipo, synchronized);
+            }
+            return linear_or_full(r, synchronized);
+        },
+        py::arg("times"), py::arg("angles"), py::arg("order"), py::arg("tolerance"),
+        py::arg("interpolation") = "LINEAR", py::arg("synchronized") = true,
+        R"doc(Reduce dense Euler samples (N, 3) (radians about X, Y, Z; Blender order, 'XYZ' = Rz·Ry·Rx).
+
+The bound is on the rotation Blender builds from the three evaluated angle channels. Angles are
+kept as given (pass a filtered, continuous sequence). Returns as reduce_keys, with three channels
+(X, Y, Z).)doc");
+}
+
 }  // namespace quatcurve::bindings

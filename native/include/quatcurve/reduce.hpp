@@ -1,0 +1,122 @@
+// Key reduction with a guaranteed angular error bound.
+//
+// Input: dense samples of a rotation — times (frames, strictly increasing) and either quaternions
+// (w, x, y, z) or Euler angles (about X, Y, Z, radians, Blender order). Output: the keys Blender
+// should store on the rotation F-curves — one F-curve per channel (w, x, y, z or X, Y, Z angle) —
+// such that Blender's own evaluation of those keys stays within `tolerance` (radians, geodesic
+// rotation angle, sign-invariant for quaternions) of EVERY input sample:
+//
+//   LINEAR  Blender evaluates each channel linearly between keys (float32), then, for quaternions,
+//           normalizes the 4-vector (no hemisphere fix), for Euler builds the rotation from the
+//           three angles. Keys are input samples, stored as given (rounded to float32).
+//   BEZIER  Blender's Bezier segment: a cubic in (frame, value) through the two keys with the left
+//           key's right handle and the right key's left handle as inner control points. We place
+//           handle frames at 1/3 and 2/3 of each segment, so the frame is (up to float32 rounding of
+//           the handle frames) linear in the curve parameter, and fit the handle values by weighted
+//           least squares in the rotation metric, then by iterative reweighting toward the minimax
+//           fit. Each segment has its own handles: tangents are broken at keys, so the F-curves need
+//           handle_left_type = handle_right_type = 'FREE' (set the types BEFORE the coordinates, or
+//           Blender recomputes the handles). Key values are input samples (float32).
+//
+// The bound is verified, not hoped for: after fitting, every input sample is evaluated exactly as
+// Blender's fcurve_eval_keyframes does (float32 key frames, values and handles; float32 arithmetic;
+// Blender's cubic root finder for the Bezier frame→parameter step; binary-search threshold 1e-4
+// frames), and segments that exceed the bound are refitted or split (a key inserted) until every
+// sample passes. The verification threshold keeps a margin of 2e-6 rad below `tolerance` (half the
+// tolerance when that is below 4e-6): Blender's own float32 arithmetic may round differently from
+// the emulation (its Bezier value is a float power-basis cubic, ~6e-7 per channel).
+//
+// Limits, stated: the keys themselves are input values rounded to float32, so a sample on a key is
+// off by up to ~2.5e-7 rad; a tolerance below that cannot be met and keeps every key (max_error then
+// reports the float32 floor). Between samples nothing is promised by the bound; the fit is guarded
+// there (see reduce.cpp): midway between samples the result stays within twice the tolerance plus a
+// quarter of the local per-sample rotation step of the dense input's own LINEAR evaluation. Samples closer than 1e-4 frames to a key evaluate to that key in Blender.
+// Quaternion input should be hemisphere-continuous (consecutive dot products ≥ 0; flip signs first
+// if needed): values are kept as given, and Blender interpolates a sign flip through zero, so a flip
+// forces keys on both sides of it. Non-unit quaternions are allowed (the reference rotation is the
+// normalized sample; the stored values keep their scale).
+//
+// Key choice: greedy — from each key, the farthest end whose fitted segment passes (exponential then
+// binary search), then a pass that removes keys whose neighbours can be joined. synchronized = true
+// keeps the same frames on every channel (what glTF export and hand editing want); false gives each
+// channel its own keys, fitted one channel after the other (quaternions w, x, y, z; Euler X, Y, Z),
+// each against the others' fitted curves under a growing share of the tolerance, and returns that
+// or the synchronized result, whichever has fewer keys in total.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "quatcurve/euler.hpp"
+#include "quatcurve/types.hpp"
+
+namespace quatcurve {
+
+enum class KeyInterpolation { LINEAR, BEZIER };
+
+// "LINEAR" or "BEZIER" (Blender's keyframe interpolation names); anything else throws InvalidArgument.
+KeyInterpolation parse_key_interpolation(const std::string& name);
+const char* key_interpolation_name(KeyInterpolation interpolation);
+
+// The keys of one F-curve, as Blender stores them. Every frame and value is float32-representable
+// (Blender stores floats), so writing them with foreach_set from float32 arrays is exact.
+struct ReducedChannel {
+    std::vector<std::size_t> indices;  // kept input samples, increasing; first and last included
+    std::vector<double> frames;        // float32(times[indices])
+    std::vector<double> values;        // float32(channel value at indices)
+    // BEZIER: absolute (frame, value) per key, interleaved [f0, v0, f1, v1, ...] (K×2). The first
+    // key's left handle and the last key's right handle only shape extrapolation, which is constant
+    // (Blender's default): they mirror the inner handle. LINEAR: empty.
+    std::vector<double> handle_left;
+    std::vector<double> handle_right;
+};
+
+struct ReducedKeys {
+    KeyInterpolation interpolation = KeyInterpolation::LINEAR;
+    bool synchronized = true;              // every channel has the same indices
+    std::vector<ReducedChannel> channels;  // 4 (w, x, y, z) or 3 (angles about X, Y, Z)
+    double max_error = 0.0;                // largest error over all input samples (radians), emulated
+    std::size_t key_count() const;         // sum of keys over channels (Blender's keyframe_points)
+};
+
+// Reduce quaternion samples. times: n strictly increasing finite frames; quats: n finite nonzero
+// quaternions; tolerance: finite, ≥ 0 radians. tolerance 0 keeps every sample; constant motion gives
+// two keys (one for n = 1). Throws InvalidArgument naming the argument and element ("times[5]: not
+// increasing", "quats[3]: zero-length quaternion", "tolerance: must be finite and >= 0").
+ReducedKeys reduce_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
+                        double tolerance, KeyInterpolation interpolation = KeyInterpolation::LINEAR,
+                        bool synchronized = true);
+
+// Reduce Euler samples (angles about X, Y, Z in radians, Blender order). The bound is on the rotation
+// Blender builds from the three evaluated angles. Angles are kept as given: pass a continuous
+// sequence (euler_filter) or every 2π jump forces keys.
+ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vector<Vec3>& angles,
+                              EulerOrder order, double tolerance,
+                              KeyInterpolation interpolation = KeyInterpolation::LINEAR,
+                              bool synchronized = true);
+
+// ---- Blender's F-curve evaluation, emulated (float32, as in Blender's fcurve.cc) ----------------
+// Value of the F-curve `channel` (keys with LINEAR or BEZIER interpolation, constant extrapolation)
+// at `frame`: at or before the first key its value, at or after the last key its value; within 1e-4
+// frames of a key that key's value; otherwise the segment's linear ease or Bezier (Blender's
+// correct_bezpart, findzero/solve_cubic in double from float coefficients, berekeny in float; 0 when
+// the root finder fails, as Blender). An empty channel gives 0.
+float blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolation, float frame);
+
+// blender_evaluate at every frame of `frames` into out (same length).
+void blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolation,
+                      const std::vector<double>& frames, std::vector<double>& out);
+
+// The same for increasing `frames`, in one walk over the keys. param_cache (optional) holds the
+// Bezier curve parameter per frame: filled when reuse is false, read when reuse is true — valid
+// only for a channel with the same key frames (hence handle frames) as the one that filled it.
+void blender_evaluate_sorted(const ReducedChannel& channel, KeyInterpolation interpolation,
+                             const std::vector<double>& frames, std::vector<double>& out,
+                             std::vector<float>* param_cache = nullptr, bool reuse = false);
+
+// The curve parameter Blender's root finder returns for `frame` in a Bezier segment whose key and
+// handle frames are q0, q1, q2, q3 (findzero's first root in [0, 1]); -1 when it finds none.
+float blender_bezier_parameter(float frame, float q0, float q1, float q2, float q3);
+
+}  // namespace quatcurve

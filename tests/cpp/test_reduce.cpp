@@ -1,0 +1,349 @@
+// Key reduction (reduce.hpp): Blender's F-curve evaluation emulation against closed forms, and the
+// reducer's bound, key choice, edge cases and bad input. The Python suite (test_reduce.py) checks the
+// bound again with an independent numpy re-implementation of Blender's evaluation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "quatcurve/errors.hpp"
+#include "quatcurve/euler.hpp"
+#include "quatcurve/quat.hpp"
+#include "quatcurve/reduce.hpp"
+
+using namespace quatcurve;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+ReducedChannel make_keys(std::vector<double> frames, std::vector<double> values) {
+    ReducedChannel ch;
+    ch.frames = std::move(frames);
+    ch.values = std::move(values);
+    for (std::size_t a = 0; a < ch.frames.size(); ++a) ch.indices.push_back(a);
+    return ch;
+}
+
+// Random smooth quaternion motion: rotation vectors on a Catmull-Rom spline through a random walk.
+std::vector<Quat> smooth_quats(unsigned seed, std::size_t n, std::size_t every = 10,
+                               double step_deg = 15.0) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> step(0.0, step_deg * kDeg);
+    std::vector<Vec3> keys(n / every + 4);
+    for (std::size_t k = 1; k < keys.size(); ++k)
+        keys[k] = keys[k - 1] + Vec3(step(rng), step(rng), step(rng));
+    std::vector<Quat> q(n);
+    Quat prev(1, 0, 0, 0);
+    for (std::size_t f = 0; f < n; ++f) {
+        const std::size_t k = f / every + 1;
+        const double u = double(f % every) / double(every);
+        const Vec3 &p0 = keys[k - 1], &p1 = keys[k], &p2 = keys[k + 1], &p3 = keys[k + 2];
+        const Vec3 v = 0.5 * ((2.0 * p1) + (-p0 + p2) * u + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * u * u +
+                              (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * u * u * u);
+        const double a = glm::length(v);
+        Quat r = a > 0 ? axis_angle_to_quat(v / a, a) : Quat(1, 0, 0, 0);
+        if (r.w * prev.w + r.x * prev.x + r.y * prev.y + r.z * prev.z < 0) r = -r;
+        q[f] = prev = r;
+    }
+    return q;
+}
+
+std::vector<double> frames_of(std::size_t n, double start = 0.0, double dt = 1.0) {
+    std::vector<double> t(n);
+    for (std::size_t k = 0; k < n; ++k) t[k] = start + dt * double(k);
+    return t;
+}
+
+// Largest rotation error over every sample under Blender's evaluation (emulated) of the result.
+double quat_max_error(const ReducedKeys& r, const std::vector<double>& times,
+                      const std::vector<Quat>& q) {
+    std::vector<std::vector<double>> vals(4);
+    for (int c = 0; c < 4; ++c) blender_evaluate(r.channels[c], r.interpolation, times, vals[c]);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+        const Quat e(vals[0][k], vals[1][k], vals[2][k], vals[3][k]);
+        worst = std::max(worst, angle_between(e, q[k]));
+    }
+    return worst;
+}
+
+double euler_max_error(const ReducedKeys& r, const std::vector<double>& times,
+                       const std::vector<Vec3>& a, EulerOrder order) {
+    std::vector<std::vector<double>> vals(3);
+    for (int c = 0; c < 3; ++c) blender_evaluate(r.channels[c], r.interpolation, times, vals[c]);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+        const Vec3 e(vals[0][k], vals[1][k], vals[2][k]);
+        worst = std::max(worst, angle_between(euler_to_quat(e, order), euler_to_quat(a[k], order)));
+    }
+    return worst;
+}
+
+void expect_structure(const ReducedKeys& r, std::size_t n, bool synchronized) {
+    for (const ReducedChannel& ch : r.channels) {
+        ASSERT_FALSE(ch.indices.empty());
+        EXPECT_EQ(ch.indices.front(), 0u);
+        EXPECT_EQ(ch.indices.back(), n - 1);
+        for (std::size_t a = 1; a < ch.indices.size(); ++a) EXPECT_LT(ch.indices[a - 1], ch.indices[a]);
+        if (r.interpolation == KeyInterpolation::BEZIER) {
+            EXPECT_EQ(ch.handle_left.size(), 2 * ch.indices.size());
+            EXPECT_EQ(ch.handle_right.size(), 2 * ch.indices.size());
+        }
+    }
+    if (synchronized)
+        for (const ReducedChannel& ch : r.channels) EXPECT_EQ(ch.indices, r.channels[0].indices);
+}
+
+template <class F>
+void expect_invalid(F f, const std::string& fragment) {
+    try {
+        f();
+        ADD_FAILURE() << "no InvalidArgument (expected '" << fragment << "')";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+
+// ---- Blender's evaluation, emulated ----------------------------------------------------------------
+
+TEST(ReduceBlenderEval, LinearSegmentsAndConstantExtrapolation) {
+    const ReducedChannel ch = make_keys({0.0, 10.0, 20.0}, {0.0, 1.0, -1.0});
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 2.5f), 0.25f);
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 15.0f), 0.0f);
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, -5.0f), 0.0f);
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 25.0f), -1.0f);
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 10.0f), 1.0f);
+    // Within Blender's 1e-4-frame threshold of a key: the key's value.
+    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 10.00005f), 1.0f);
+    const ReducedChannel one = make_keys({3.0}, {0.7});
+    EXPECT_FLOAT_EQ(blender_evaluate(one, KeyInterpolation::BEZIER, 100.0f), 0.7f);
+    EXPECT_FLOAT_EQ(blender_evaluate(ReducedChannel{}, KeyInterpolation::LINEAR, 1.0f), 0.0f);
+}
+
+TEST(ReduceBlenderEval, BezierWithThirdHandlesIsTheCubicInTheParameter) {
+    // Handle frames at exactly 1/3 and 2/3 (representable): frame is linear in u, the value is the
+    // Bernstein cubic.
+    ReducedChannel ch = make_keys({0.0, 3.0}, {0.2, -0.5});
+    ch.handle_left = {-1.0, 0.2, 2.0, 0.9};
+    ch.handle_right = {1.0, -0.7, 4.0, -0.5};
+    for (double u : {0.1, 0.25, 0.5, 0.8, 0.95}) {
+        const double v = 1 - u;
+        const double expected = v * v * v * 0.2 + 3 * v * v * u * -0.7 + 3 * v * u * u * 0.9 +
+                                u * u * u * -0.5;
+        // float32 power-basis evaluation (berekeny) rounds to ~1e-6 here.
+        EXPECT_NEAR(blender_evaluate(ch, KeyInterpolation::BEZIER, float(3.0 * u)), expected, 1.5e-6)
+            << "u = " << u;
+        EXPECT_NEAR(blender_bezier_parameter(float(3.0 * u), 0.0f, 1.0f, 2.0f, 3.0f), u, 1e-7);
+    }
+    // A flat segment takes Blender's shortcut (the key's value).
+    ReducedChannel flat = make_keys({0.0, 3.0}, {0.5, 0.5});
+    flat.handle_left = {-1.0, 0.5, 2.0, 0.5};
+    flat.handle_right = {1.0, 0.5, 4.0, 0.5};
+    EXPECT_EQ(blender_evaluate(flat, KeyInterpolation::BEZIER, 1.3f), 0.5f);
+}
+
+TEST(ReduceBlenderEval, SortedSweepEqualsPointwiseEvaluation) {
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> val(-1.0, 1.0), gap(0.3, 4.0);
+    ReducedChannel ch;
+    double f = 10.0;
+    for (int a = 0; a < 40; ++a) {
+        ch.indices.push_back(a);
+        ch.frames.push_back(double(float(f)));
+        ch.values.push_back(double(float(val(rng))));
+        f += gap(rng);
+    }
+    for (std::size_t a = 0; a < ch.frames.size(); ++a) {
+        const double dl = a > 0 ? ch.frames[a] - ch.frames[a - 1] : 1.0;
+        const double dr = a + 1 < ch.frames.size() ? ch.frames[a + 1] - ch.frames[a] : 1.0;
+        ch.handle_left.push_back(double(float(ch.frames[a] - dl / 3)));
+        ch.handle_left.push_back(double(float(val(rng))));
+        ch.handle_right.push_back(double(float(ch.frames[a] + dr / 3)));
+        ch.handle_right.push_back(double(float(val(rng))));
+    }
+    std::vector<double> at;
+    for (double x = 5.0; x < f + 5.0; x += 0.173) at.push_back(x);
+    for (double key : ch.frames) {  // on, and within the threshold of, every key
+        at.push_back(key);
+        at.push_back(key + 0.00005);
+        at.push_back(key - 0.00015);
+    }
+    std::sort(at.begin(), at.end());
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+        std::vector<double> swept;
+        blender_evaluate_sorted(ch, ipo, at, swept);
+        for (std::size_t k = 0; k < at.size(); ++k)
+            ASSERT_EQ(swept[k], double(blender_evaluate(ch, ipo, float(at[k])))) << "frame " << at[k];
+    }
+}
+
+// ---- the reducer --------------------------------------------------------------------------------------
+
+TEST(Reduce, ParseInterpolation) {
+    EXPECT_EQ(parse_key_interpolation("LINEAR"), KeyInterpolation::LINEAR);
+    EXPECT_EQ(parse_key_interpolation("BEZIER"), KeyInterpolation::BEZIER);
+    EXPECT_STREQ(key_interpolation_name(KeyInterpolation::BEZIER), "BEZIER");
+    expect_invalid([] { parse_key_interpolation("CUBIC"); }, "interpolation: unknown");
+}
+
+TEST(Reduce, QuaternionBoundHoldsForEveryVariant) {
+    const std::vector<Quat> q = smooth_quats(1, 500);
+    const std::vector<double> t = frames_of(q.size());
+    for (double tol_deg : {0.02, 0.1, 1.0, 4.0}) {
+        const double tol = tol_deg * kDeg;
+        for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+            std::size_t sync_keys = 0;
+            for (bool sync : {true, false}) {
+                const ReducedKeys r = reduce_keys(t, q, tol, ipo, sync);
+                expect_structure(r, q.size(), sync);
+                const double err = quat_max_error(r, t, q);
+                EXPECT_LE(err, tol) << tol_deg << " deg, " << key_interpolation_name(ipo);
+                EXPECT_NEAR(r.max_error, err, 1e-9);
+                EXPECT_LT(r.key_count(), 4 * q.size());
+                if (sync) sync_keys = r.key_count();
+                else EXPECT_LE(r.key_count(), sync_keys);
+            }
+        }
+    }
+}
+
+TEST(Reduce, EulerBoundHoldsForEveryOrder) {
+    const std::vector<Quat> q = smooth_quats(2, 300);
+    const std::vector<double> t = frames_of(q.size());
+    for (EulerOrder order : {EulerOrder::XYZ, EulerOrder::XZY, EulerOrder::YXZ, EulerOrder::YZX,
+                             EulerOrder::ZXY, EulerOrder::ZYX}) {
+        std::vector<Vec3> a(q.size());
+        for (std::size_t k = 0; k < q.size(); ++k) a[k] = quat_to_euler(q[k], order);
+        euler_filter(a.data(), a.size(), order);
+        for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+            for (bool sync : {true, false}) {
+                const ReducedKeys r = reduce_keys_euler(t, a, order, 0.1 * kDeg, ipo, sync);
+                expect_structure(r, q.size(), sync);
+                EXPECT_EQ(r.channels.size(), 3u);
+                EXPECT_LE(euler_max_error(r, t, a, order), 0.1 * kDeg) << euler_order_name(order);
+            }
+        }
+    }
+}
+
+TEST(Reduce, BezierNeedsFarFewerKeysThanLinearOnSmoothMotion) {
+    const std::vector<Quat> q = smooth_quats(4, 1000);
+    const std::vector<double> t = frames_of(q.size());
+    const std::size_t lin = reduce_keys(t, q, 0.1 * kDeg).key_count();
+    const std::size_t bez = reduce_keys(t, q, 0.1 * kDeg, KeyInterpolation::BEZIER).key_count();
+    EXPECT_LT(bez, lin / 2);
+    EXPECT_LT(bez, 4000u / 5);
+}
+
+TEST(Reduce, FarFramesKeepTheBound) {
+    // Near frame 100,000 float32 frames are coarse (ulp 0.0078): Blender's frame→parameter map of
+    // the stored handle frames is not linear; verification and repair still hold the bound.
+    const std::vector<Quat> q = smooth_quats(5, 600, 20, 25.0);
+    const std::vector<double> t = frames_of(q.size(), 100000.0, 0.41);
+    for (bool sync : {true, false}) {
+        const ReducedKeys r = reduce_keys(t, q, 0.05 * kDeg, KeyInterpolation::BEZIER, sync);
+        EXPECT_LE(quat_max_error(r, t, q), 0.05 * kDeg);
+    }
+}
+
+TEST(Reduce, ToleranceZeroKeepsEverySample) {
+    const std::vector<Quat> q = smooth_quats(6, 40);
+    const std::vector<double> t = frames_of(q.size());
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER})
+        for (bool sync : {true, false})
+            for (const ReducedChannel& ch : reduce_keys(t, q, 0.0, ipo, sync).channels)
+                EXPECT_EQ(ch.indices.size(), q.size());
+}
+
+TEST(Reduce, ConstantMotionGivesTwoKeysOneSampleOneKey) {
+    const std::vector<double> t = frames_of(50);
+    const std::vector<Quat> q(50, Quat(0.5, 0.5, -0.5, 0.5));
+    const std::vector<Vec3> a(50, Vec3(0.3, -0.2, 1.0));
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+        for (bool sync : {true, false}) {
+            for (const ReducedChannel& ch : reduce_keys(t, q, 1e-3, ipo, sync).channels)
+                EXPECT_EQ(ch.indices, (std::vector<std::size_t>{0, 49}));
+            for (const ReducedChannel& ch :
+                 reduce_keys_euler(t, a, EulerOrder::ZYX, 1e-3, ipo, sync).channels)
+                EXPECT_EQ(ch.indices, (std::vector<std::size_t>{0, 49}));
+            const ReducedKeys one = reduce_keys({7.0}, {Quat(1, 0, 0, 0)}, 0.1, ipo, sync);
+            for (const ReducedChannel& ch : one.channels) {
+                EXPECT_EQ(ch.indices, std::vector<std::size_t>{0});
+                EXPECT_EQ(ch.frames, std::vector<double>{7.0});
+            }
+        }
+    }
+}
+
+TEST(Reduce, KeysAreFloat32InputValuesAndHandlesSitAtThirds) {
+    const std::vector<Quat> q = smooth_quats(7, 200);
+    const std::vector<double> t = frames_of(q.size(), 3.0, 0.7);
+    const ReducedKeys r = reduce_keys(t, q, 0.2 * kDeg, KeyInterpolation::BEZIER, false);
+    for (int c = 0; c < 4; ++c) {
+        const ReducedChannel& ch = r.channels[c];
+        for (std::size_t a = 0; a < ch.indices.size(); ++a) {
+            const std::size_t k = ch.indices[a];
+            const double v[4] = {q[k].w, q[k].x, q[k].y, q[k].z};
+            EXPECT_EQ(ch.values[a], double(float(v[c])));
+            EXPECT_EQ(ch.frames[a], double(float(t[k])));
+            if (a + 1 < ch.indices.size()) {
+                const double d = ch.frames[a + 1] - ch.frames[a];
+                EXPECT_NEAR(ch.handle_right[2 * a] - ch.frames[a], d / 3, 1e-5);
+                EXPECT_NEAR(ch.frames[a + 1] - ch.handle_left[2 * (a + 1)], d / 3, 1e-5);
+            }
+        }
+    }
+}
+
+TEST(Reduce, HemisphereFlipForcesKeysOnBothSides) {
+    std::vector<Quat> q = smooth_quats(8, 120);
+    for (std::size_t k = 60; k < q.size(); ++k) q[k] = -q[k];
+    const std::vector<double> t = frames_of(q.size());
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+        const ReducedKeys r = reduce_keys(t, q, 0.5 * kDeg, ipo, false);
+        EXPECT_LE(quat_max_error(r, t, q), 0.5 * kDeg);
+        for (const ReducedChannel& ch : r.channels) {
+            EXPECT_NE(std::find(ch.indices.begin(), ch.indices.end(), 59u), ch.indices.end());
+            EXPECT_NE(std::find(ch.indices.begin(), ch.indices.end(), 60u), ch.indices.end());
+        }
+    }
+}
+
+TEST(Reduce, Deterministic) {
+    const std::vector<Quat> q = smooth_quats(9, 300);
+    const std::vector<double> t = frames_of(q.size());
+    const ReducedKeys a = reduce_keys(t, q, 0.1 * kDeg, KeyInterpolation::BEZIER, false);
+    const ReducedKeys b = reduce_keys(t, q, 0.1 * kDeg, KeyInterpolation::BEZIER, false);
+    for (int c = 0; c < 4; ++c) {
+        EXPECT_EQ(a.channels[c].indices, b.channels[c].indices);
+        EXPECT_EQ(a.channels[c].handle_right, b.channels[c].handle_right);
+    }
+}
+
+TEST(Reduce, BadInputNamesTheArgument) {
+    const std::vector<double> t = frames_of(4);
+    const std::vector<Quat> q(4, Quat(1, 0, 0, 0));
+    const std::vector<Vec3> a(4, Vec3(0.0));
+    expect_invalid([&] { reduce_keys(t, q, -1.0); }, "tolerance");
+    expect_invalid([&] { reduce_keys(t, q, std::nan("")); }, "tolerance");
+    expect_invalid([&] { reduce_keys_euler(t, a, EulerOrder::XYZ, INFINITY); }, "tolerance");
+    expect_invalid([&] { reduce_keys({}, {}, 0.1); }, "times: at least one sample");
+    expect_invalid([&] { reduce_keys({0, 1, 1, 2}, q, 0.1); }, "times[2]: not increasing");
+    expect_invalid([&] { reduce_keys({0, 2, 1, 3}, q, 0.1); }, "times[2]: not increasing");
+    expect_invalid([&] { reduce_keys({0, 1, NAN, 3}, q, 0.1); }, "times[2]: non-finite");
+    expect_invalid([&] { reduce_keys(t, {q[0], q[1], q[2]}, 0.1); }, "quats: 3 quaternions for 4");
+    std::vector<Quat> bad = q;
+    bad[2] = Quat(0, 0, 0, 0);
+    expect_invalid([&] { reduce_keys(t, bad, 0.1); }, "quats[2]: zero-length");
+    bad[2] = Quat(1, NAN, 0, 0);
+    expect_invalid([&] { reduce_keys(t, bad, 0.1, KeyInterpolation::BEZIER); }, "quats[2]");
+    std::vector<Vec3> bad_a = a;
+    bad_a[1] = Vec3(0, INFINITY, 0);
+    expect_invalid([&] { reduce_keys_euler(t, bad_a, EulerOrder::XYZ, 0.1); }, "angles[1]");
+    expect_invalid([&] { reduce_keys_euler(t, {a[0]}, EulerOrder::XYZ, 0.1); }, "angles: 1 triples");
+}
