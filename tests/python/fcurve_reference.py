@@ -14,7 +14,6 @@ Then a quaternion is normalized (no hemisphere fix) and Euler angles build the r
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 F32 = np.float32
 
@@ -88,7 +87,9 @@ def quat_angle(a, b):
 
 
 def euler_rotation(angles, order):
-    """Blender Euler (angles about X, Y, Z; 'XYZ' = Rz·Ry·Rx) as a scipy Rotation (extrinsic)."""
+    """Blender Euler (angles about X, Y, Z; 'XYZ' = Rz·Ry·Rx) as a scipy Rotation (extrinsic).
+    scipy is imported here only: Blender's Python has numpy but not scipy."""
+    from scipy.spatial.transform import Rotation
     angles = np.asarray(angles, dtype=np.float64)
     cols = ["XYZ".index(a) for a in order]
     return Rotation.from_euler(order.lower(), angles[:, cols])
