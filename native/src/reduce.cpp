@@ -161,6 +161,12 @@ void check_times(const std::vector<double>& times) {
             throw InvalidArgument("times[" + std::to_string(k) + "]: non-finite value");
         if (k > 0 && !(times[k] > times[k - 1]))
             throw InvalidArgument("times[" + std::to_string(k) + "]: not increasing");
+        // Blender stores frames as float32: two samples on one float32 frame cannot both be keys.
+        if (k > 0 && !(f32(times[k]) > f32(times[k - 1])))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: same float32 frame as times[" +
+                                  std::to_string(k - 1) + "] (Blender stores frames as float32)");
+        if (!std::isfinite(f32(times[k])))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: beyond float32 range");
     }
 }
 

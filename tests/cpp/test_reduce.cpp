@@ -336,6 +336,9 @@ TEST(Reduce, BadInputNamesTheArgument) {
     expect_invalid([&] { reduce_keys({0, 1, 1, 2}, q, 0.1); }, "times[2]: not increasing");
     expect_invalid([&] { reduce_keys({0, 2, 1, 3}, q, 0.1); }, "times[2]: not increasing");
     expect_invalid([&] { reduce_keys({0, 1, NAN, 3}, q, 0.1); }, "times[2]: non-finite");
+    expect_invalid([&] { reduce_keys({1e8, 1e8 + 1, 1e8 + 8, 1e8 + 16}, q, 0.1); },
+                   "times[1]: same float32 frame as times[0]");
+    expect_invalid([&] { reduce_keys({0, 1, 2, 1e39}, q, 0.1); }, "times[3]: beyond float32");
     expect_invalid([&] { reduce_keys(t, {q[0], q[1], q[2]}, 0.1); }, "quats: 3 quaternions for 4");
     std::vector<Quat> bad = q;
     bad[2] = Quat(0, 0, 0, 0);

@@ -332,6 +332,8 @@ def test_bad_times():
         quatcurve.reduce_keys(GOOD_T.reshape(5, 1), GOOD_Q, 0.1)
     with pytest.raises(ValueError, match=r"times: at least one sample"):
         quatcurve.reduce_keys(np.zeros(0), np.zeros((0, 4)), 0.1)
+    with pytest.raises(ValueError, match=r"times\[2\]: same float32 frame as times\[1\]"):
+        quatcurve.reduce_keys(1e8 + np.array([0, 8, 9, 16, 24.0]), GOOD_Q, 0.1)
     with pytest.raises(ValueError, match=r"times\[4\]: non-finite"):
         quatcurve.reduce_keys_euler([0, 1, 2, 3, np.inf], GOOD_E, "XYZ", 0.1)
 

@@ -80,7 +80,8 @@ struct ReducedKeys {
     std::size_t key_count() const;         // sum of keys over channels (Blender's keyframe_points)
 };
 
-// Reduce quaternion samples. times: n strictly increasing finite frames; quats: n finite nonzero
+// Reduce quaternion samples. times: n strictly increasing finite frames, still strictly increasing
+// once rounded to float32 (Blender's frame storage); quats: n finite nonzero
 // quaternions; tolerance: finite, ≥ 0 radians. tolerance 0 keeps every sample; constant motion gives
 // two keys (one for n = 1). Throws InvalidArgument naming the argument and element ("times[5]: not
 // increasing", "quats[3]: zero-length quaternion", "tolerance: must be finite and >= 0").
