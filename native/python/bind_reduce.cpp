@@ -57,9 +57,10 @@ DArray pair_array(const std::vector<double>& v) {
     return out;
 }
 
-// LINEAR: the indices (synchronized) or one index array per channel; BEZIER: the ReducedKeys.
-py::object linear_or_full(const ReducedKeys& r, bool synchronized) {
-    if (r.interpolation == KeyInterpolation::BEZIER) return py::cast(r);
+// LINEAR: the indices (synchronized) or one index array per channel; BEZIER (or detailed): the
+// ReducedKeys.
+py::object linear_or_full(const ReducedKeys& r, bool synchronized, bool detailed) {
+    if (detailed || r.interpolation == KeyInterpolation::BEZIER) return py::cast(r);
     if (synchronized) return index_array(r.channels[0].indices);
     py::list per_channel;
     for (const ReducedChannel& ch : r.channels) per_channel.append(index_array(ch.indices));
@@ -109,7 +110,7 @@ void bind_reduce(py::module_& m) {
     m.def(
         "reduce_keys",
         [](py::handle times, py::handle quats, double tolerance, const std::string& interpolation,
-           bool synchronized) {
+           bool synchronized, bool detailed) {
             const KeyInterpolation ipo = parse_key_interpolation(interpolation);
             const std::vector<double> t = read_times(times);
             const Batch q = read_rows(quats, 4, "quats", t.size());
@@ -120,10 +121,10 @@ void bind_reduce(py::module_& m) {
                 py::gil_scoped_release release;
                 r = reduce_keys(t, qs, tolerance, ipo, synchronized);
             }
-            return linear_or_full(r, synchronized);
+            return linear_or_full(r, synchronized, detailed);
         },
         py::arg("times"), py::arg("quats"), py::arg("tolerance"), py::arg("interpolation") = "LINEAR",
-        py::arg("synchronized") = true,
+        py::arg("synchronized") = true, py::kw_only(), py::arg("detailed") = false,
         R"doc(Reduce dense quaternion samples to the fewest keys Blender can evaluate within `tolerance`.
 
 times: (N,) strictly increasing frames; quats: (N, 4) (w, x, y, z), kept as given (pass a
@@ -138,12 +139,13 @@ tolerance 0 keeps every sample.
 Returns, for LINEAR: the kept indices (int64 array) when synchronized, else a list of four index
 arrays (w, x, y, z). For BEZIER: a ReducedKeys with per-channel indices, frames, values,
 handle_left/handle_right (K, 2) absolute (frame, value), max_error and key_count.
+detailed=True returns the ReducedKeys for LINEAR too (empty handles), e.g. for its max_error.
 synchronized=False lets each channel keep its own keys where that saves keys.)doc");
 
     m.def(
         "reduce_keys_euler",
         [](py::handle times, py::handle angles, const std::string& order, double tolerance,
-           const std::string& interpolation, bool synchronized) {
+           const std::string& interpolation, bool synchronized, bool detailed) {
             const KeyInterpolation ipo = parse_key_interpolation(interpolation);
             const EulerOrder ord = parse_euler_order(order);
             const std::vector<double> t = read_times(times);
@@ -158,10 +160,11 @@ synchronized=False lets each channel keep its own keys where that saves keys.)do
                 py::gil_scoped_release release;
                 r = reduce_keys_euler(t, as, ord, tolerance, ipo, synchronized);
             }
-            return linear_or_full(r, synchronized);
+            return linear_or_full(r, synchronized, detailed);
         },
         py::arg("times"), py::arg("angles"), py::arg("order"), py::arg("tolerance"),
-        py::arg("interpolation") = "LINEAR", py::arg("synchronized") = true,
+        py::arg("interpolation") = "LINEAR", py::arg("synchronized") = true, py::kw_only(),
+        py::arg("detailed") = false,
         R"doc(Reduce dense Euler samples (N, 3) (radians about X, Y, Z; Blender order, 'XYZ' = Rz·Ry·Rx).
 
 The bound is on the rotation Blender builds from the three evaluated angle channels. Angles are

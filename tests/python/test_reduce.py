@@ -295,6 +295,21 @@ def test_per_channel_key_sets_differ_on_mocap():
     assert not r.synchronized and len(set(counts)) > 1
 
 
+def test_detailed_linear_result():
+    q = smooth_quats(4, n=200)
+    times = np.arange(200.0)
+    idx = quatcurve.reduce_keys(times, q, 0.3 * DEG)
+    full = quatcurve.reduce_keys(times, q, 0.3 * DEG, detailed=True)
+    assert full.interpolation == "LINEAR" and full.synchronized
+    np.testing.assert_array_equal(full.channels[0].indices, idx)
+    assert full.channels[0].handle_left.shape == (0, 2)
+    err = ref.quat_errors(ref.evaluate_linear_indices(times, q, idx), q).max()
+    assert full.max_error == pytest.approx(err, abs=2e-7) and err <= 0.3 * DEG
+    e = smooth_euler(4, n=200)
+    full = quatcurve.reduce_keys_euler(times, e, "ZYX", 0.3 * DEG, "LINEAR", False, detailed=True)
+    assert len(full.channels) == 3 and full.max_error <= 0.3 * DEG
+
+
 def test_result_repr_and_attributes():
     q = smooth_quats(4, n=100)
     r = quatcurve.reduce_keys(np.arange(100.0), q, 0.5 * DEG, "BEZIER")
