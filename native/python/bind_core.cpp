@@ -5,6 +5,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,18 @@ Mat4 read_mat4(const Batch& b, std::size_t i, const char* name) {
 }
 
 void write_quat(double* out, std::size_t i, const Quat& q) { to_wxyz(q, out + 4 * i); }
+
+// A finite input can still have a result beyond double range (the product of two 1e200
+// quaternions, e^w for w > 709, a 1e308 vector rotated): refuse it, naming the element, rather than
+// return inf or nan. `out` holds the batch's elements of `tail` doubles each.
+void require_finite_result(const DArray& out, const std::vector<py::ssize_t>& batch_shape, std::size_t tail) {
+    const double* p = out.data();
+    const std::size_t n = static_cast<std::size_t>(out.size());
+    for (std::size_t k = 0; k < n; ++k)
+        if (!std::isfinite(p[k]))
+            throw InvalidArgument(element_name("result", batch_shape, k / tail) +
+                                  ": overflows double precision (the input is too large)");
+}
 
 void write_vec(double* out, std::size_t i, const Vec3& v) {
     double* p = out + 3 * i;
@@ -117,6 +130,7 @@ DArray map_quat(py::handle qo, Need need, Fn fn) {
     DArray out = make_output(q.batch_shape, {4});
     double* o = out.mutable_data();
     for (std::size_t i = 0; i < q.count; ++i) write_quat(o, i, fn(read_quat(q, i, "q", need)));
+    require_finite_result(out, q.batch_shape, 4);
     return out;
 }
 
@@ -129,6 +143,7 @@ DArray map_quat_pair(py::handle ao, py::handle bo, Need need_a, Need need_b, Fn 
     double* o = out.mutable_data();
     for (std::size_t i = 0; i < bc.count; ++i)
         write_quat(o, i, fn(read_quat(a, bc.index(0, i), "a", need_a), read_quat(b, bc.index(1, i), "b", need_b)));
+    require_finite_result(out, bc.shape, 4);
     return out;
 }
 
@@ -141,6 +156,7 @@ DArray map_quat_vec(py::handle qo, py::handle vo, const char* vname, Fn fn) {
     double* o = out.mutable_data();
     for (std::size_t i = 0; i < bc.count; ++i)
         write_vec(o, i, fn(read_quat(q, bc.index(0, i), "q", Need::nonzero), read_vec(v, bc.index(1, i), vname)));
+    require_finite_result(out, bc.shape, 3);
     return out;
 }
 
@@ -160,6 +176,7 @@ DArray map_mat4_vec(py::handle mo, py::handle vo, const char* vname, Fn fn) {
             throw InvalidArgument(element_name(vname, bc.shape, i) + ": " + e.what());
         }
     }
+    require_finite_result(out, bc.shape, 3);
     return out;
 }
 
@@ -188,7 +205,9 @@ DArray map_angles(py::handle ao, std::initializer_list<py::ssize_t> tail, Fn fn)
 #define QC_CONVENTIONS                                                                                \
     "\n\nConventions: quaternions are (w, x, y, z); angles in radians; matrices act on column "      \
     "vectors (P' = M @ P). Leading dimensions are batch dimensions. Non-finite input raises "        \
-    "ValueError naming the element (e.g. 'q[3]: non-finite value nan in component x')."
+    "ValueError naming the element (e.g. 'q[3]: non-finite value nan in component x'), and so "    \
+    "does a result that overflows double precision ('result[3]: overflows ...'): outputs are "      \
+    "always finite."
 #define QC_BROADCAST \
     " The batch dimensions of the inputs broadcast as in numpy (a single value against a batch)."
 #define QC_EULER                                                                                      \
@@ -225,9 +244,11 @@ void bind_core(py::module_& m) {
               DArray out = make_output(q.batch_shape, {});
               double* o = out.mutable_data();
               for (std::size_t i = 0; i < q.count; ++i) o[i] = norm(read_quat(q, i, "q", Need::finite));
+              require_finite_result(out, q.batch_shape, 1);
               return out;
           },
-          py::arg("q"), "|q|, (..., 4) -> (...); overflow-safe (exact for components near 1e+-300)." QC_CONVENTIONS);
+          py::arg("q"), "|q|, (..., 4) -> (...); overflow-safe (exact for components near 1e+-300; a norm beyond "
+          "1.8e308 raises ValueError)." QC_CONVENTIONS);
     m.def("quat_normalize",
           [](py::handle q) { return map_quat(q, Need::nonzero, [](const Quat& x) { return normalized_rotation(x); }); },
           py::arg("q"),
@@ -236,7 +257,7 @@ void bind_core(py::module_& m) {
     m.def("quat_exp", [](py::handle q) { return map_quat(q, Need::finite, [](const Quat& x) { return exp(x); }); },
           py::arg("q"),
           "Quaternion exponential e^q = e^w (cos|v|, sin|v| v/|v|), (..., 4) -> (..., 4), for any q "
-          "(Taylor series for |v| -> 0; overflows to inf for w > ~709)." QC_CONVENTIONS);
+          "(Taylor series for |v| -> 0). A result beyond double range (w > ~709) raises ValueError." QC_CONVENTIONS);
     m.def("quat_log", [](py::handle q) { return map_quat(q, Need::nonzero, [](const Quat& x) { return log(x); }); },
           py::arg("q"),
           "Quaternion logarithm (ln|q|, atan2(|v|, w) v/|v|), (..., 4) -> (..., 4); the vector part's "
@@ -250,6 +271,7 @@ void bind_core(py::module_& m) {
               double* o = out.mutable_data();
               for (std::size_t i = 0; i < bc.count; ++i)
                   write_quat(o, i, pow(read_quat(q, bc.index(0, i), "q", Need::nonzero), read_scalar(t, bc.index(1, i), "t")));
+              require_finite_result(out, bc.shape, 4);
               return out;
           },
           py::arg("q"), py::arg("t"),
@@ -420,6 +442,7 @@ void bind_core(py::module_& m) {
                   require(finite_problem(c), "m", mb.batch_shape, i);
                   write_quat(o, i, complex2_to_quat(c));
               }
+              require_finite_result(out, mb.batch_shape, 4);
               return out;
           },
           py::arg("m"),
@@ -450,6 +473,7 @@ void bind_core(py::module_& m) {
                   require(finite_problem(r), "m", mb.batch_shape, i);
                   write_quat(o, i, real4_to_quat(r));
               }
+              require_finite_result(out, mb.batch_shape, 4);
               return out;
           },
           py::arg("m"),
@@ -490,6 +514,7 @@ void bind_core(py::module_& m) {
               for (std::size_t i = 0; i < bc.count; ++i)
                   write_vec(p, i, quat_to_euler_compat(read_quat(q, bc.index(0, i), "q", Need::nonzero), o,
                                                        read_vec(ref, bc.index(1, i), "compat")));
+              require_finite_result(out, bc.shape, 3);
               return out;
           },
           py::arg("q"), py::arg("order") = "XYZ", py::arg("compat") = py::none(),
@@ -523,6 +548,7 @@ void bind_core(py::module_& m) {
               double* p = out.mutable_data();
               for (std::size_t i = 0; i < bc.count; ++i)
                   write_vec(p, i, euler_compat(read_vec(a, bc.index(0, i), "angles"), o, read_vec(r, bc.index(1, i), "ref")));
+              require_finite_result(out, bc.shape, 3);
               return out;
           },
           py::arg("angles"), py::arg("ref"), py::arg("order") = "XYZ",
@@ -541,6 +567,7 @@ void bind_core(py::module_& m) {
                   euler_filter(seq.data(), n, o);
                   for (std::size_t s = 0; s < n; ++s) write_vec(p, start + s, seq[s]);
               }
+              require_finite_result(out, a.batch_shape, 3);
               return out;
           },
           py::arg("angles"), py::arg("order") = "XYZ",

@@ -55,6 +55,19 @@ Quat axis_quat(int axis, double angle) {
 // x shifted by the multiple of 2π that brings it nearest to ref.
 double nearest_turn(double x, double ref) { return x + kTwoPi * std::nearbyint((ref - x) / kTwoPi); }
 
+// Angles beyond this many radians are reduced to (−π, π] before any whole turns are added: for
+// them x + 2π·k cancels away x's fractional turn (at 1e16 rad nothing of it is left).
+constexpr double kReduceAbove = 65536.0;
+
+// The same rotation with every huge angle reduced as atan2(sin x, cos x): sin and cos reduce their
+// argument exactly, so the result is x mod 2π to within an ulp of π, whatever |x|.
+Vec3 reduced_angles(const Vec3& angles) {
+    Vec3 out = angles;
+    for (int n = 0; n < 3; ++n)
+        if (std::fabs(out[n]) > kReduceAbove) out[n] = std::atan2(std::sin(out[n]), std::cos(out[n]));
+    return out;
+}
+
 double l1(const Vec3& a, const Vec3& b) {
     return std::fabs(a.x - b.x) + std::fabs(a.y - b.y) + std::fabs(a.z - b.z);
 }
@@ -135,9 +148,10 @@ Vec3 quat_to_euler(const Quat& q, EulerOrder order) {
     return rotation_to_euler(quat_to_matrix(q), order);
 }
 
-Vec3 euler_compat(const Vec3& angles, EulerOrder order, const Vec3& ref) {
-    check_finite(angles, "angles");
+Vec3 euler_compat(const Vec3& given, EulerOrder order, const Vec3& ref) {
+    check_finite(given, "angles");
     check_finite(ref, "ref");
+    const Vec3 angles = reduced_angles(given);
     const Axes ax = axes_of(order);
     const int i = ax.i, j = ax.j, k = ax.k;
     const double b = angles[j];

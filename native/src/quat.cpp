@@ -37,6 +37,31 @@ double safe_norm4(double a, double b, double c, double d) {
 
 double safe_norm3(const Vec3& v) { return safe_norm4(v.x, v.y, v.z, 0.0); }
 
+// The power of two 2^e with the largest |component| of x in [1, 2) (e = 0 for zero): dividing by it
+// is exact, so a quaternion's direction, a matrix's polar factor or a sandwich product can be
+// computed on x·2^-e without squares overflowing (components near 1e308) or underflowing (1e-300).
+int scale_exponent(double a, double b, double c, double d) {
+    const double m = std::max({std::fabs(a), std::fabs(b), std::fabs(c), std::fabs(d)});
+    return m > 0.0 && std::isfinite(m) ? std::ilogb(m) : 0;
+}
+
+Quat scaled(const Quat& q, int e) {
+    return Quat(std::ldexp(q.w, -e), std::ldexp(q.x, -e), std::ldexp(q.y, -e), std::ldexp(q.z, -e));
+}
+
+Quat scaled(const Quat& q) { return scaled(q, scale_exponent(q.w, q.x, q.y, q.z)); }
+
+Mat3 scaled(const Mat3& m) {
+    double big = 0.0;
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) big = std::max(big, std::fabs(m[c][r]));
+    const int e = big > 0.0 && std::isfinite(big) ? std::ilogb(big) : 0;
+    Mat3 out;
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) out[c][r] = std::ldexp(m[c][r], -e);
+    return out;
+}
+
 // Frobenius norm of a 3×3 matrix.
 double frobenius(const Mat3& m) {
     double s = 0.0;
@@ -116,9 +141,10 @@ std::string nonzero_problem(const Vec3& v, const char* noun) {
     return p;
 }
 
-std::string rotation_matrix_problem(const Mat3& m) {
-    std::string p = finite_problem(m);
+std::string rotation_matrix_problem(const Mat3& given) {
+    std::string p = finite_problem(given);
     if (!p.empty()) return p;
+    const Mat3 m = scaled(given);  // f³ and det overflow for entries near 1e103 otherwise
     const double f = frobenius(m);
     const double det = glm::determinant(m);
     if (!(f > 0.0) || std::fabs(det) <= 1e-14 * f * f * f) return "singular matrix (determinant ~ 0)";
@@ -153,8 +179,9 @@ void check_nonzero(const Vec3& v, const std::string& what) {
 
 Quat normalized_rotation(const Quat& q, const std::string& what) {
     check_nonzero(q, what);
-    const double n = norm(q);
-    return Quat(q.w / n, q.x / n, q.y / n, q.z / n);
+    const Quat s = scaled(q);  // |q| itself overflows for components near 1e308
+    const double n = norm(s);
+    return Quat(s.w / n, s.x / n, s.y / n, s.z / n);
 }
 
 // ---- algebra -------------------------------------------------------------------------------------
@@ -170,12 +197,14 @@ Quat conjugate(const Quat& q) { return Quat(q.w, -q.x, -q.y, -q.z); }
 
 double norm(const Quat& q) { return safe_norm4(q.w, q.x, q.y, q.z); }
 
-// Divides twice by |q| rather than once by |q|², which would underflow or overflow far sooner.
+// conj(s)/|s|² · 2^-e on s = q·2^-e (|s|² in [1, 16)): no intermediate overflows or underflows,
+// only the result where it must (|q| beyond 1e308 gives a subnormal result).
 Quat inverse(const Quat& q) {
     check_nonzero(q, "q");
-    const double n = norm(q);
-    const Quat c = conjugate(q);
-    return Quat(c.w / n / n, c.x / n / n, c.y / n / n, c.z / n / n);
+    const int e = scale_exponent(q.w, q.x, q.y, q.z);
+    const Quat s = scaled(q, e);
+    const double n2 = s.w * s.w + s.x * s.x + s.y * s.y + s.z * s.z;
+    return scaled(Quat(s.w / n2, -s.x / n2, -s.y / n2, -s.z / n2), e);
 }
 
 Quat divide(const Quat& a, const Quat& b) {
@@ -195,12 +224,16 @@ Quat exp(const Quat& q) {
 
 Quat log(const Quat& q) {
     check_nonzero(q, "q");
-    const Vec3 v(q.x, q.y, q.z);
+    // On s = q·2^-e: ln|q| = ln|s| + e·ln 2 and the vector part atan2(|v|, w)·v/|v| is scale-free,
+    // so components near 1e308 (whose |q| overflows) work too.
+    const int e = scale_exponent(q.w, q.x, q.y, q.z);
+    const Quat s = scaled(q, e);
+    const Vec3 v(s.x, s.y, s.z);
     const double r = safe_norm3(v);
-    const double lnn = std::log(norm(q));
+    const double lnn = std::log(norm(s)) + e * 0.693147180559945309417232121458176568;
     if (r == 0.0) return q.w > 0.0 ? Quat(lnn, 0.0, 0.0, 0.0) : Quat(lnn, kPi, 0.0, 0.0);
     // atan2(r, w)/r has no cancellation for any r > 0: for tiny r it is atan(r/w)/r ≈ 1/w.
-    const double k = std::atan2(r, q.w) / r;
+    const double k = std::atan2(r, s.w) / r;
     return Quat(lnn, k * v.x, k * v.y, k * v.z);
 }
 
@@ -212,16 +245,27 @@ Quat pow(const Quat& q, double t) {
 
 // ---- rotation of points --------------------------------------------------------------------------
 
-Vec3 rotate_sandwich(const Quat& q, const Vec3& p) {
-    const Quat r = multiply(multiply(q, Quat(0.0, p.x, p.y, p.z)), inverse(q));
-    return Vec3(r.x, r.y, r.z);
+// On q·2^-e (exact, and the scale cancels): the products do not overflow for |q| near 1e308.
+Vec3 rotate_sandwich(const Quat& q, const Vec3& given) {
+    check_nonzero(q, "q");
+    const Quat s = scaled(q);
+    // P·2^-e too (rotation is linear): only a result beyond double range overflows.
+    const int e = scale_exponent(given.x, given.y, given.z, 0.0);
+    const Vec3 p(std::ldexp(given.x, -e), std::ldexp(given.y, -e), std::ldexp(given.z, -e));
+    const Quat r = multiply(multiply(s, Quat(0.0, p.x, p.y, p.z)), inverse(s));
+    return Vec3(std::ldexp(r.x, e), std::ldexp(r.y, e), std::ldexp(r.z, e));
 }
 
-Vec3 rotate(const Quat& q, const Vec3& p) {
+// On P·2^-e (rotation is linear, the scaling exact): t = 2·(u×P) would overflow for |P| near 1e308
+// even where the rotated point is finite.
+Vec3 rotate(const Quat& q, const Vec3& given) {
     const Quat n = normalized_rotation(q);
     const Vec3 u(n.x, n.y, n.z);
+    const int e = scale_exponent(given.x, given.y, given.z, 0.0);
+    const Vec3 p(std::ldexp(given.x, -e), std::ldexp(given.y, -e), std::ldexp(given.z, -e));
     const Vec3 t = 2.0 * glm::cross(u, p);
-    return p + n.w * t + glm::cross(u, t);
+    const Vec3 r = p + n.w * t + glm::cross(u, t);
+    return Vec3(std::ldexp(r.x, e), std::ldexp(r.y, e), std::ldexp(r.z, e));
 }
 
 // ---- axis-angle ------------------------------------------------------------------------------------
@@ -230,7 +274,9 @@ Quat axis_angle_to_quat(const Vec3& axis, double angle) {
     const std::string p = nonzero_problem(axis, "axis");
     if (!p.empty()) fail("axis", p);
     check_finite(angle, "angle");
-    const Vec3 a = axis / safe_norm3(axis);
+    const int e = scale_exponent(axis.x, axis.y, axis.z, 0.0);  // |axis| overflows near 1e308
+    const Vec3 u(std::ldexp(axis.x, -e), std::ldexp(axis.y, -e), std::ldexp(axis.z, -e));
+    const Vec3 a = u / safe_norm3(u);
     const double s = std::sin(0.5 * angle);
     return Quat(std::cos(0.5 * angle), s * a.x, s * a.y, s * a.z);
 }
@@ -240,7 +286,10 @@ void quat_to_axis_angle(const Quat& q, Vec3& axis, double& angle) {
     const Vec3 v(n.x, n.y, n.z);
     const double r = safe_norm3(v);
     angle = 2.0 * std::atan2(r, n.w);
-    axis = r > 0.0 ? v / r : Vec3(0.0, 1.0, 0.0);
+    // The direction from v·2^-e: for a subnormal v, |v| itself is rounded to a few bits.
+    const int e = scale_exponent(v.x, v.y, v.z, 0.0);
+    const Vec3 u(std::ldexp(v.x, -e), std::ldexp(v.y, -e), std::ldexp(v.z, -e));
+    axis = r > 0.0 ? u / safe_norm3(u) : Vec3(0.0, 1.0, 0.0);
 }
 
 double angle_between(const Quat& a, const Quat& b) {
@@ -275,7 +324,7 @@ Mat3 quat_to_matrix(const Quat& q) {
 Mat3 nearest_rotation(const Mat3& m) {
     const std::string p = rotation_matrix_problem(m);
     if (!p.empty()) fail("m", p);
-    Mat3 x = m;
+    Mat3 x = scaled(m);  // the polar factor is scale-free; unscaled, X⁻ᵀ under/overflows near 1e±154
     for (int iteration = 0; iteration < 60; ++iteration) {
         const Mat3 inv_t = glm::transpose(glm::inverse(x));
         const double fx = frobenius(x);
@@ -364,9 +413,22 @@ std::array<std::complex<double>, 4> quat_to_complex2(const Quat& q) {
     return {C(q.w, q.x), C(q.y, q.z), C(-q.y, q.z), C(q.w, -q.x)};
 }
 
+namespace {
+// The mean of a and b, or (a − b)/2 when b is negated: (a + b)/2 unless the sum overflows.
+double half_sum(double a, double b) {
+    const double s = a + b;
+    return std::isfinite(s) ? 0.5 * s : 0.5 * a + 0.5 * b;
+}
+
+double quarter_sum(double a, double b, double c, double d) {
+    const double s = a + b + c + d;
+    return std::isfinite(s) ? 0.25 * s : 0.25 * a + 0.25 * b + 0.25 * c + 0.25 * d;
+}
+}  // namespace
+
 Quat complex2_to_quat(const std::array<std::complex<double>, 4>& m) {
-    return Quat(0.5 * (m[0].real() + m[3].real()), 0.5 * (m[0].imag() - m[3].imag()),
-                0.5 * (m[1].real() - m[2].real()), 0.5 * (m[1].imag() + m[2].imag()));
+    return Quat(half_sum(m[0].real(), m[3].real()), half_sum(m[0].imag(), -m[3].imag()),
+                half_sum(m[1].real(), -m[2].real()), half_sum(m[1].imag(), m[2].imag()));
 }
 
 std::array<double, 16> quat_to_real4(const Quat& q) {
@@ -379,10 +441,10 @@ std::array<double, 16> quat_to_real4(const Quat& q) {
 
 Quat real4_to_quat(const std::array<double, 16>& m) {
     auto e = [&m](int r, int c) { return m[static_cast<std::size_t>(4 * r + c)]; };
-    return Quat(0.25 * (e(0, 0) + e(1, 1) + e(2, 2) + e(3, 3)),
-                0.25 * (e(1, 0) - e(0, 1) + e(3, 2) - e(2, 3)),
-                0.25 * (e(2, 0) - e(0, 2) + e(1, 3) - e(3, 1)),
-                0.25 * (e(3, 0) - e(0, 3) + e(2, 1) - e(1, 2)));
+    return Quat(quarter_sum(e(0, 0), e(1, 1), e(2, 2), e(3, 3)),
+                quarter_sum(e(1, 0), -e(0, 1), e(3, 2), -e(2, 3)),
+                quarter_sum(e(2, 0), -e(0, 2), e(1, 3), -e(3, 1)),
+                quarter_sum(e(3, 0), -e(0, 3), e(2, 1), -e(1, 2)));
 }
 
 }  // namespace quatcurve

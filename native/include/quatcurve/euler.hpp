@@ -39,7 +39,9 @@ Vec3 quat_to_euler(const Quat& q, EulerOrder order);
 // The Euler angles equivalent to `angles` (same rotation) closest to `ref` by the sum of absolute
 // differences: both solutions, each angle shifted by the multiple of 2π nearest to ref (the exact
 // minimum; Blender's compatible Euler does this with thresholds). At gimbal lock the family
-// (a+t, b, c±t) is searched too, which Blender does not. Ties keep the solution given.
+// (a+t, b, c±t) is searched too, which Blender does not. Ties keep the solution given. Angles
+// beyond 65536 rad are first reduced mod 2π through sin and cos (exactly), so any finite angle
+// keeps its rotation (adding whole turns to 1e16 rad would cancel its fraction of a turn away).
 Vec3 euler_compat(const Vec3& angles, EulerOrder order, const Vec3& ref);
 // euler_compat(quat_to_euler(q, order), order, ref). Throws on zero q.
 Vec3 quat_to_euler_compat(const Quat& q, EulerOrder order, const Vec3& ref);

@@ -45,7 +45,7 @@ void check_finite(double x, const std::string& what);
 void check_nonzero(const Quat& q, const std::string& what);
 void check_nonzero(const Vec3& v, const std::string& what);
 // q/|q| for a quaternion meant as a rotation; throws on zero length or non-finite input. Exact for
-// tiny or huge finite q (the norm is overflow-safe).
+// tiny or huge finite q, up to components of 1.8e308 (computed on q·2^-e, e the largest exponent).
 Quat normalized_rotation(const Quat& q, const std::string& what = "q");
 
 // ---- algebra -------------------------------------------------------------------------------------
@@ -55,7 +55,8 @@ Quat multiply(const Quat& a, const Quat& b);
 Quat conjugate(const Quat& q);
 // |q| = √(w²+x²+y²+z²), rescaled when the squares would overflow or underflow (exact for 1e±300).
 double norm(const Quat& q);
-// conj(q)/|q|²; throws InvalidArgument ("q: zero-length quaternion") when |q| < kMinNorm.
+// conj(q)/|q|² (on q·2^-e, so only the result itself can under/overflow); throws InvalidArgument
+// ("q: zero-length quaternion") when |q| < kMinNorm.
 Quat inverse(const Quat& q);
 // a·b⁻¹ (right division: divide(a·b, b) = a); throws when |b| < kMinNorm.
 Quat divide(const Quat& a, const Quat& b);
@@ -71,7 +72,8 @@ Quat log(const Quat& q);
 Quat pow(const Quat& q, double t);
 
 // ---- rotation of points --------------------------------------------------------------------------
-// Literally q·[0,P]·q⁻¹ (two Hamilton products); any nonzero q (its scale cancels); throws on zero.
+// Literally q·[0,P]·q⁻¹ (two Hamilton products) on q·2^-e: any nonzero q, up to components of
+// 1.8e308 (its scale cancels); throws on zero.
 Vec3 rotate_sandwich(const Quat& q, const Vec3& p);
 // The fast equivalent on q̂ = q/|q|: t = 2·(u×P), P' = P + w·t + u×t. Throws on zero q.
 Vec3 rotate(const Quat& q, const Vec3& p);

@@ -1,0 +1,1370 @@
+"""Fuzzing of the native module `quatcurve`: every public function and every Curve method gets random
+and extreme arrays (NaN, ±inf, 1e±300, subnormals, zeros, antipodal pairs, duplicate and unsorted
+times, huge counts, wrong shapes and dtypes). The outcome asserted for every call:
+
+  * it returns, or raises ValueError or TypeError (MemoryError only for an output of more than
+    MEMORY_LIMIT bytes: the child runs under an address-space limit);
+  * no crash and no hang (a watchdog ends the process and dumps the stack after CALL_TIMEOUT s);
+  * the output is finite (except the sentinels a function documents: NaN key jumps, +inf speed
+    ratios) and every rotation quaternion it returns has unit length;
+  * input the API promises to refuse (non-finite values, shapes that do not broadcast, junk
+    types, unsorted or duplicate times) is refused.
+
+One hypothesis example draws the structure of a case (modes, sizes, a seed) and numpy fills a batch
+of many rows from that seed: rows are counted as cases. Targets are enumerated from
+dir(quatcurve) (plus one per Curve method in quatcurve.METHODS), so a new public callable without a
+strategy in REGISTRY is reported by test_fuzz.py.
+
+Run by tests/python/test_fuzz.py in a child process (a segfault is a failed target, not an aborted
+pytest run); directly:  python tests/python/fuzz_native.py [TARGET ...]
+Environment: QUATCURVE_FUZZ_LONG=1 for the long campaign (random seeds, 100x the examples).
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import json
+import math
+import os
+import sys
+import time
+import traceback
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
+import quatcurve as qc
+
+LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
+EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
+EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5}  # slower targets: fewer examples
+# The smoke run reports the first failing example as found (with its inputs); the long campaign,
+# or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
+SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
+CALL_TIMEOUT = 600.0 if LONG else 30.0  # seconds one call may take before it counts as a hang
+MEMORY_LIMIT = 1 << 29                  # outputs above 512 MiB may raise MemoryError
+ADDRESS_SPACE = 6 << 30                 # RLIMIT_AS of the child: huge allocations fail cleanly
+UNIT_TOL = 1e-10
+ORDERS = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")
+
+NAN, INF = float("nan"), float("inf")
+DMAX = np.finfo(np.float64).max
+SPECIAL = np.array([0.0, -0.0, 1.0, -1.0, 5e-324, -5e-324, 1e-310, -2.2250738585072014e-308,
+                    1e-300, -1e-300, 1e300, -1e300, DMAX, -DMAX, np.pi, -np.pi, np.pi / 2, -np.pi / 2,
+                    2 * np.pi, 1e-8, 1e8, 1e15, -1e16, 0.5, 1 + 2.0 ** -52, 1 - 2.0 ** -53])
+
+
+class Violation(AssertionError):
+    """The contract was broken (not a ValueError/TypeError refusal)."""
+
+
+# ==== value generators: numpy, seeded from hypothesis ================================================
+
+LEVELS = ("calm", "extreme", "poison", "wild")  # wild = extreme values with non-finite ones mixed in
+
+
+def fill(rng, shape, level):
+    """Numbers of a given level: calm = N(0, 1); extreme = a mixture of specials, subnormals, 1e±300,
+    small integers and multiples of pi/2; wild adds NaN and ±inf."""
+    n = int(np.prod(shape, dtype=np.int64))
+    out = rng.standard_normal(n)
+    if level in ("extreme", "wild") and n:
+        cls = rng.integers(0, 10, n)
+        sign = rng.choice([-1.0, 1.0], n)
+        pick = cls == 4
+        out[pick] = rng.choice(SPECIAL, int(pick.sum()))
+        pick = cls == 5
+        out[pick] = sign[pick] * 10.0 ** rng.uniform(-323, -15, int(pick.sum()))
+        pick = cls == 6
+        out[pick] = sign[pick] * 10.0 ** rng.uniform(15, 308, int(pick.sum()))
+        pick = cls == 7
+        out[pick] = rng.integers(-3, 4, int(pick.sum()))
+        pick = cls == 8
+        out[pick] = rng.integers(-8, 9, int(pick.sum())) * (np.pi / 2)
+        if level == "wild":
+            pick = (cls == 9) & (rng.random(n) < 0.3)
+            out[pick] = rng.choice([NAN, INF, -INF], int(pick.sum()))
+    return out.reshape(shape)
+
+
+def unit_rows(rng, n):
+    q = rng.standard_normal((n, 4))
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def quats(rng, batch, level):
+    """(…, 4) quaternions: unit, scaled by 10^±300, axis-aligned, near identity, raw extreme numbers."""
+    n = int(np.prod(batch, dtype=np.int64))
+    q = unit_rows(rng, n)
+    if level in ("extreme", "wild") and n:
+        kind = rng.integers(0, 6, n)
+        scale = 10.0 ** rng.uniform(-299, 300, n)
+        q[kind == 1] *= scale[kind == 1, None]
+        axes = np.eye(4)[rng.integers(0, 4, n)] * rng.choice([-1.0, 1.0], (n, 1))
+        q[kind == 2] = axes[kind == 2]
+        eps = 10.0 ** rng.uniform(-300, -8, (n, 3)) * rng.choice([-1.0, 1.0], (n, 3))
+        near = np.concatenate([np.ones((n, 1)), eps], axis=1)
+        q[kind == 3] = near[kind == 3]
+        raw = fill(rng, (n, 4), level)
+        q[kind == 4] = raw[kind == 4]
+    return q.reshape(tuple(batch) + (4,))
+
+
+def hamilton(a, b):
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw], -1)
+
+
+def partner_quats(rng, a, level):
+    """A second quaternion batch related to `a` row by row: the same, antipodal, 180° away, a hair
+    away (1e-15), or independent."""
+    if a.size == 0 or a.shape[:-1] == ():
+        return quats(rng, a.shape[:-1], level)
+    b = quats(rng, a.shape[:-1], level)
+    flat_a, flat_b = a.reshape(-1, 4), b.reshape(-1, 4)
+    rel = rng.integers(0, 5, flat_a.shape[0])
+    with np.errstate(all="ignore"):
+        flat_b[rel == 0] = flat_a[rel == 0]
+        flat_b[rel == 1] = -flat_a[rel == 1]
+        half = hamilton(flat_a, np.array([0.0, 1.0, 0.0, 0.0]))
+        flat_b[rel == 2] = half[rel == 2]
+        hair = flat_a * (1 + 1e-15 * rng.standard_normal(flat_a.shape))
+        flat_b[rel == 3] = hair[rel == 3]
+    return flat_b.reshape(a.shape)
+
+
+def vecs(rng, batch, level):
+    return fill(rng, tuple(batch) + (3,), "calm" if level == "poison" else level)
+
+
+def scalars(rng, batch, level):
+    return fill(rng, tuple(batch), "calm" if level == "poison" else level)
+
+
+def angles(rng, batch, level):
+    """(…, 3) Euler angles: calm within ±2π; extreme adds gimbal lock (±π/2 middle angle exactly),
+    spins (k·2π), and large magnitudes up to 1e300."""
+    a = rng.uniform(-2 * np.pi, 2 * np.pi, tuple(batch) + (3,))
+    if level in ("extreme", "wild") and a.size:
+        flat = a.reshape(-1, 3)
+        n = flat.shape[0]
+        kind = rng.integers(0, 6, n)
+        mid = rng.integers(0, 3, n)
+        flat[kind == 1, :] = rng.choice([-1.0, 1.0], ((kind == 1).sum(), 3)) * np.pi / 2
+        flat[kind == 2] += rng.integers(-1000, 1000, ((kind == 2).sum(), 3)) * 2 * np.pi
+        raw = fill(rng, (n, 3), level)
+        flat[kind == 3] = raw[kind == 3]
+        rows = np.nonzero(kind == 4)[0]
+        flat[rows, mid[rows]] = rng.choice([-1.0, 1.0], rows.size) * np.pi / 2
+    return a
+
+
+def rotations(rng, batch, level):
+    """(…, 3, 3) matrices: exact rotations, scaled (10^±300, non-uniform), sheared, perturbed,
+    or raw numbers."""
+    n = int(np.prod(batch, dtype=np.int64))
+    m = quat_to_matrix_np(unit_rows(rng, n))
+    if level in ("extreme", "wild") and n:
+        kind = rng.integers(0, 6, n)
+        m[kind == 1] *= (10.0 ** rng.uniform(-290, 290, n))[kind == 1, None, None]
+        m[kind == 2] *= (10.0 ** rng.uniform(-5, 5, (n, 1, 3)))[kind == 2]
+        shear = np.triu(rng.standard_normal((n, 3, 3)), 1)
+        m[kind == 3] = (m + m @ shear)[kind == 3]
+        m[kind == 4] += 1e-9 * rng.standard_normal((int((kind == 4).sum()), 3, 3))
+        raw = fill(rng, (n, 3, 3), level)
+        m[kind == 5] = raw[kind == 5]
+    return m.reshape(tuple(batch) + (3, 3))
+
+
+def transforms(rng, batch, level):
+    """(…, 4, 4) homogeneous transforms; extreme adds huge translations and projective bottom rows."""
+    r = rotations(rng, batch, level)
+    m = np.zeros(tuple(batch) + (4, 4))
+    m[..., :3, :3] = r
+    m[..., :3, 3] = fill(rng, tuple(batch) + (3,), "calm" if level == "poison" else level)
+    m[..., 3, 3] = 1.0
+    if level in ("extreme", "wild") and m.size:
+        flat = m.reshape(-1, 4, 4)
+        proj = rng.random(flat.shape[0]) < 0.2
+        flat[proj, 3, :] = fill(rng, (int(proj.sum()), 4), level)
+    return m
+
+
+def complex2(rng, batch, level):
+    q = quats(rng, batch, level)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    m = np.stack([w + 1j * x, y + 1j * z, -y + 1j * z, w - 1j * x], -1).reshape(tuple(batch) + (2, 2))
+    if level in ("extreme", "wild") and m.size:
+        m = m + 1j * fill(rng, m.shape, level) * (rng.random(m.shape) < 0.2)
+    return m
+
+
+def real4(rng, batch, level):
+    q = quats(rng, batch, level)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    rows = [w, -x, -y, -z, x, w, -z, y, y, z, w, -x, z, -y, x, w]
+    m = np.stack(rows, -1).reshape(tuple(batch) + (4, 4))
+    if level in ("extreme", "wild") and m.size:
+        m = m + fill(rng, m.shape, level) * (rng.random(m.shape) < 0.1)
+    return m
+
+
+def quat_to_matrix_np(q):
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+                     2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                     2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1
+                    ).reshape(q.shape[:-1] + (3, 3))
+
+
+KINDS = {  # argument kind -> (generator(rng, batch, level), element tail)
+    "quat": (quats, (4,)), "vec": (vecs, (3,)), "scalar": (scalars, ()), "angles": (angles, (3,)),
+    "mat3": (rotations, (3, 3)), "mat4": (transforms, (4, 4)), "complex2": (complex2, (2, 2)),
+    "real4": (real4, (4, 4)),
+}
+
+# What makes an element invalid, per kind, in the "poison" level: one element per case.
+POISON_VALUES = (NAN, INF, -INF)
+
+
+def poison(rng, arr, kind, zero_ok):
+    """Make one element of `arr` (in place) invalid: a non-finite number, or — where the argument
+    must be nonzero — a zero or subnormal-length element."""
+    if arr.size == 0:
+        return False
+    flat = arr.reshape(-1)
+    tail = int(np.prod(KINDS[kind][1], dtype=np.int64)) if kind in KINDS else 1
+    if not zero_ok and rng.random() < 0.4:
+        row = rng.integers(0, max(1, flat.size // tail))
+        flat[row * tail:(row + 1) * tail] = 0.0
+        if rng.random() < 0.5:
+            flat[row * tail] = rng.choice([5e-324, 1e-310, -1e-305])
+        return True
+    value = rng.choice(POISON_VALUES)
+    flat[rng.integers(0, flat.size)] = value * (1j if arr.dtype.kind == "c" and rng.random() < 0.5 else 1)
+    return True
+
+
+# ---- times ---------------------------------------------------------------------------------------
+
+TIME_MODES = ("unit", "random", "tiny", "huge", "offset", "subnormal", "span_overflow", "negative")
+
+
+def increasing_times(rng, n, mode):
+    """n strictly increasing finite times with a given spacing character."""
+    if n == 0:
+        return np.zeros(0)
+    if mode == "unit":
+        t = np.arange(n, dtype=float) + rng.integers(-100, 100)
+    elif mode == "random":
+        t = np.cumsum(rng.exponential(1.0, n) + 1e-3) - 5
+    elif mode == "tiny":  # consecutive doubles
+        t = np.empty(n)
+        t[0] = rng.choice([0.0, 1.0, 1e6])
+        for i in range(1, n):
+            t[i] = np.nextafter(t[i - 1], INF)
+    elif mode == "huge":
+        t = np.linspace(-1e300, 1e300, n) if n > 1 else np.array([1e300])
+    elif mode == "offset":
+        t = 1e15 + np.arange(n, dtype=float)
+    elif mode == "subnormal":
+        t = np.arange(n, dtype=float) * 5e-324
+    elif mode == "span_overflow":  # t[-1] - t[0] overflows
+        t = np.linspace(-DMAX, DMAX, n) if n > 1 else np.array([DMAX])
+    else:
+        t = -np.cumsum(rng.exponential(1.0, n))[::-1].copy()
+    return t
+
+
+def break_times(rng, t):
+    """Make strictly increasing times invalid: a duplicate, a swap, or a non-finite value."""
+    t = t.copy()
+    how = rng.integers(0, 3) if t.size > 1 else 2
+    if how == 0:
+        i = rng.integers(1, t.size)
+        t[i] = t[i - 1]
+    elif how == 1:
+        i = rng.integers(1, t.size)
+        t[i - 1], t[i] = t[i], t[i - 1]
+    else:
+        t[rng.integers(0, t.size)] = rng.choice(POISON_VALUES)
+    return t
+
+
+# ---- junk: wrong types, shapes and dtypes ---------------------------------------------------------
+
+class Opaque:
+    pass
+
+
+def junk_values(tail):
+    """Junk for an array argument with element shape `tail`: a list of (value, must_fail). must_fail
+    is False for what numpy converts to valid numbers (lists, int/bool/float16/str-digit arrays,
+    Fortran-order and strided arrays, masked arrays, datetimes)."""
+    tail = tuple(tail)
+    n = int(np.prod(tail, dtype=np.int64))
+
+    def shaped(arr):
+        return arr.reshape(tail)
+
+    strided = np.ones((3,) + tail[:-1] + (2 * tail[-1],))[..., ::2] if tail else np.ones(6)[::2]
+    out = [
+        (None, True), ("abc", True), (b"\x00\x01\x02\x03", True), ({"a": 1}, True), (Opaque(), True),
+        (shaped(np.array([Opaque()] * n, dtype=object)), True),
+        (shaped(np.array(["x"] * n)), True),
+        (np.array([[1.0, 2.0], [3.0]], dtype=object), True),
+        (shaped(np.zeros(n, dtype=[("a", "f8"), ("b", "i4")])), True),
+        ([2 ** 2000] * n, True),
+        ([None] + [0.0] * (n - 1), True),
+        (shaped(np.array(["1"] * n)), False),
+        (np.zeros(tail).tolist() if tail else 0.5, False),
+        ([np.zeros(tail).tolist()] * 2 if tail else [0.5, 1.0], False),
+        (np.ones(tail, dtype=bool), False), (np.ones(tail, dtype=np.int8), False),
+        (np.ones(tail, dtype=np.float16), False), (np.ones(tail, dtype=np.longdouble), False),
+        (np.ones(tail, dtype=np.uint64), False), (np.asfortranarray(np.ones((3,) + tail)), False),
+        (strided, False), (np.ones((4,) + tail)[::-1], False),
+        (np.ma.masked_array(np.ones((2,) + tail), mask=True), False),
+        (shaped(np.array(["2020-01-01"] * n, dtype="datetime64[D]")), False),
+    ]
+    if tail:
+        for shape in (tail + (2,), (5,) + tuple(t + 1 for t in tail), (), (0,) * (len(tail) + 1)):
+            out.append((np.zeros(shape), shape[len(shape) - len(tail):] != tail))
+    return out
+
+
+def junk_strings():
+    """(value, must_fail) for a string argument (Euler order, method, interpolation)."""
+    return [(None, True), (3, True), (b"XYZ", False), ("", True), ("xyz", True), ("XYZ ", True),
+            ("X\x00YZ", True), ("\u00dc\u00df", True), ("ZZZ", True), ("XYZXYZ" * 1000, True),
+            (["XYZ"], True), (np.str_("XYZ"), False)]
+
+
+# ==== cases ========================================================================================
+
+@dataclass
+class Case:
+    call: Callable[[], Any]
+    rows: int
+    check: Callable[[Any], None] = lambda out: None
+    must_fail: str = ""      # why the call must raise ValueError/TypeError ("" = it may pass)
+    out_bytes: int = 0       # nominal output size: above MEMORY_LIMIT a MemoryError is fine
+    inputs: Any = None       # the arguments, for the failure report
+
+
+class Draw:
+    """Hypothesis draws for the structure of a case; a numpy Generator for the bulk values."""
+
+    def __init__(self, data):
+        self.data = data
+        self.rng = np.random.default_rng(data.draw(st.integers(0, 2 ** 32 - 1), label="seed"))
+
+    def pick(self, options, label=None):
+        return self.data.draw(st.sampled_from(options), label=label)
+
+    def chance(self, p, label=None):
+        return self.data.draw(st.integers(0, 999), label=label) < p * 1000
+
+    def level(self):
+        return self.pick(("calm", "extreme", "extreme", "poison", "wild"), "level")
+
+    def count(self, small=64, huge=200_000, label="count"):
+        """Row counts: mostly log-uniform in [2, small], sometimes 0, 1 or 2, rarely huge (up to
+        `huge`). Hypothesis picks the class, the seeded generator the number."""
+        kind = self.pick(("small",) * 8 + ("tiny", "huge"), label + "_kind")
+        if kind == "tiny":
+            return self.pick((0, 1, 2), label)
+        if kind == "huge" and self.chance(0.2, label + "_huge"):
+            return int(self.rng.integers(huge // 4, huge + 1))
+        return int(np.exp(self.rng.uniform(np.log(2), np.log(small + 1))))
+
+    def batch_shapes(self, nargs, huge=100_000):
+        """Batch shapes for nargs broadcasting arguments (sometimes not broadcastable)."""
+        kind = self.pick(("same", "same", "scalar_vs", "outer", "ndim", "empty", "mismatch", "zero_d"),
+                         "shape_kind")
+        n = self.count(small=1000, huge=huge)
+        if nargs == 1 and kind in ("scalar_vs", "outer", "mismatch"):
+            kind = "same"
+        if kind == "same":
+            return [(n,)] * nargs
+        if kind == "scalar_vs":
+            shapes = [(n,)] * nargs
+            shapes[self.data.draw(st.integers(0, nargs - 1))] = ()
+            return shapes
+        if kind == "outer" and nargs > 1:
+            a = self.data.draw(st.integers(1, 12))
+            return [(a, 1)] + [(1, min(n, 64))] * (nargs - 1)
+        if kind == "ndim":
+            dims = tuple(self.data.draw(st.lists(st.integers(1, 3), min_size=2, max_size=6)))
+            return [dims] * nargs
+        if kind == "empty":
+            return [(0,)] + [(1,)] * (nargs - 1) if self.chance(0.5) else [(2 ** 40, 0)] + [(0,)] * (nargs - 1)
+        if kind == "mismatch" and nargs > 1:
+            return [(n + 1,)] + [(n + 2,)] * (nargs - 1)
+        return [()] * nargs
+
+
+def broadcast_or_none(shapes):
+    try:
+        return np.broadcast_shapes(*shapes)
+    except ValueError:
+        return None
+
+
+# ---- output checks --------------------------------------------------------------------------------
+
+def expect(cond, message):
+    """Raise Violation(message) unless cond; message may be a callable (built only on failure)."""
+    if not cond:
+        raise Violation(message() if callable(message) else message)
+
+
+def finite(out, what="output", allow_nan=False, allow_posinf=False):
+    a = np.asarray(out)
+    expect(a.dtype.kind in "fciub", f"{what}: dtype {a.dtype}")
+    bad = ~np.isfinite(a)
+    if allow_nan:
+        bad &= ~np.isnan(a)
+    if allow_posinf:
+        bad &= ~(np.isposinf(a) if a.dtype.kind != "c" else np.zeros_like(bad))
+    if bad.any():
+        idx = np.argwhere(bad)[0] if a.ndim else ()
+        raise Violation(f"{what}: non-finite value {a[tuple(idx)]!r} at {tuple(int(i) for i in idx)}"
+                        f" (shape {a.shape})")
+
+
+def unit(out, what="output"):
+    finite(out, what)
+    n = np.linalg.norm(np.asarray(out), axis=-1)
+    if n.size and np.max(np.abs(n - 1)) > UNIT_TOL:
+        i = np.unravel_index(np.argmax(np.abs(n - 1)), n.shape)
+        raise Violation(f"{what}: quaternion of length {n[i]!r} at {tuple(int(k) for k in i)}")
+
+
+def shape_is(out, shape, what="output"):
+    expect(isinstance(out, np.ndarray), f"{what}: not an ndarray but {type(out).__name__}")
+    expect(out.shape == tuple(shape), f"{what}: shape {out.shape}, expected {tuple(shape)}")
+
+
+def in_range(out, lo, hi, what="output", slack=1e-12):
+    finite(out, what)
+    a = np.asarray(out)
+    if a.size and (a.min() < lo - slack or a.max() > hi + slack):
+        raise Violation(f"{what}: values in [{a.min()!r}, {a.max()!r}], expected [{lo}, {hi}]")
+
+
+def rotation_matrix(out, what="output"):
+    finite(out, what)
+    m = np.asarray(out)
+    if m.size:
+        err = np.abs(m @ np.swapaxes(m, -1, -2) - np.eye(3)).max()
+        expect(err < 1e-9, f"{what}: not orthonormal (|M Mᵀ - I| = {err!r})")
+        expect(np.abs(np.linalg.det(m) - 1).max() < 1e-9, f"{what}: det != 1")
+
+
+def np_angle(a, b):
+    """Geodesic rotation angle between quaternion arrays (sign-invariant), scaled safely."""
+    a = a / np.abs(a).max(-1, keepdims=True)
+    b = b / np.abs(b).max(-1, keepdims=True)
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    d, s = np.linalg.norm(a - b, axis=-1), np.linalg.norm(a + b, axis=-1)
+    return 4 * np.arctan2(np.minimum(d, s), np.maximum(d, s))
+
+
+OUT_CHECKS = {  # output kind -> (element tail, checker(out))
+    "quat": ((4,), finite), "unit": ((4,), unit), "vec": ((3,), finite), "scalar": ((), finite),
+    "angle_pi": ((), lambda o: in_range(o, 0, np.pi)), "gimbal": ((), lambda o: in_range(o, 0, np.pi / 2)),
+    "norm": ((), lambda o: in_range(o, 0, DMAX)), "rot3": ((3, 3), rotation_matrix),
+    "mat4": ((4, 4), finite), "complex2": ((2, 2), finite), "angles": ((3,), finite),
+    "rot4": ((4, 4), lambda o: (rotation_matrix(np.asarray(o)[..., :3, :3]), finite(o),
+                                expect(np.all(np.asarray(o)[..., 3, :] == [0, 0, 0, 1]), "bottom row"))),
+    "log": ((4,), lambda o: (finite(o), in_range(np.linalg.norm(np.asarray(o)[..., 1:], axis=-1), 0, np.pi,
+                                                 "log vector part"))),
+}
+
+
+# ---- elementwise (broadcasting) core functions -------------------------------------------------------
+
+@dataclass
+class Elementwise:
+    """A core function: array arguments of given kinds whose batch dimensions broadcast, an optional
+    Euler order, an output kind, and which arguments must be nonzero (zero-length refused)."""
+    args: tuple            # (name, kind, refuses_zero)
+    out: str | tuple       # output kind, or a tuple of kinds for tuple results
+    order: bool = False
+    extra: Callable | None = None   # extra check(out, arrays)
+    pair: bool = False     # second quaternion argument derived from the first (antipodal, …)
+    optional: tuple = ()   # names of arguments for which None is valid
+
+    def build(self, fn, d: Draw) -> Case:
+        rng, level = d.rng, d.level()
+        shapes = d.batch_shapes(len(self.args))
+        arrays = []
+        for i, ((_, kind, _), shape) in enumerate(zip(self.args, shapes)):
+            gen = KINDS[kind][0]
+            a = gen(rng, shape, "extreme" if level == "poison" else level)
+            if self.pair and i == 1 and kind == "quat" and arrays and arrays[0].shape == a.shape:
+                a = partner_quats(rng, arrays[0], level)
+            arrays.append(np.require(a, requirements="C"))
+        batch = broadcast_or_none(shapes)
+        rows = int(np.prod(batch)) if batch is not None else sum(int(np.prod(s)) for s in shapes)
+        must_fail = ""
+        if batch is None:
+            must_fail = f"batch shapes {shapes} do not broadcast"
+        if d.chance(0.08, "junk_arg"):
+            k = d.data.draw(st.integers(0, len(arrays) - 1), label="junk_index")
+            value, bad = d.pick(junk_values(KINDS[self.args[k][1]][1]), "junk")
+            arrays[k] = value
+            bad = bad and not (value is None and self.args[k][0] in self.optional)
+            # junk meets no element when another argument is empty (numpy makes None a 0-d nan)
+            bad = bad and all(np.size(a) for i, a in enumerate(arrays) if i != k)
+            must_fail = f"{self.args[k][0]}={type(value).__name__} junk" if bad else ""
+            batch = None
+        elif level == "wild" and rows:
+            if any(not np.all(np.isfinite(a)) for a in arrays):
+                must_fail = must_fail or "a non-finite element"
+        elif level == "poison" and rows:
+            k = d.data.draw(st.integers(0, len(arrays) - 1), label="poisoned_arg")
+            if poison(rng, arrays[k], self.args[k][1], not self.args[k][2]):
+                must_fail = must_fail or f"{self.args[k][0]} poisoned"
+        kwargs = {}
+        if self.order:
+            if d.chance(0.1, "junk_order"):
+                kwargs["order"], bad = d.pick(junk_strings(), "order")
+                must_fail = f"order={kwargs['order']!r}" if bad else ""
+            else:
+                kwargs["order"] = d.pick(ORDERS, "order")
+        tails = (OUT_CHECKS[self.out][0] if isinstance(self.out, str) else None)
+        out_bytes = rows * 8 * (int(np.prod(tails)) if tails else 4)
+
+        def check(out):
+            kinds = (self.out,) if isinstance(self.out, str) else self.out
+            outs = (out,) if isinstance(self.out, str) else out
+            expect(isinstance(outs, tuple) and len(outs) == len(kinds), f"result {type(out).__name__}")
+            for o, kind in zip(outs, kinds):
+                tail, checker = OUT_CHECKS[kind]
+                if batch is not None:
+                    shape_is(o, tuple(batch) + tail, kind)
+                checker(o)
+            if self.extra is not None and batch is not None and rows:
+                self.extra(out, arrays)
+
+        return Case(lambda: fn(*arrays, **kwargs), rows, check, must_fail, out_bytes, (arrays, kwargs))
+
+
+def same_direction(out, arrays):
+    """quat_normalize keeps the sign: out · q > 0."""
+    q = np.broadcast_to(arrays[0], out.shape)
+    qs = q / np.abs(q).max(-1, keepdims=True)
+    expect(np.all(np.sum(out * qs, -1) > 0), "quat_normalize flipped a sign")
+
+
+def length_kept(out, arrays):
+    """Rotation keeps vector length (relative 1e-9)."""
+    v = np.broadcast_to(arrays[1], out.shape)
+    scale = np.abs(v).max(-1, keepdims=True)
+    scale[scale == 0] = 1
+    ln, lo = np.linalg.norm(v / scale, axis=-1), np.linalg.norm(out / scale, axis=-1)
+    err = np.abs(ln - lo) / np.maximum(ln, 1e-300)
+    expect(np.all((err < 1e-9) | (ln < 1e-280)), f"rotation changed a length by {np.nanmax(err)!r}")
+
+
+def axis_angle_ranges(out, arrays):
+    axis, angle = out
+    unit(np.concatenate([axis, np.zeros(axis.shape[:-1] + (1,))], -1), "axis")
+    in_range(angle, 0, 2 * np.pi, "angle")
+
+
+def euler_ranges(out, arrays):
+    """Without compat: middle angle in [-π/2, π/2], the others in [-π, π]."""
+    in_range(np.abs(out), 0, np.pi, "euler angles", slack=1e-12)
+
+
+ELEMENTWISE = {
+    "quat_multiply": Elementwise((("a", "quat", False), ("b", "quat", False)), "quat", pair=True),
+    "quat_conjugate": Elementwise((("q", "quat", False),), "quat"),
+    "quat_inverse": Elementwise((("q", "quat", True),), "quat"),
+    "quat_divide": Elementwise((("a", "quat", False), ("b", "quat", True)), "quat", pair=True),
+    "quat_norm": Elementwise((("q", "quat", False),), "norm"),
+    "quat_normalize": Elementwise((("q", "quat", True),), "unit", extra=same_direction),
+    "quat_exp": Elementwise((("q", "quat", False),), "quat"),
+    "quat_log": Elementwise((("q", "quat", True),), "log"),
+    "quat_pow": Elementwise((("q", "quat", True), ("t", "scalar", False)), "quat"),
+    "quat_rotate": Elementwise((("q", "quat", True), ("v", "vec", False)), "vec", extra=length_kept),
+    "quat_rotate_sandwich": Elementwise((("q", "quat", True), ("v", "vec", False)), "vec", extra=length_kept),
+    "axis_angle_to_quat": Elementwise((("axis", "vec", True), ("angle", "scalar", False)), "unit"),
+    "quat_to_axis_angle": Elementwise((("q", "quat", True),), ("vec", "scalar"), extra=axis_angle_ranges),
+    "angle_between": Elementwise((("a", "quat", True), ("b", "quat", True)), "angle_pi", pair=True),
+    "quat_to_matrix": Elementwise((("q", "quat", True),), "rot3"),
+    "matrix_to_quat": Elementwise((("m", "mat3", True),), "unit"),
+    "nearest_rotation": Elementwise((("m", "mat3", True),), "rot3"),
+    "translation_matrix": Elementwise((("t", "vec", False),), "mat4"),
+    "scale_matrix": Elementwise((("s", "vec", False),), "mat4"),
+    "rotation_matrix4": Elementwise((("q", "quat", True),), "rot4"),
+    "transform_points": Elementwise((("M", "mat4", True), ("P", "vec", False)), "vec"),
+    "transform_directions": Elementwise((("M", "mat4", False), ("D", "vec", False)), "vec"),
+    "quat_to_complex2": Elementwise((("q", "quat", False),), "complex2"),
+    "complex2_to_quat": Elementwise((("m", "complex2", False),), "quat"),
+    "quat_to_real4": Elementwise((("q", "quat", False),), "mat4"),
+    "real4_to_quat": Elementwise((("m", "real4", False),), "quat"),
+    "euler_to_quat": Elementwise((("angles", "angles", False),), "unit", order=True),
+    "euler_to_matrix": Elementwise((("angles", "angles", False),), "rot3", order=True),
+    "matrix_to_euler": Elementwise((("m", "mat3", True),), "angles", order=True, extra=euler_ranges),
+    "euler_compat": Elementwise((("angles", "angles", False), ("ref", "angles", False)), "angles", order=True),
+    "gimbal_distance": Elementwise((("angles", "angles", False),), "gimbal", order=True),
+}
+
+
+def build_quat_to_euler(fn, d: Draw) -> Case:
+    """quat_to_euler(q, order, compat=None): without compat as an elementwise function; with compat a
+    broadcasting pair (q, compat)."""
+    if d.chance(0.5, "with_compat"):
+        spec = Elementwise((("q", "quat", True), ("compat", "angles", False)), "angles", order=True,
+                           optional=("compat",))
+        case = spec.build(lambda q, c, **kw: fn(q, compat=c, **kw), d)
+    else:
+        spec = Elementwise((("q", "quat", True),), "angles", order=True, extra=euler_ranges)
+        case = spec.build(fn, d)
+    return case
+
+
+def build_euler_filter(fn, d: Draw) -> Case:
+    """euler_filter(angles (…, N, 3), order): sequences with spins, gimbal lock, huge angles."""
+    rng, level = d.rng, d.level()
+    n = d.count(small=200, huge=100_000)
+    lead = d.pick(((), (), (3,), (2, 2), (0,)), "lead")
+    shape = tuple(lead) + (n,)
+    a = angles(rng, shape, "extreme" if level == "poison" else level)
+    if d.chance(0.3, "smooth") and n:
+        a = np.cumsum(rng.normal(0, 0.5, tuple(lead) + (n, 3)), axis=-2)
+    must_fail = ""
+    rows = int(np.prod(shape))
+    if level == "wild" and not np.all(np.isfinite(a)) and rows:
+        must_fail = "non-finite"
+    if level == "poison" and rows:
+        poison(rng, a, "angles", True)
+        must_fail = "poisoned"
+    order = d.pick(ORDERS, "order")
+    arg: Any = a
+    if d.chance(0.08, "junk"):
+        arg, bad = d.pick(junk_values((3,)), "junk")
+        must_fail = "junk" if bad else ""
+
+    def check(out):
+        if arg is a:
+            shape_is(out, a.shape)
+        finite(out)
+        if arg is a and rows and np.all(np.abs(a) < 1e6):
+            # the filter changes no orientation
+            err = np_angle(qc.euler_to_quat(out, order), qc.euler_to_quat(a, order)).max()
+            expect(err < 1e-6, f"euler_filter changed an orientation by {err!r} rad")
+
+    return Case(lambda: fn(arg, order), max(rows, 1), check, must_fail, rows * 24, (arg, order))
+
+
+def build_euler_middle_axis(fn, d: Draw) -> Case:
+    if d.chance(0.5, "valid"):
+        order = d.pick(ORDERS, "order")
+        return Case(lambda: fn(order), 1, lambda out: expect(out in (0, 1, 2), f"axis {out!r}"))
+    value, bad = d.pick(junk_strings(), "order")
+    return Case(lambda: fn(value), 1, lambda out: expect(out in (0, 1, 2), f"axis {out!r}"),
+                "junk order" if bad else "")
+
+
+# ---- metrics: paths (N,) times, (N, 4) quats, key times ------------------------------------------------
+
+@dataclass
+class Path:
+    times: np.ndarray
+    quats: np.ndarray
+    keys: np.ndarray
+    must_fail: str
+    rows: int
+
+
+def draw_path(d: Draw, small=120, huge=50_000) -> Path:
+    rng = d.rng
+    level = d.level()
+    n = d.count(small=small, huge=huge)
+    tmode = d.pick(TIME_MODES, "time_mode")
+    t = increasing_times(rng, n, tmode)
+    qmode = d.pick(("random", "smooth", "antipodal", "constant", "extreme"), "quat_mode")
+    if qmode == "smooth" and n:
+        q = qc.quat_normalize(np.cumsum(rng.normal(0, 0.05, (n, 4)), 0) + [4, 0, 0, 0])
+    elif qmode == "antipodal" and n:
+        q = unit_rows(rng, n)
+        q[1::2] = -q[0::2][: q[1::2].shape[0]]
+    elif qmode == "constant" and n:
+        q = np.tile(unit_rows(rng, 1), (n, 1))
+    else:
+        q = quats(rng, (n,), "extreme" if qmode == "extreme" else "calm")
+    must_fail = ""
+    if n and rng.random() < 0.5:
+        keys = np.unique(np.concatenate([t[[0, -1]], rng.choice(t, min(n, rng.integers(0, 8)))]))
+    else:
+        keys = t[[0, -1]] if n > 1 else t[:n].copy()
+    if level == "poison" and n:
+        what = d.pick(("times", "quats", "keys"), "poison_what")
+        if what == "times":
+            t = break_times(rng, t)
+        elif what == "quats":
+            poison(rng, q, "quat", False)
+        else:
+            keys = keys.copy()
+            if keys.size == 0:
+                keys = np.array([NAN])
+            else:
+                keys[rng.integers(0, keys.size)] = rng.choice([NAN, INF, t[0] - 1.0, 0.5 * (t[0] + t[-1]) + 0.1234])
+            # a key between samples is refused; one that happens to hit a sample is fine
+            if np.all(np.isin(keys, t)) and np.all(np.diff(keys) > 0):
+                what = ""
+        must_fail = f"poisoned {what}" if what else ""
+    if level == "wild" and n:
+        q = quats(rng, (n,), "wild")
+        if not np.all(np.isfinite(q)):
+            must_fail = "non-finite quats"
+    return Path(np.ascontiguousarray(t), np.ascontiguousarray(q), np.ascontiguousarray(keys), must_fail, n)
+
+
+def maybe_junk(d: Draw, args: list, tails: list, names: list, must_fail: str) -> str:
+    """Replace one of the first len(tails) arguments by junk with probability 0.08. Returns the new
+    must_fail reason: the junk's, or "" for junk numpy may convert (the other reason may be gone)."""
+    if not d.chance(0.08, "junk_arg"):
+        return must_fail
+    k = d.data.draw(st.integers(0, len(tails) - 1), label="junk_index")
+    value, bad = d.pick(junk_values(tails[k]), "junk")
+    args[k] = value
+    return f"{names[k]} junk ({type(value).__name__})" if bad else ""
+
+
+def needs(cond, reason):
+    return "" if cond else reason
+
+
+def build_angular_deviation(fn, d):
+    p = draw_path(d)
+    ref = partner_quats(d.rng, p.quats, "calm") if p.rows else p.quats.copy()
+    args = [p.quats, ref]
+    must_fail = p.must_fail if "quats" in p.must_fail or "non-finite" in p.must_fail else ""
+    if d.chance(0.1, "mismatch"):
+        args[1] = ref[:-1] if ref.shape[0] else np.zeros((1, 4))
+        must_fail = must_fail or "lengths differ"
+    must_fail = maybe_junk(d, args, [(4,), (4,)], ["quats", "reference"], must_fail)
+
+    def check(out):
+        shape_is(out, (p.rows,))
+        in_range(out, 0, np.pi)
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def path_only_fail(p: Path, *parts):
+    return p.must_fail if any(x in p.must_fail for x in parts) else ""
+
+
+def build_interval_speeds(fn, d):
+    p = draw_path(d)
+    args = [p.times, p.quats]
+    must_fail = path_only_fail(p, "times", "quats") or needs(p.rows >= 2, "fewer than 2 samples")
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        shape_is(out, (p.rows - 1,))
+        in_range(out, 0, DMAX, "speeds")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def build_segment_speed_ratios(fn, d):
+    p = draw_path(d)
+    args = [p.times, p.quats, p.keys]
+    must_fail = p.must_fail
+    must_fail = maybe_junk(d, args, [(), (4,), ()], ["times", "quats", "key_times"], must_fail)
+
+    def check(out):
+        shape_is(out, (max(p.keys.size - 1, 0),))
+        finite(out, "speed ratios", allow_posinf=True)
+        expect(np.all(out >= 1 - 1e-12), f"speed ratio below 1: {out.min()!r}")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def build_segment_speed_ratios_from_velocity(fn, d):
+    p = draw_path(d)
+    vel = vecs(d.rng, (p.rows,), d.pick(("calm", "extreme"), "vel_level"))
+    args = [p.times, vel, p.keys]
+    must_fail = path_only_fail(p, "times", "keys")
+    if "quats" in p.must_fail and p.rows:
+        poison(d.rng, vel, "vec", True)
+        must_fail = "poisoned velocities"
+    must_fail = maybe_junk(d, args, [(), (3,), ()], ["times", "velocities", "key_times"], must_fail)
+
+    def check(out):
+        shape_is(out, (max(p.keys.size - 1, 0),))
+        finite(out, "speed ratios", allow_nan=True, allow_posinf=True)
+        ok = out[~np.isnan(out)]
+        expect(np.all(ok >= 1 - 1e-12), f"speed ratio below 1: {ok.min() if ok.size else None!r}")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def build_path_length(fn, d):
+    p = draw_path(d)
+    args = [p.quats]
+    must_fail = path_only_fail(p, "quats", "non-finite")
+    must_fail = maybe_junk(d, args, [(4,)], ["quats"], must_fail)
+
+    def check(out):
+        expect(isinstance(out, float), f"path_length returned {type(out).__name__}")
+        in_range(out, 0, np.pi * max(p.rows, 1), "path length")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, 0, args)
+
+
+def build_key_jumps(fn, d):
+    p = draw_path(d)
+    args = [p.times, p.quats, p.keys]
+    must_fail = maybe_junk(d, args, [(), (4,), ()], ["times", "quats", "key_times"], p.must_fail)
+
+    def check(out):
+        expect(isinstance(out, tuple) and len(out) == 2, "key_jumps: not a pair")
+        for name, o in zip(("velocity", "acceleration"), out):
+            shape_is(o, (p.keys.size,), name)
+            finite(o, name + " jumps", allow_nan=True)
+            in_range(o[~np.isnan(o)], 0, DMAX, name + " jumps")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def build_gimbal_distances(fn, d):
+    rng, level = d.rng, d.level()
+    n = d.count(small=200, huge=100_000)
+    a = angles(rng, (n,), "extreme" if level == "poison" else level)
+    must_fail = "non-finite" if level == "wild" and not np.all(np.isfinite(a)) else ""
+    if level == "poison" and n:
+        poison(rng, a, "angles", True)
+        must_fail = "poisoned"
+    args = [a, d.pick(ORDERS, "order")]
+    generated = a
+    if d.chance(0.05, "junk_order"):
+        args[1], bad = d.pick(junk_strings(), "order")
+        must_fail = must_fail or ("junk order" if bad else "")
+    must_fail = maybe_junk(d, args, [(3,)], ["angles"], must_fail)
+
+    def check(out):
+        if args[0] is generated:
+            shape_is(out, (n,))
+        in_range(out, 0, np.pi / 2)
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 8, args)
+
+
+def build_gimbal_distances_from_quats(fn, d):
+    rng, level = d.rng, d.level()
+    n = d.count(small=200, huge=100_000)
+    q = quats(rng, (n,), "extreme" if level == "poison" else level)
+    must_fail = "non-finite" if level == "wild" and not np.all(np.isfinite(q)) else ""
+    if level == "poison" and n:
+        poison(rng, q, "quat", False)
+        must_fail = "poisoned"
+    args = [q, d.pick(ORDERS, "order")]
+    generated = q
+    must_fail = maybe_junk(d, args, [(4,)], ["quats"], must_fail)
+
+    def check(out):
+        if args[0] is generated:
+            shape_is(out, (n,))
+        in_range(out, 0, np.pi / 2)
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 8, args)
+
+
+def build_closest_gimbal_approach(fn, d):
+    rng = d.rng
+    p = draw_path(d)
+    dist = np.abs(scalars(rng, (p.rows,), d.pick(("calm", "extreme"), "dist_level")))
+    tol = d.pick((0.0, 1e-6, 0.1, 1e300, -1.0, NAN, INF), "tolerance")
+    args = [p.times, dist, tol]
+    must_fail = ("non-finite times" if not np.all(np.isfinite(p.times)) else "") or needs(p.rows >= 1, "no samples") or \
+        needs(math.isfinite(tol) and tol >= 0, f"tolerance {tol}")
+    if d.chance(0.15, "bad_distance") and p.rows:
+        dist[rng.integers(0, p.rows)] = rng.choice([NAN, INF])
+        must_fail = must_fail or "bad distance"
+    must_fail = maybe_junk(d, args, [(), ()], ["times", "distances"], must_fail)
+
+    def check(out):
+        expect(isinstance(out, tuple) and len(out) == 2, "not a pair")
+        finite(out[0], "distance")
+        finite(out[1], "times")
+        expect(out[1].size >= 1, "no time of closest approach")
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
+
+
+def build_path_metrics(fn, d):
+    p = draw_path(d)
+    ref = partner_quats(d.rng, p.quats, "calm") if p.rows else p.quats.copy()
+    key_quats = None
+    if d.chance(0.4, "key_quats"):
+        key_quats = quats(d.rng, (p.keys.size,), d.pick(("calm", "extreme"), "kq_level"))
+    args = [p.times, p.quats, p.keys, ref, key_quats]
+    must_fail = p.must_fail or needs(p.rows >= 1, "no samples")
+    must_fail = maybe_junk(d, args, [(), (4,), (), (4,), (4,)],
+                           ["times", "quats", "key_times", "reference", "key_quats"], must_fail)
+
+    def check(out):
+        expect(isinstance(out, dict), "path_metrics: not a dict")
+        for k, v in out.items():
+            if k in ("velocity_jumps", "acceleration_jumps"):
+                finite(v, k, allow_nan=True)
+            elif k in ("segment_speed_ratios", "speed_ratio", "path_length_ratio"):
+                finite(v, k, allow_posinf=True)
+            else:
+                finite(v, k)
+    return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 64, args)
+
+
+# ---- key reduction --------------------------------------------------------------------------------
+
+def check_indices(idx, n, what):
+    shape_is(idx, idx.shape, what)
+    expect(idx.dtype.kind == "i", f"{what}: dtype {idx.dtype}")
+    expect(idx.ndim == 1 and idx.size >= min(n, 2 if n > 1 else 1), f"{what}: {idx.size} indices for {n}")
+    if idx.size:
+        expect(idx[0] == 0 and idx[-1] == n - 1, f"{what}: first/last sample not kept")
+        expect(np.all(np.diff(idx) > 0), f"{what}: indices not increasing")
+
+
+def frames_distinct(frames, what):
+    """Blender stores frames as float32: kept keys must stay distinct there (two keys on one frame)."""
+    f32 = np.asarray(frames, dtype=np.float64).astype(np.float32)
+    finite(f32.astype(np.float64), f"{what} (as float32)")
+    expect(np.all(np.diff(f32) > 0), lambda: f"{what}: two kept keys on one float32 frame "
+                                             f"({f32[np.nonzero(np.diff(f32) <= 0)[0][0]]!r})")
+
+
+def build_reduce(fn, d, euler):
+    rng = d.rng
+    level = d.level()
+    n = d.count(small=300, huge=20_000)
+    tmode = d.pick(TIME_MODES, "time_mode")
+    t = increasing_times(rng, n, tmode)
+    width = 3 if euler else 4
+    vmode = d.pick(("smooth", "noise", "constant", "extreme", "spin"), "value_mode")
+    if vmode == "smooth" and n:
+        v = np.cumsum(rng.normal(0, 0.02, (n, width)), 0)
+        v = v + ([0.0] * 3 if euler else [3.0, 0, 0, 0])
+    elif vmode == "spin" and n:
+        v = np.zeros((n, width))
+        v[:, 0] = np.linspace(0, 40 * np.pi, n) if euler else np.cos(np.linspace(0, 20 * np.pi, n))
+        if not euler:
+            v[:, 3] = np.sin(np.linspace(0, 20 * np.pi, n))
+    elif vmode == "constant" and n:
+        v = np.tile(rng.normal(0, 1, (1, width)) + (0 if euler else 2), (n, 1))
+    elif vmode == "extreme":
+        v = angles(rng, (n,), "extreme") if euler else quats(rng, (n,), "extreme")
+    else:
+        v = angles(rng, (n,), "calm") if euler else quats(rng, (n,), "calm")
+    tol = d.pick((0.0, 1e-9, 1e-7, 1e-4, 0.01, 0.1, 1.0, 4.0, 1e300), "tolerance")
+    must_fail = needs(n >= 1, "no samples")
+    if level == "poison" and n:
+        what = d.pick(("times", "values", "tolerance"), "poison_what")
+        if what == "times":
+            t = break_times(rng, t)
+        elif what == "values":
+            poison(rng, v, "angles" if euler else "quat", euler)
+        else:
+            tol = d.pick((-1e-9, -1.0, NAN, INF, -INF), "bad_tolerance")
+        must_fail = must_fail or f"poisoned {what}"
+    interpolation = d.pick(("LINEAR", "BEZIER"), "interpolation")
+    synchronized = d.pick((True, False), "synchronized")
+    args = [t, v] + ([d.pick(ORDERS, "order")] if euler else []) + [tol, interpolation, synchronized]
+    if d.chance(0.08, "junk_string"):
+        k = 2 if euler and d.chance(0.5) else len(args) - 2
+        args[k], bad = d.pick(junk_strings(), "junk_string")
+        must_fail = must_fail or (f"junk string {args[k]!r}" if bad else "")
+    if d.chance(0.05, "length_mismatch") and n:
+        args[1] = v[:-1]
+        must_fail = must_fail or "lengths differ"
+    must_fail = maybe_junk(d, args, [(), (width,)], ["times", "angles" if euler else "quats"], must_fail)
+    if d.chance(0.04, "junk_tolerance"):
+        k = 3 if euler else 2
+        args[k], bad = d.pick([("0.1", True), (None, True), (np.float64(0.1), False), (True, False),
+                               (np.array([0.1]), False), ([0.1], True)], "junk_tolerance")
+        must_fail = must_fail or ("junk tolerance" if bad else "")
+
+    def check(out):
+        if isinstance(out, np.ndarray):
+            check_indices(out, n, "indices")
+            frames_distinct(t[out], "kept frames")
+        elif isinstance(out, list):
+            expect(len(out) == width, f"{len(out)} channels")
+            for c, idx in enumerate(out):
+                check_indices(idx, n, f"channel {c} indices")
+                frames_distinct(t[idx], f"channel {c} frames")
+        else:
+            expect(type(out).__name__ == "ReducedKeys", f"result {type(out).__name__}")
+            expect(len(out.channels) == width, f"{len(out.channels)} channels")
+            finite(out.max_error, "max_error")
+            expect(out.max_error <= max(tol, 1e-6), f"max_error {out.max_error!r} above tolerance {tol!r}")
+            expect(out.key_count == sum(len(c) for c in out.channels), "key_count")
+            for c, ch in enumerate(out.channels):
+                check_indices(ch.indices, n, f"channel {c} indices")
+                for name in ("frames", "values", "handle_left", "handle_right"):
+                    finite(getattr(ch, name), f"channel {c} {name}")
+                frames_distinct(ch.frames, f"channel {c} frames")
+                expect(ch.handle_left.shape == (len(ch), 2), f"channel {c} handle_left shape")
+            repr(out)
+            repr(out.channels[0])
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+
+
+# ---- the Curve class: one target per method ----------------------------------------------------------
+
+CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "times"}
+TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
+
+
+def draw_options(d: Draw, method, k):
+    """Options for a method: mostly valid, sometimes out of range, non-finite, wrong length, of
+    another method, unknown, or of a junk type. Returns (kwargs, must_fail)."""
+    rng = d.rng
+    kwargs, must_fail = {}, ""
+    if method == "SLERP" and d.chance(0.5, "sp"):
+        kwargs["shortest_path"], bad = d.pick([(True, False), (False, False), (2, True), ("yes", True),
+                                               (np.bool_(False), False), (None, True)], "shortest_path")
+        must_fail = "bad shortest_path" if bad else ""
+    if method == "TCB":
+        for name in TCB_OPTIONS:
+            if not d.chance(0.5, name):
+                continue
+            lo = 0.0 if name.startswith("ease") else -1.0
+            form = d.pick(("scalar", "per_key", "edge", "out_of_range", "nan", "wrong_length", "bool", "junk"),
+                          name + "_form")
+            if form == "scalar":
+                kwargs[name] = float(rng.uniform(lo, 1))
+            elif form == "per_key":
+                kwargs[name] = rng.uniform(lo, 1, k)
+            elif form == "edge":
+                kwargs[name] = rng.choice([lo, 1.0, -0.0], k)
+            elif form == "out_of_range":
+                kwargs[name] = float(rng.choice([1 + 1e-12, lo - 1e-9, 1e300, -1e300]))
+                must_fail = must_fail or f"{name} out of range"
+            elif form == "nan":
+                kwargs[name] = rng.choice([NAN, INF])
+                must_fail = must_fail or f"{name} non-finite"
+            elif form == "wrong_length":
+                kwargs[name] = np.zeros(k + 1 if k != 0 else 2)
+                must_fail = must_fail or f"{name} wrong length"
+            elif form == "bool":
+                kwargs[name] = True
+            else:
+                kwargs[name], bad = d.pick(junk_values(()), name + "_junk")
+                must_fail = must_fail or (f"{name} junk" if bad else "")
+    if d.chance(0.05, "foreign_option"):
+        name = d.pick(("shortest_path", "tension", "frobnicate", "", "ease_in"), "foreign")
+        if name not in kwargs:
+            kwargs[name] = 0.0 if name != "shortest_path" else True
+            takes = (method == "SLERP" and name == "shortest_path") or (method == "TCB" and name in TCB_OPTIONS)
+            must_fail = must_fail or ("" if takes else f"option {name!r} for {method}")
+    return kwargs, must_fail
+
+
+def build_curve(method, d: Draw) -> Case:
+    rng = d.rng
+    level = d.level()
+    k = d.count(small=40, huge=20_000, label="keys")
+    tmode = d.pick(TIME_MODES, "time_mode")
+    times = increasing_times(rng, k, tmode)
+    from_euler = method == "EULER" or d.chance(0.35, "from_euler")
+    kmode = d.pick(("random", "antipodal", "same", "half_turn", "near", "extreme", "spin"), "key_mode")
+    if from_euler:
+        keys = angles(rng, (k,), "extreme" if kmode == "extreme" else "calm")
+        if kmode == "spin" and k:
+            keys = np.cumsum(rng.choice([-1, 1], (k, 3)) * rng.uniform(1.5, 4.0, (k, 3)), 0)
+        elif kmode == "same" and k:
+            keys[:] = keys[0]
+        elif kmode == "half_turn" and k:
+            keys = np.zeros((k, 3))
+            keys[:, 2] = np.arange(k) * np.pi
+    else:
+        keys = quats(rng, (k,), "extreme" if kmode == "extreme" else "calm")
+        if k > 1:
+            if kmode == "antipodal":
+                keys[1::2] = -keys[0::2][: keys[1::2].shape[0]]
+            elif kmode == "same":
+                keys[:] = keys[0]
+            elif kmode == "half_turn":
+                keys = np.tile([[1.0, 0, 0, 0], [0.0, 1, 0, 0]], (k // 2 + 1, 1))[:k]
+            elif kmode == "near":
+                keys = np.tile(keys[:1], (k, 1)) + 1e-15 * rng.standard_normal((k, 4))
+    must_fail = needs(k >= 1, "no keys")
+    if method == "EULER" and not from_euler:
+        must_fail = must_fail or "EULER from quaternions"
+    if level == "poison" and k:
+        what = d.pick(("times", "keys"), "poison_what")
+        if what == "times":
+            times = break_times(rng, times)
+        else:
+            poison(rng, keys, "angles" if from_euler else "quat", from_euler)
+        must_fail = must_fail or f"poisoned {what}"
+    if level == "wild" and k:
+        keys = fill(rng, keys.shape, "wild")
+        if not np.all(np.isfinite(keys)):
+            must_fail = must_fail or "non-finite keys"
+        elif not from_euler and np.any(np.linalg.norm(keys, axis=1) < 1e-300):
+            must_fail = must_fail or "zero key"
+    kwargs, opt_fail = draw_options(d, method, k)
+    must_fail = must_fail or opt_fail
+    if d.chance(0.05, "mismatch") and k:
+        keys = keys[:-1]
+        must_fail = must_fail or "lengths differ"
+    order = d.pick(ORDERS, "order")
+    meth = method
+    if d.chance(0.04, "junk_method"):
+        meth, bad = d.pick(junk_strings() + [("slerp", True)], "junk_method")
+        must_fail = must_fail or ("junk method" if bad else "")
+    args = [times, keys]
+    must_fail = maybe_junk(d, args, [(), (3,) if from_euler else (4,)], ["times", "keys"], must_fail)
+
+    # sample times: around the key range, extremes, unsorted, duplicates, huge counts
+    m = d.count(small=200, huge=200_000, label="samples")
+    smode = d.pick(("inside", "sorted", "extreme", "keys", "unsorted", "poison", "2d"), "sample_mode")
+    finite_keys = times[np.isfinite(times)] if isinstance(times, np.ndarray) else np.zeros(1)
+    lo, hi = (finite_keys.min(), finite_keys.max()) if finite_keys.size else (0.0, 1.0)
+    with np.errstate(all="ignore"):
+        span = hi - lo if np.isfinite(hi - lo) else DMAX
+        ts = lo + rng.random(m) * span * 1.2 - 0.1 * span
+    if smode == "sorted":
+        ts.sort()
+    elif smode == "extreme":
+        ts = fill(rng, (m,), "extreme")
+    elif smode == "keys" and finite_keys.size:
+        ts = rng.choice(finite_keys, m)
+    elif smode == "2d":
+        ts = ts[: (m // 2) * 2].reshape(-1, 2) if m > 1 else ts.reshape(1, -1)
+    if smode == "poison" and m:
+        ts[rng.integers(0, m)] = rng.choice(POISON_VALUES)
+    sample_fail = "non-finite sample time" if not np.all(np.isfinite(ts)) else ""
+    ts = np.ascontiguousarray(ts)
+    sample_arg: Any = ts
+    if d.chance(0.05, "junk_times"):
+        sample_arg, bad = d.pick(junk_values(()), "junk_times")
+        sample_fail = sample_fail or ("junk sample times" if bad else "")
+    cls = qc.Curve
+
+    def call():
+        if from_euler:
+            c = cls.from_euler(*args, order=order, method=meth, **kwargs)
+        else:
+            c = cls(*args, method=meth, **kwargs)
+        results = {"curve": c, "keys_times": c.times, "keys_quats": c.quats, "method": c.method,
+                   "options": c.options, "repr": repr(c)}
+        for name in ("sample", "angular_velocity"):
+            try:
+                results[name] = getattr(c, name)(sample_arg)
+                results[name + "_error"] = None
+            except (ValueError, TypeError) as e:
+                results[name + "_error"] = e
+        results["at_keys"] = c.sample(c.times)
+        return results
+
+    def check(r):
+        kt = r["keys_times"]
+        given_times = np.asarray(args[0], dtype=float).reshape(-1)
+        expect(np.array_equal(kt, given_times), "Curve.times differs from the key times")
+        unit(r["keys_quats"], "Curve.quats")
+        expect(r["method"] == method, f"Curve.method {r['method']!r}")
+        expect(isinstance(r["options"], dict), "Curve.options not a dict")
+        # passes through its keys (any method), sign-invariant
+        at = r["at_keys"]
+        unit(at, "sample(keys)")
+        err = np_angle(at, r["keys_quats"])
+        if err.size:
+            expect(err.max() < 1e-6, f"sample at key {int(err.argmax())} is {err.max()!r} rad off the key")
+        for name, tail in (("sample", (4,)), ("angular_velocity", (3,))):
+            e = r[name + "_error"]
+            if sample_fail:
+                expect(e is not None, f"{name} accepted {sample_fail}")
+                continue
+            expect(e is None, f"{name} refused valid times: {e!r}")
+            out = r[name]
+            shape_is(out, ts.shape + tail, name) if sample_arg is ts else None
+            (unit if name == "sample" else finite)(out, name)
+
+    inputs = {"from_euler": from_euler, "times": args[0], "keys": args[1], "order": order, "method": meth,
+              "options": kwargs, "sample_times": sample_arg}
+    return Case(call, max(k, 1) + m, check, must_fail, m * 32, inputs)
+
+
+# ==== the registry ===============================================================================
+
+def _elementwise(name):
+    spec = ELEMENTWISE[name]
+    return lambda fn, d: spec.build(fn, d)
+
+
+def _not_constructible(fn, d):
+    """Result classes (ReducedKeys, ReducedChannel) are not built from Python: any call is refused."""
+    args = d.pick(((), (1,), (None,), ("x", 2), (np.zeros(4),)), "args")
+    return Case(lambda: fn(*args), 1, lambda out: None, "result class constructed from Python")
+
+
+REGISTRY: dict[str, Callable[[Callable, Draw], Case]] = {name: _elementwise(name) for name in ELEMENTWISE}
+REGISTRY.update({
+    "quat_to_euler": build_quat_to_euler,
+    "euler_filter": build_euler_filter,
+    "euler_middle_axis": build_euler_middle_axis,
+    "angular_deviation": build_angular_deviation,
+    "interval_speeds": build_interval_speeds,
+    "segment_speed_ratios": build_segment_speed_ratios,
+    "segment_speed_ratios_from_velocity": build_segment_speed_ratios_from_velocity,
+    "path_length": build_path_length,
+    "key_jumps": build_key_jumps,
+    "gimbal_distances": build_gimbal_distances,
+    "gimbal_distances_from_quats": build_gimbal_distances_from_quats,
+    "closest_gimbal_approach": build_closest_gimbal_approach,
+    "path_metrics": build_path_metrics,
+    "reduce_keys": lambda fn, d: build_reduce(fn, d, euler=False),
+    "reduce_keys_euler": lambda fn, d: build_reduce(fn, d, euler=True),
+    "ReducedKeys": _not_constructible,
+    "ReducedChannel": _not_constructible,
+    # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
+    "Curve": None,
+})
+
+
+def public_callables():
+    """Every public callable of the module (what must have a strategy)."""
+    return sorted(n for n in dir(qc) if not n.startswith("_") and callable(getattr(qc, n)))
+
+
+def targets():
+    """Fuzz targets: each public callable with a strategy, and Curve once per method."""
+    out = [n for n in public_callables() if REGISTRY.get(n) is not None]
+    out += [f"Curve[{m}]" for m in getattr(qc, "METHODS", ())]
+    return out
+
+
+def builder(target):
+    if target.startswith("Curve["):
+        method = target[len("Curve["):-1]
+        return lambda d: build_curve(method, d)
+    fn = getattr(qc, target)
+    return lambda d: REGISTRY[target](fn, d)
+
+
+# ==== running ====================================================================================
+
+def run_target(target, examples=None):
+    """Fuzz one target; returns a result dict (status ok/fail, counts, message)."""
+    build = builder(target)
+    if examples is None:
+        examples = max(1, int(EXAMPLES * EXAMPLE_SHARE.get(target, 1.0)))
+    phases = tuple(Phase) if SHRINK else tuple(p for p in Phase if p not in (Phase.shrink, Phase.explain))
+    stats = {"calls": 0, "rows": 0, "refused": 0}
+
+    @settings(max_examples=examples, derandomize=not LONG, database=None, deadline=None, phases=phases,
+              suppress_health_check=list(HealthCheck), print_blob=LONG, report_multiple_bugs=False)
+    @given(st.data())
+    def prop(data):
+        case = build(Draw(data))
+        try:
+            run_case(case, stats)
+        except Violation as v:
+            raise Violation(f"{v}\ninputs: {describe(case.inputs)}") from None
+        stats["calls"] += 1
+        stats["rows"] += case.rows
+
+    def run_case(case, stats):
+        faulthandler.dump_traceback_later(CALL_TIMEOUT, exit=True)
+        try:
+            out = case.call()
+        except (ValueError, TypeError) as e:
+            stats["refused"] += 1
+            expect(str(e).strip() != "", f"{type(e).__name__} without a message")
+        except MemoryError as e:
+            if case.out_bytes <= MEMORY_LIMIT:
+                raise Violation(f"MemoryError for an output of {case.out_bytes} bytes: {e}") from e
+        except Violation:
+            raise
+        except BaseException as e:  # noqa: BLE001 — anything else breaks the contract
+            raise Violation(f"raised {type(e).__name__}: {e}") from e
+        else:
+            if case.must_fail:
+                raise Violation(f"accepted bad input ({case.must_fail}); returned {summary(out)}")
+            case.check(out)
+        finally:
+            faulthandler.cancel_dump_traceback_later()
+
+    start = time.perf_counter()
+    result = {"target": target, "status": "ok", "message": ""}
+    try:
+        prop()
+    except Exception as e:  # noqa: BLE001 — the failure is the report
+        result["status"] = "fail"
+        text = "".join(traceback.format_exception(e))
+        result["message"] = text[-6000:]
+    result.update(stats, seconds=round(time.perf_counter() - start, 3))
+    return result
+
+
+def describe(x, depth=0):
+    """Inputs for a failure report: small arrays in full (17 digits), large ones by shape, dtype,
+    their first rows and where their non-finite values are."""
+    if isinstance(x, np.ndarray):
+        if x.size <= 48:
+            body = np.array2string(x, precision=17, separator=", ", threshold=64) if x.dtype.kind in "fciub" else repr(x.tolist())
+            return f"array({body}, dtype={x.dtype})"
+        text = f"array(shape={x.shape}, dtype={x.dtype}, first={np.array2string(x.reshape(-1)[:12], precision=17, separator=', ')}"
+        if x.dtype.kind in "fc":
+            bad = np.argwhere(~np.isfinite(x))
+            text += f", non-finite at {bad[:4].tolist()}" if bad.size else ""
+            text += f", |max|={np.nanmax(np.abs(x)) if np.isfinite(x).any() else None!r}"
+        return text + ")"
+    if isinstance(x, (list, tuple)) and depth < 3:
+        inner = ", ".join(describe(v, depth + 1) for v in x[:8])
+        return ("[" + inner + "]") if isinstance(x, list) else ("(" + inner + ")")
+    if isinstance(x, dict) and depth < 3:
+        return "{" + ", ".join(f"{k!r}: {describe(v, depth + 1)}" for k, v in x.items()) + "}"
+    return repr(x)[:300]
+
+
+def summary(out):
+    if isinstance(out, np.ndarray):
+        return f"array{out.shape} {np.array2string(out.reshape(-1)[:8], threshold=8)}"
+    if isinstance(out, dict):
+        return "{" + ", ".join(f"{k}: {summary(v)}" for k, v in list(out.items())[:6]) + "}"
+    return repr(out)[:300]
+
+
+def limit_memory():
+    try:
+        import resource
+        resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
+    except (ImportError, ValueError, OSError):
+        pass
+
+
+def main(argv):
+    """Child entry: fuzz the targets named in argv (all when none), one JSON line per target into
+    $QUATCURVE_FUZZ_RESULTS (or stdout). A line {"start": target} precedes each target, so a crash
+    is attributed to it."""
+    faulthandler.enable()
+    warnings.simplefilter("ignore")
+    limit_memory()
+    names = argv or targets()
+    path = os.environ.get("QUATCURVE_FUZZ_RESULTS")
+    sink = open(path, "a", buffering=1) if path else sys.stdout
+    for name in names:
+        sink.write(json.dumps({"start": name}) + "\n")
+        sink.flush()
+        result = run_target(name)
+        sink.write(json.dumps(result) + "\n")
+        sink.flush()
+        if not path:
+            print(f"{name}: {result['status']} {result['rows']} rows in {result['seconds']} s", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
