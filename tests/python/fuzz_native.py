@@ -977,6 +977,7 @@ def build_reduce(fn, d, euler):
     interpolation = d.pick(("LINEAR", "BEZIER"), "interpolation")
     synchronized = d.pick((True, False), "synchronized")
     args = [t, v] + ([d.pick(ORDERS, "order")] if euler else []) + [tol, interpolation, synchronized]
+    kwargs = {"detailed": True} if d.chance(0.3, "detailed") else {}
     if d.chance(0.08, "junk_string"):
         k = 2 if euler and d.chance(0.5) else len(args) - 2
         args[k], bad = d.pick(junk_strings(), "junk_string")
@@ -1011,11 +1012,12 @@ def build_reduce(fn, d, euler):
                 for name in ("frames", "values", "handle_left", "handle_right"):
                     finite(getattr(ch, name), f"channel {c} {name}")
                 frames_distinct(ch.frames, f"channel {c} frames")
-                expect(ch.handle_left.shape == (len(ch), 2), f"channel {c} handle_left shape")
+                handles = len(ch) if out.interpolation == "BEZIER" else 0
+                expect(ch.handle_left.shape == (handles, 2), f"channel {c} handle_left shape {ch.handle_left.shape}")
             repr(out)
             repr(out.channels[0])
 
-    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
 
 
 # ---- the Curve class: one target per method ----------------------------------------------------------
