@@ -294,15 +294,9 @@ def _frames_text(frames):
 
 def evaluate_in_scratch(prop, key_frames, key_values, frames, interpolation="BEZIER"):
     """(N, C) values of C channels keyed (key_frames, key_values[:, c]) with `interpolation` — BEZIER
-    with Blender's default auto-clamped handles, or LINEAR — as Blender evaluates them at `frames`.
-    The curves live in a scratch action that is removed before returning."""
-    key_values = np.asarray(key_values, dtype=np.float64)
-    out = np.empty((len(frames), key_values.shape[1]))
-    with fcurves.scratch_channels("quatcurve compare scratch") as channels:
-        for c in range(key_values.shape[1]):
-            fcurve = channels.write(prop, c, key_frames, key_values[:, c], interpolation=interpolation)
-            out[:, c] = fcurves.evaluate(fcurve, frames)
-    return out
+    with Blender's default auto-clamped handles, or LINEAR — as Blender evaluates them at `frames`
+    (fcurves.evaluate_scratch_keys: a scratch action, removed before returning)."""
+    return fcurves.evaluate_scratch_keys(prop, key_frames, key_values, frames, interpolation)
 
 
 def euler_keys(keys, key_quats, order):

@@ -1,0 +1,307 @@
+"""Compare (addon/quatcurve_blender/compare.py and the quatcurve.compare operator) in background mode.
+
+Keys are made with keyframe_insert (auto-clamped Bezier) and, where a test needs LINEAR keys,
+rewritten through the F-curve adapter; Blender's modes are evaluated by Blender in scratch actions.
+"""
+
+import json
+import math
+import os
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Euler, Quaternion
+
+from conftest import ROOT
+from quatcurve_blender import bake, compare, fcurves, plot
+
+README = os.path.join(ROOT, "README.md")
+
+
+@pytest.fixture
+def linear_keys(scene):
+    """The scene; keyed_object makes LINEAR keys."""
+    return scene
+
+
+def keyed_object(scene, name, mode, keys, interpolation="LINEAR"):
+    """An empty in `mode` keyed at {frame: value} (Euler angles in degrees, or a quaternion), its keys
+    of `interpolation` (keyframe_insert makes BEZIER keys; others are rewritten through fcurves.py)."""
+    obj = bpy.data.objects.new(name, None)
+    scene.collection.objects.link(obj)
+    obj.rotation_mode = mode
+    for frame, value in keys.items():
+        if mode == "QUATERNION":
+            obj.rotation_quaternion = value
+            obj.keyframe_insert("rotation_quaternion", frame=frame)
+        else:
+            obj.rotation_euler = [math.radians(v) for v in value]
+            obj.keyframe_insert("rotation_euler", frame=frame)
+    if interpolation != "BEZIER":
+        for fcurve in fcurves.Channels.of(obj).fcurves:
+            fcurves.write_keys(fcurve, *fcurves.read_keys(fcurve), interpolation=interpolation)
+    return obj
+
+
+def fixed_angle(scene):
+    return keyed_object(scene, "Fixed", "XYZ", {1: (0, 90, 0), 21: (90, 45, 90)})
+
+
+def digests():
+    """Every action's F-curves with their keys and handles, through the adapter's bulk reads."""
+    return {a.name: sorted((f.data_path, f.array_index, *(v.tobytes() for v in fcurves.read_keys(f)),
+                            *(h.tobytes() for h in fcurves.read_handles(f)))
+                           for f in fcurves.all_fcurves(a))
+            for a in bpy.data.actions}
+
+
+def frame_index(comparison, frame):
+    return int(np.flatnonzero(np.isclose(comparison.frames, frame))[0])
+
+
+# ---- the issue's numbers ------------------------------------------------------------------------------
+
+def test_fixed_angle_euler_mode_lies_17_13_degrees_from_slerp(linear_keys):
+    obj = fixed_angle(linear_keys)
+    report = compare.compare([bake.Target(obj)])
+    t = report.targets[0]
+    mid = frame_index(t, 11)
+    # The target's own LINEAR Euler keys, and Blender's Euler mode with auto-clamped Bezier keys (the
+    # same at the middle frame of a two-key segment, by symmetry).
+    for source in ("BLENDER", "BLENDER_EULER_XYZ"):
+        assert math.degrees(t.sources[source].metrics["deviation"][mid]) == pytest.approx(17.13, abs=0.05)
+    assert t.sources["SLERP"].metrics["max_deviation"] == 0.0
+    # SLERP's midpoint is (90, 67.5, 90).
+    slerp_mid = Quaternion(t.sources["SLERP"].quats[mid]).to_euler("XYZ")
+    assert np.degrees(slerp_mid) == pytest.approx([90, 67.5, 90], abs=1e-3)
+
+
+def test_blender_modes_use_blenders_default_bezier_keys(scene):
+    # Two auto-clamped Bezier keys 0 → 1 over frames 1..21: flat handles a third of the way in, so
+    # Blender evaluates smoothstep 3u² − 2u³ (u = 0.25 → 0.15625); LINEAR gives u.
+    frames = [1.0, 6.0, 11.0, 16.0, 21.0]
+    bezier = fcurves.evaluate_scratch_keys("rotation_euler", [1.0, 21.0], [[0.0], [1.0]], frames)
+    np.testing.assert_allclose(bezier[:, 0], [0, 0.15625, 0.5, 0.84375, 1], atol=1e-6)
+    linear = fcurves.evaluate_scratch_keys("rotation_euler", [1.0, 21.0], [[0.0], [1.0]], frames, "LINEAR")
+    np.testing.assert_allclose(linear[:, 0], [0, 0.25, 0.5, 0.75, 1], atol=1e-6)
+    assert len(bpy.data.actions) == 0  # the scratch action is gone
+
+
+def test_slerp_speed_ratio_is_one_inside_every_segment(linear_keys):
+    obj = keyed_object(linear_keys, "Wander", "XYZ",
+                       {1: (0, 0, 0), 8: (40, 10, -30), 30: (80, 60, 20), 35: (50, 10, 80)})
+    t = compare.compare([bake.Target(obj)], compare.CompareSettings(subframes=3)).targets[0]
+    ratios = t.sources["SLERP"].metrics["segment_speed_ratios"]
+    assert len(ratios) == 3
+    np.testing.assert_allclose(ratios, 1.0, atol=1e-6)
+    assert t.sources["SLERP"].metrics["speed_ratio"] == pytest.approx(1.0, abs=1e-6)
+    # The smooth methods are continuous at keys, SLERP is not.
+    assert t.sources["SLERP"].metrics["max_velocity_jump"] > 0.01
+    assert t.sources["SPLINE_C2"].metrics["max_velocity_jump"] < 0.1 * t.sources["SLERP"].metrics["max_velocity_jump"]
+
+
+@pytest.mark.parametrize("degrees", [150.0, 90.0])
+def test_linear_quaternion_segment_has_the_speed_ratio_of_nlerp(linear_keys, degrees):
+    theta = math.radians(degrees)
+    end = Quaternion((0.6, 0.0, 0.8), theta)
+    obj = keyed_object(linear_keys, "Quat", "QUATERNION", {1: (1, 0, 0, 0), 25: tuple(end)})
+    settings = compare.CompareSettings(subframes=8, key_interpolation="LINEAR")
+    t = compare.compare([bake.Target(obj)], settings).targets[0]
+    expected = 2 / (1 + math.cos(theta / 2))  # ≈ 1.589 at 150°
+    assert t.sources["BLENDER"].metrics["speed_ratio"] == pytest.approx(expected, rel=1e-3)
+    assert t.sources["BLENDER_QUATERNION"].metrics["speed_ratio"] == pytest.approx(expected, rel=1e-3)
+    assert t.sources["NLERP"].metrics["speed_ratio"] == pytest.approx(expected, rel=1e-3)
+    assert t.sources["SLERP"].metrics["speed_ratio"] == pytest.approx(1.0, abs=1e-6)
+
+
+# ---- report, plot, untouched animation ----------------------------------------------------------------------
+
+def test_report_png_and_json(linear_keys, tmp_path):
+    fixed = fixed_angle(linear_keys)
+    quat = keyed_object(linear_keys, "Quat", "QUATERNION",
+                        {1: (1, 0, 0, 0), 11: tuple(Quaternion((0, 0, 1), 2.0)), 31: tuple(Quaternion((1, 1, 0), 2.5))})
+    before = digests()
+    report = compare.compare([bake.Target(fixed), bake.Target(quat)], compare.CompareSettings(all_euler_orders=True))
+    path, pngs = compare.write_report(report, str(tmp_path / "report.json"))
+    assert digests() == before  # scratch actions removed, the user's keys untouched
+
+    assert [os.path.basename(p) for p in pngs] == ["report_Fixed.png", "report_Quat.png"]
+    for png in pngs:
+        pixels = plot.read_png(png)
+        assert pixels.shape == (plot.HEIGHT, plot.WIDTH, 4) == (800, 1200, 4)
+        ink = (pixels[..., :3] != plot.BACKGROUND).any(axis=2)
+        assert ink.mean() > 0.02
+        for i in range(len(report.targets[0].sources)):  # every legend colour is drawn
+            assert (pixels[..., :3] == plot.PALETTE[i]).all(axis=2).sum() > 100
+
+    with open(path) as f:
+        data = json.load(f)
+    assert check_schema(data, compare.REPORT_SCHEMA) == []
+    assert data["blender_version"] == bpy.app.version_string
+    names = [t["name"] for t in data["targets"]]
+    assert names == ["Fixed", "Quat"]
+    fixed_json = data["targets"][0]
+    assert set(fixed_json["sources"]) == {"BLENDER", "BLENDER_QUATERNION", *compare.ENGINE_METHODS,
+                                         *(compare.euler_source(o) for o in fcurves.EULER_ORDERS)}
+    assert fixed_json["frames"] == {"start": 1.0, "end": 21.0, "step": 1.0, "count": 21}
+    assert fixed_json["plot"] == "report_Fixed.png"
+    # (0, 90°, 0) in XYZ is gimbal lock: the closest approach is 0 at frame 1, and XYZ is not recommended.
+    gimbal = fixed_json["sources"]["BLENDER_EULER_XYZ"]["gimbal"]
+    assert gimbal["order"] == "XYZ" and gimbal["closest_deg"] == pytest.approx(0.0, abs=1e-3)
+    assert gimbal["frames"][0] == 1.0
+    assert fixed_json["recommendation"]["euler_order"] != "XYZ"
+    # Auto-clamped Bezier keys ease to a stop at the first and last key.
+    ratio = fixed_json["sources"]["BLENDER_EULER_XYZ"]["speed_ratio"]
+    assert ratio is None or ratio > compare.STOP_RATIO
+
+
+def test_readme_documents_every_report_field():
+    with open(README, encoding="utf-8") as f:
+        text = f.read()
+    missing = [name for name in schema_property_names(compare.REPORT_SCHEMA) if "`%s`" % name not in text]
+    assert missing == []
+
+
+def test_operator_on_selection_writes_report_image_and_table(linear_keys, tmp_path):
+    obj = fixed_angle(linear_keys)
+    other = keyed_object(linear_keys, "Unselected", "XYZ", {1: (0, 0, 0), 5: (0, 0, 90)})
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    before, actions = digests(), len(bpy.data.actions)
+    report_path = str(tmp_path / "out" / "compare.json")
+    assert bpy.ops.quatcurve.compare(report_path=report_path) == {"FINISHED"}
+    assert digests() == before and len(bpy.data.actions) == actions
+    assert os.path.isfile(report_path) and os.path.isfile(str(tmp_path / "out" / "compare_Fixed.png"))
+    image = bpy.data.images[compare.image_name("Fixed")]
+    assert tuple(image.size) == (plot.WIDTH, plot.HEIGHT)
+    pixels = np.empty(plot.WIDTH * plot.HEIGHT * 4, np.float32)
+    image.pixels.foreach_get(pixels)
+    assert pixels.reshape(-1, 4)[:, :3].min() < 0.5  # not blank
+    table = json.loads(linear_keys.quatcurve_compare.last_table)
+    assert [t["name"] for t in table] == ["Fixed"]  # only the selection
+    rows = {r[0]: r for r in table[0]["rows"]}
+    assert rows["SLERP"][1:] == ["0.00°", "1.000", rows["SLERP"][3]]
+    assert other.name not in linear_keys.quatcurve_compare.last_table
+
+
+def test_operator_refuses_without_selection_or_animation(linear_keys):
+    # In background mode an operator that reports an error (and returns CANCELLED) raises RuntimeError.
+    with pytest.raises(RuntimeError, match="Nothing to compare: no objects selected"):
+        bpy.ops.quatcurve.compare()
+    still = bpy.data.objects.new("Still", None)
+    linear_keys.collection.objects.link(still)
+    still.select_set(True)
+    with pytest.raises(RuntimeError, match="Still: no rotation animation"):
+        bpy.ops.quatcurve.compare()
+    with pytest.raises(compare.CompareError, match="Still: no rotation animation"):
+        compare.compare([bake.Target(still)])
+
+
+def test_pose_bone_and_spin(linear_keys):
+    arm = bpy.data.armatures.new("Rig")
+    rig = bpy.data.objects.new("Rig", arm)
+    linear_keys.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    for name, head in (("Root", (0, 0, 0)), ("Tip", (0, 0, 1))):
+        bone = arm.edit_bones.new(name)
+        bone.head, bone.tail = head, (head[0], head[1], head[2] + 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    pb = rig.pose.bones["Tip"]
+    pb.rotation_mode = "XYZ"
+    for frame, z in ((1, 0), (11, 100), (21, 200), (31, 300), (41, 400)):  # a 400° spin
+        pb.rotation_euler = (0, 0, math.radians(z))
+        pb.keyframe_insert("rotation_euler", frame=frame)
+    before = digests()
+    t = compare.compare([bake.Target(rig, "Tip")]).targets[0]
+    assert digests() == before
+    assert t.name == "Rig/Tip"
+    # Every method keeps the full 400° turn of the Euler keys; key-to-key geodesics sum to the same.
+    for name in ("BLENDER", "BLENDER_EULER_XYZ", "SLERP", "SPLINE_C2"):
+        assert math.degrees(t.sources[name].metrics["path_length"]) == pytest.approx(400, abs=0.5), name
+    assert math.degrees(t.sources["SLERP"].metrics["key_path_length"]) == pytest.approx(400, abs=1e-3)
+    assert compare.plot_path("/x/r.json", t.name) == "/x/r_Rig_Tip.png"
+
+
+def test_bad_settings():
+    with pytest.raises(compare.CompareError, match="subframes"):
+        compare.check_settings(compare.CompareSettings(subframes=0))
+    with pytest.raises(compare.CompareError, match="key interpolation"):
+        compare.check_settings(compare.CompareSettings(key_interpolation="CONSTANT"))
+    with pytest.raises(compare.CompareError, match="method 'EULER'"):
+        compare.check_settings(compare.CompareSettings(methods=("EULER",)))
+
+
+# ---- a JSON-schema-like validator, independent of compare.validate ---------------------------------------
+
+_TYPES = {"object": dict, "array": list, "string": str, "null": type(None)}
+
+
+def check_schema(value, schema, path="$"):
+    kinds = schema.get("type", [])
+    kinds = [kinds] if isinstance(kinds, str) else kinds
+    ok = not kinds
+    for kind in kinds:
+        if kind == "number":
+            ok |= isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+        elif kind == "integer":
+            ok |= isinstance(value, int) and not isinstance(value, bool)
+        else:
+            ok |= isinstance(value, _TYPES[kind])
+    if not ok:
+        return ["%s: %r is not %s" % (path, value, kinds)]
+    errors = []
+    if "enum" in schema and value not in schema["enum"]:
+        errors.append("%s: %r not in %s" % (path, value, schema["enum"]))
+    if isinstance(value, dict):
+        errors += ["%s: missing %s" % (path, k) for k in schema.get("required", []) if k not in value]
+        for k, sub in schema.get("properties", {}).items():
+            if k in value:
+                errors += check_schema(value[k], sub, path + "." + k)
+        for k, v in value.items() if "values" in schema else ():
+            errors += check_schema(v, schema["values"], "%s[%s]" % (path, k))
+    if isinstance(value, list):
+        for i, v in enumerate(value):
+            errors += check_schema(v, schema.get("items", {}), "%s[%d]" % (path, i))
+    return errors
+
+
+def schema_property_names(schema):
+    names = set(schema.get("properties", {}))
+    subs = list(schema.get("properties", {}).values()) + [schema[k] for k in ("values", "items") if k in schema]
+    for sub in subs:
+        names |= schema_property_names(sub)
+    return names
+
+
+class FakeLayout:
+    """Records labels and props; enough of UILayout for the panel's compare drawing."""
+
+    def __init__(self, lines=None):
+        self.lines = [] if lines is None else lines
+
+    def box(self):
+        return FakeLayout(self.lines)
+
+    column = row = split = lambda self, **kwargs: FakeLayout(self.lines)
+
+    def label(self, text="", icon="NONE"):
+        self.lines.append(text)
+
+    def prop(self, data, name, text=None):
+        assert hasattr(data, name), name
+        self.lines.append("prop " + name)
+
+
+def test_panel_draws_the_last_table(linear_keys):
+    from quatcurve_blender import ui
+    obj = fixed_angle(linear_keys)
+    obj.select_set(True)
+    assert bpy.ops.quatcurve.compare() == {"FINISHED"}
+    layout = FakeLayout()
+    ui.draw_compare_settings(layout, linear_keys.quatcurve_compare)
+    ui.draw_compare_table(layout, linear_keys.quatcurve_compare)
+    assert "prop subframes" in layout.lines and "Fixed" in layout.lines
+    assert "SLERP" in layout.lines and "0.00°" in layout.lines and "1.000" in layout.lines
+    assert any("gimbal" in line for line in layout.lines)  # the recommendation, wrapped
