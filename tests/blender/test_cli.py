@@ -1,0 +1,218 @@
+"""The command line (addon/quatcurve_blender/cli.py), run as a subprocess under the same Blender as
+the tests: the binary (`blender --background --python cli.py -- …`) or, for a bpy venv, its Python
+(`python -m quatcurve_blender.cli …` with addon/ on PYTHONPATH).
+
+Each launch costs about a second, so the cases are few: --help, a bake with --compare, an in-place
+bake of chosen bones, and one launch per bad argument."""
+
+import hashlib
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+import bpy
+import pytest
+from mathutils import Quaternion
+
+from quatcurve_blender import cli, compare, fcurves, plot
+
+ADDON_DIR = os.path.dirname(os.path.dirname(os.path.abspath(cli.__file__)))
+CLI = os.path.join(ADDON_DIR, "quatcurve_blender", "cli.py")
+IS_BINARY = bool(bpy.app.binary_path)  # '' in the bpy module
+
+
+def cli_command(args, preloaded=None):
+    """The CLI under this test's Blender; `preloaded`: IN.blend given to the Blender binary itself
+    (`blender -b IN.blend --python cli.py -- …`)."""
+    if IS_BINARY:
+        return ([bpy.app.binary_path, "--background", "--factory-startup"] + ([preloaded] if preloaded else [])
+                + ["--python", CLI, "--"] + list(args))
+    return [sys.executable, "-m", "quatcurve_blender.cli"] + list(args)
+
+
+def run_cli(args, preloaded=None):
+    env = dict(os.environ, PYTHONNOUSERSITE="1")
+    if not IS_BINARY:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (ADDON_DIR, env.get("PYTHONPATH")) if p)
+    proc = subprocess.run(cli_command([str(a) for a in args], preloaded), capture_output=True, env=env,
+                          timeout=300, encoding="utf-8", errors="replace")
+    return proc
+
+
+def digest(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def error_lines(proc):
+    return [line for line in proc.stderr.splitlines() if line.startswith("quatcurve: error:")]
+
+
+def build_scene(path):
+    """Turn: Euler XYZ keys (0°, 90°, 0°) → (90°, 45°, 90°), frames 1 → 21. Quat: 150° about Z, frames
+    1 → 11. Still: no animation. Rig: pose bones B0 and B1 with quaternion keys, B2 without. LINEAR
+    keys (the preference for new keys, restored afterwards)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    edit = bpy.context.preferences.edit
+    previous = edit.keyframe_new_interpolation_type
+    edit.keyframe_new_interpolation_type = "LINEAR"
+    try:
+        def empty(name, mode):
+            obj = bpy.data.objects.new(name, None)
+            scene.collection.objects.link(obj)
+            obj.rotation_mode = mode
+            return obj
+
+        turn = empty("Turn", "XYZ")
+        for frame, degrees in ((1, (0, 90, 0)), (21, (90, 45, 90))):
+            turn.rotation_euler = [math.radians(d) for d in degrees]
+            turn.keyframe_insert("rotation_euler", frame=frame)
+        quat = empty("Quat", "QUATERNION")
+        for frame, q in ((1, (1, 0, 0, 0)), (11, (math.cos(math.radians(75)), 0, 0, math.sin(math.radians(75))))):
+            quat.rotation_quaternion = q
+            quat.keyframe_insert("rotation_quaternion", frame=frame)
+        empty("Still", "XYZ")
+
+        rig = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))
+        scene.collection.objects.link(rig)
+        bpy.context.view_layer.objects.active = rig
+        bpy.ops.object.mode_set(mode="EDIT")
+        for i, name in enumerate(("B0", "B1", "B2")):
+            bone = rig.data.edit_bones.new(name)
+            bone.head, bone.tail = (i, 0, 0), (i, 0, 1)
+        bpy.ops.object.mode_set(mode="OBJECT")
+        for name, axis in (("B0", (1, 0, 0)), ("B1", (0, 1, 0))):
+            pb = rig.pose.bones[name]
+            pb.rotation_mode = "QUATERNION"
+            for frame, angle in ((1, 0.0), (11, 1.0), (21, 2.0)):
+                pb.rotation_quaternion = Quaternion(axis, angle)
+                pb.keyframe_insert("rotation_quaternion", frame=frame)
+    finally:
+        edit.keyframe_new_interpolation_type = previous
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
+
+
+@pytest.fixture(scope="module")
+def source_blend(addon, tmp_path_factory):
+    path = tmp_path_factory.mktemp("cli") / "in.blend"
+    build_scene(path)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return path
+
+
+def open_blend(path):
+    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+
+
+def rotation_key_counts(rig, bone, count=4):
+    channels = fcurves.Channels.of(rig)
+    path = rig.pose.bones[bone].path_from_id("rotation_quaternion")
+    return [fcurves.key_count(f) if f is not None else 0 for f in channels.find_all(path, count)]
+
+
+# ---- tests ------------------------------------------------------------------------------------------
+
+def test_help_documents_every_option(addon):
+    proc = run_cli(["--help"])
+    assert proc.returncode == 0, proc.stderr
+    options = [s for action in cli.build_parser()._actions for s in action.option_strings]
+    assert len(options) >= 18
+    missing = [o for o in options if o not in proc.stdout]
+    assert not missing, "--help does not mention %s" % missing
+    assert "exit status" in proc.stdout
+
+
+def test_bake_with_compare_writes_file_report_and_plots(addon, source_blend, tmp_path):
+    before = digest(source_blend)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    out, report = out_dir / "baked.blend", out_dir / "report.json"
+    proc = run_cli(["--method", "SLERP", "--compare", "--report", report, "--output", out, source_blend])
+    assert proc.returncode == 0, proc.stderr
+    assert not error_lines(proc) and "Traceback" not in proc.stderr
+
+    # Default selection: every object and pose bone with rotation animation (not Still, not Rig/B2).
+    names = ["Quat", "Rig/B0", "Rig/B1", "Turn"]
+    lines = proc.stdout.splitlines()
+    for name in names:
+        assert sum(line.strip().startswith(name + ": SLERP") for line in lines) == 1, proc.stdout
+    assert any(line.startswith("total: 4 targets") for line in lines), proc.stdout
+
+    assert digest(source_blend) == before
+    assert sorted(os.listdir(out_dir)) == sorted(
+        ["baked.blend", "report.json"] + [os.path.basename(compare.plot_path(str(report), n)) for n in names])
+
+    data = json.loads(report.read_text(encoding="utf-8"))
+    assert compare.validate(data, compare.REPORT_SCHEMA) == []
+    assert [t["name"] for t in data["targets"]] == names
+    for target in data["targets"]:
+        pixels = plot.read_png(str(out_dir / target["plot"]))
+        assert pixels.shape[:2] == (plot.HEIGHT, plot.WIDTH)
+
+    open_blend(out)
+    scene = bpy.context.scene
+    turn, quat = bpy.data.objects["Turn"], bpy.data.objects["Quat"]
+    assert fcurves.active_action(turn).name.endswith("_slerp")
+    assert bpy.data.actions[fcurves.active_action(turn).name[:-len("_slerp")]].use_fake_user
+    scene.frame_set(11)  # the fixed-angle example's SLERP midpoint
+    assert [round(math.degrees(a), 3) for a in turn.rotation_euler] == [90.0, 67.5, 90.0]
+    scene.frame_set(6)
+    q = quat.rotation_quaternion
+    assert math.degrees(2 * math.atan2(math.hypot(q.x, q.y, q.z), q.w)) == pytest.approx(75.0, abs=1e-3)
+
+
+def test_in_place_bakes_only_the_chosen_bones(addon, source_blend, tmp_path):
+    path = tmp_path / "in_place.blend"
+    shutil.copyfile(source_blend, path)
+    before = digest(path)
+    args = ["--in-place", "--objects", "R?g", "--bones", "B1", "--method", "SQUAD", "--rotation-mode", "QUATERNION"]
+    # The binary is given IN.blend itself (the form `blender -b IN.blend --python cli.py -- …`).
+    proc = run_cli(args, preloaded=str(path)) if IS_BINARY else run_cli(args + [path])
+    assert proc.returncode == 0, proc.stderr
+    assert [line.split(":")[0].strip() for line in proc.stdout.splitlines() if ": SQUAD " in line] == ["Rig/B1"]
+    assert digest(path) != before
+    assert sorted(os.listdir(tmp_path)) == ["in_place.blend"]  # no temporary file, no .blend1
+
+    open_blend(path)
+    rig = bpy.data.objects["Rig"]
+    assert fcurves.active_action(rig).name.endswith("_squad")
+    assert rotation_key_counts(rig, "B1") == [21] * 4          # frames 1..21, every frame
+    assert rotation_key_counts(rig, "B0") == [3] * 4           # untouched
+    assert not fcurves.active_action(bpy.data.objects["Turn"]).name.endswith("_squad")
+
+
+BAD_ARGUMENTS = [
+    # (id, arguments with {IN} {OUT} {TMP}, exit status, words in the message)
+    ("missing-input", ["--output", "{OUT}", "{TMP}/missing.blend"], 2, "no such file"),
+    ("unknown-object", ["--objects", "Nope", "--output", "{OUT}", "{IN}"], 2, "no object matches"),
+    ("unknown-bone", ["--bones", "Nope", "--output", "{OUT}", "{IN}"], 2, "no pose bone matches"),
+    ("unknown-method", ["--method", "SLURP", "--output", "{OUT}", "{IN}"], 2, "invalid choice"),
+    ("bad-range", ["--frame-range", "20", "10", "--output", "{OUT}", "{IN}"], 2, "is empty"),
+    ("output-folder-missing", ["--output", "{TMP}/no/such/folder/out.blend", "{IN}"], 2, "does not exist"),
+    ("output-is-input", ["--output", "{IN}", "{IN}"], 2, "--in-place"),
+    # Not writable: refused up front for a normal user; root passes the access check, so Blender's
+    # save fails (/proc takes no files) — a failure, status 1.
+    ("output-unwritable", ["--output", "/proc/quatcurve-cli-test.blend", "{IN}"], (1, 2), "writ"),
+]
+
+
+@pytest.mark.parametrize("case", BAD_ARGUMENTS, ids=[c[0] for c in BAD_ARGUMENTS])
+def test_bad_argument_fails_with_one_line_and_leaves_input_alone(addon, source_blend, tmp_path, case):
+    _, template, status, words = case
+    out = tmp_path / "out.blend"
+    args = [a.format(IN=source_blend, OUT=out, TMP=tmp_path) for a in template]
+    before = digest(source_blend)
+    proc = run_cli(args)
+    expected = status if isinstance(status, tuple) else (status,)
+    assert proc.returncode in expected, (proc.returncode, proc.stdout, proc.stderr)
+    errors = error_lines(proc)
+    assert len(errors) == 1, proc.stderr
+    assert words in errors[0], errors[0]
+    assert "Traceback" not in proc.stderr and "Traceback" not in proc.stdout
+    assert digest(source_blend) == before
+    assert not out.exists()
+    assert not [n for n in os.listdir(source_blend.parent) if n.endswith(".tmp.blend")]
