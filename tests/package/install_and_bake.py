@@ -10,8 +10,9 @@ import math
 import os
 import sys
 
-import addon_utils
-import bpy
+import bpy  # first: addon_utils needs bpy initialized (bpy module builds)
+
+import addon_utils  # noqa: E402
 
 
 def fail(message):
