@@ -121,6 +121,20 @@ inline Vec3 rotvec_principal(const Quat& q) {
     return 2.0 * atan2_over_n(n, w) * v;
 }
 
+// 2·atan2(n, w)/n for any sign of w (angle in [0, 2π)); n = 0 with w < 0 (q = −1) gives 0.
+inline double atan2_over_n_any(double n, double w) {
+    if (w >= 0.0) return atan2_over_n(n, w);
+    return n > 0.0 ? kPi / n - atan2_over_n(n, -w) : 0.0;
+}
+
+// Logarithm of the unit quaternion q as it stands, without a hemisphere flip: rotation vector of
+// angle 2·atan2(|v|, w) ∈ [0, 2π). Continuous in q except at q = −1, so a path whose quaternions
+// cross w = 0 does not jump (the flip of rotvec_principal would turn it by 2π there).
+inline Vec3 rotvec_unflipped(const Quat& q) {
+    const Vec3 v(q.x, q.y, q.z);
+    return 2.0 * atan2_over_n_any(std::sqrt(glm::dot(v, v)), q.w) * v;
+}
+
 // The rotation vector of the rotation q (either sign) nearest to ref: principal χ0 = θ0·u, then
 // χ = u·(θ0 + 2πk) with k the whole number of turns that brings it nearest to ref. When q is the
 // identity the axis is ref's own.
@@ -223,6 +237,10 @@ inline VJet jlog_near(const RJet& X, const Vec3& ref) {
 }
 inline VJet jlog(const RJet& X) {
     const Vec3 chi = rotvec_principal(X.q);
+    return {chi, jl_inv_apply(chi, X.w)};
+}
+inline VJet jlog_unflipped(const RJet& X) {
+    const Vec3 chi = rotvec_unflipped(X.q);
     return {chi, jl_inv_apply(chi, X.w)};
 }
 // (g, ġ)·x

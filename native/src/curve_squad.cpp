@@ -45,18 +45,18 @@ void ease(double u, double a, double b, double& e, double& de) {
 }
 
 // Shoemake's quadrangle at s from A = Q·exp(s r/2) = A·C1 + (Q·(0, r))·K1 and
-// B = a·exp(s ψ/2) = a·C2 + (a·(0, ψ))·K2: X = A⁻¹B in A's hemisphere, q = A·X^g, g = 2s(1−s);
-// log and exp by polynomial (curve_math.hpp).
+// B = a·exp(s ψ/2) = a·C2 + (a·(0, ψ))·K2: X = A⁻¹B, q = A·X^g, g = 2s(1−s); log and exp by
+// polynomial (curve_math.hpp). The outer slerp takes X as it stands, as Shoemake's formula does:
+// choosing X's hemisphere would make the curve jump wherever X.w crosses 0 (large tangents, e.g.
+// keys far apart), since X and −X are the same rotation but X^g and (−X)^g are not.
 inline Q4 squad_from(const SquadSeg& g, double s, double C1, double K1, double C2, double K2) {
     const Q4 A{g.A.w * C1 + g.BA.w * K1, g.A.x * C1 + g.BA.x * K1, g.A.y * C1 + g.BA.y * K1,
                g.A.z * C1 + g.BA.z * K1};
     const Q4 B{g.a.w * C2 + g.Ba.w * K2, g.a.x * C2 + g.Ba.x * K2, g.a.y * C2 + g.Ba.y * K2,
                g.a.z * C2 + g.Ba.z * K2};
     const Q4 X = cmul(A, B);
-    const double sign = X.w < 0.0 ? -1.0 : 1.0;
     const double n2 = X.x * X.x + X.y * X.y + X.z * X.z;
-    const double n = std::sqrt(n2);
-    const double f = 2.0 * atan2_over_n(n, sign * X.w) * sign;  // χ = f·vec(X)
+    const double f = 2.0 * atan2_over_n_any(std::sqrt(n2), X.w);  // χ = f·vec(X)
     const double gf = 2.0 * s * (1.0 - s) * f;
     double c3, k3;
     exp_coeffs(gf * gf * n2, c3, k3);
@@ -74,7 +74,7 @@ inline Q4 squad_at(const SquadSeg& g, double s) {
 inline RJet squad_jet(const SquadSeg& g, double s, double sd) {
     const RJet A = jmul(jconst(to_quat(g.A)), jexp({s * g.r, sd * g.r}));
     const RJet B = jmul(jconst(to_quat(g.a)), jexp({s * g.psi, sd * g.psi}));
-    const VJet chi = jlog(jmul(jinv(A), B));
+    const VJet chi = jlog_unflipped(jmul(jinv(A), B));
     return jmul(A, jexp(jscale(2.0 * s * (1.0 - s), (2.0 - 4.0 * s) * sd, chi)));
 }
 
@@ -164,10 +164,14 @@ void build_squad(Curve::Impl& m, const CurveOptions* tcb, std::size_t keys) {
         const Vec3& r = m.kr[i];
         const Vec3 alpha = 0.5 * (out[i] - r);
         const Vec3 beta = 0.5 * (r - in[i + 1]);
+        // Every quaternion of the quadrangle is taken on the segment's own chain: the end is
+        // q_i·exp(r/2) (= ±q_{i+1}, whatever sign is stored) and the inner slerp a → b runs to b as
+        // it stands (plain slerp, as Shoemake's formula). Then X = A⁻¹B is exp(α/2) at s = 0 and
+        // exp(β/2) at s = 1, so the outer slerp needs no hemisphere choice and the curve is C1
+        // even when stored neighbours sit in opposite hemispheres.
         const Quat a = qmul(m.kq[i], qexp(alpha));
-        const Quat b = qmul(m.kq[i + 1], qexp(beta));
-        // the inner slerp a → b takes the shortest arc, as the textbook formula
-        const Vec3 psi = rotvec_principal(qmul(qconj(a), b));
+        const Quat b = qmul(qmul(m.kq[i], qexp(r)), qexp(beta));
+        const Vec3 psi = rotvec_unflipped(qmul(qconj(a), b));
         SquadSeg& g = m.squad[i];
         g.t0 = m.kt[i];
         g.inv_h = 1.0 / (m.kt[i + 1] - m.kt[i]);

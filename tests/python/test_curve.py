@@ -122,6 +122,23 @@ def test_c1_at_non_uniform_keys(method):
     assert np.max(np.linalg.norm(s.angular_velocity(t[1:-1] - 1e-7) - s.angular_velocity(t[1:-1]), axis=1)) > 0.05
 
 
+@pytest.mark.parametrize("method", SMOOTH)
+def test_large_turns_between_keys_stay_continuous(method):
+    """Keys up to ~170° apart with stored neighbours in opposite hemispheres (the demo's
+    "Hemisphere" object): the curve neither jumps inside a segment nor breaks C1 at keys."""
+    s, c = np.sin(np.radians(60)), np.cos(np.radians(60))
+    q = np.array([(1, 0, 0, 0), (c, s, 0, 0), (-c, 0, -s, 0), (0.5, 0.5, 0.5, 0.5)])
+    t = np.array([1.0, 21.0, 41.0, 61.0])
+    for qs, ts in ((q, t), keys(12, 11, max_angle=2.9)[:2][::-1]):
+        curve = qc.Curve(ts, qs, method)
+        dense = np.linspace(ts[0], ts[-1], 4001)
+        step = angle(curve.sample(dense[:-1]), curve.sample(dense[1:]))
+        speed = np.linalg.norm(curve.angular_velocity(dense), axis=1)
+        assert np.max(step) <= 1.01 * np.max(speed) * (dense[1] - dense[0]) + 1e-9
+        left, right = curve.angular_velocity(ts[1:-1] - 1e-7), curve.angular_velocity(ts[1:-1])
+        assert np.max(np.linalg.norm(left - right, axis=1)) <= 1e-4 * (1 + np.max(speed))
+
+
 def test_spline_c2_acceleration_is_continuous():
     t, q, a = keys(10, 8, max_angle=2.5)
     e = 1e-5
