@@ -1,0 +1,104 @@
+"""Benchmark: baking a 100-bone armature with quatcurve.bake against Blender's own nla.bake.
+
+    blender --background --factory-startup --python tests/bench/bench_bake.py
+    ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_bake.py
+
+Ours: 100 bones keyed (quaternions) every 10 frames over 10,000 frames, baked dense (every frame)
+with SQUAD into quaternions through the operator — 1,000,100 bone-frames. Blender's: bpy.ops.nla.bake
+(pose, visual keying, selected bones) on the same kind of rig over 300 frames, in the same run.
+Prints seconds, bone-frames per second and the ratio. Targets: ours ≤ 1.0 s, ratio ≥ 100×.
+Not a timed test: it only prints.
+"""
+
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+
+import quatcurve_blender  # noqa: E402
+from quatcurve_blender import fcurves  # noqa: E402
+
+BONES = 100
+KEY_EVERY = 10
+
+
+def build_rig(name, last_frame, seed):
+    """An armature of BONES bones in a chain-free row, each with random quaternion keys every
+    KEY_EVERY frames from frame 0 to last_frame, written in bulk; all bones selected, Pose mode."""
+    arm = bpy.data.armatures.new(name)
+    rig = bpy.data.objects.new(name, arm)
+    bpy.context.scene.collection.objects.link(rig)
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(obj == rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    for i in range(BONES):
+        bone = arm.edit_bones.new("Bone%03d" % i)
+        bone.head, bone.tail = (i * 0.1, 0, 0), (i * 0.1, 0, 1)
+    bpy.ops.object.mode_set(mode="POSE")
+    fcurves.new_action(rig, name + "Action")
+    channels = fcurves.Channels.of(rig, create=True)
+    rng = np.random.default_rng(seed)
+    frames = np.arange(0, last_frame + 1, KEY_EVERY, dtype=np.float64)
+    for pb in rig.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+        quats = rng.normal(size=(len(frames), 4))
+        quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        path = pb.path_from_id("rotation_quaternion")
+        for i in range(4):
+            channels.write(path, i, frames, quats[:, i], group=pb.name)
+        if bpy.app.version >= (5, 0, 0):
+            pb.select = True
+        else:
+            pb.bone.select = True
+    return rig
+
+
+def clear_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def bench_ours():
+    clear_scene()
+    build_rig("Ours", 10_000, seed=1)
+    bpy.context.view_layer.update()  # the rig's own first evaluation is not the bake's cost
+    begin = time.perf_counter()
+    result = bpy.ops.quatcurve.bake(method="SQUAD", rotation_mode="QUATERNION", step=1)
+    seconds = time.perf_counter() - begin
+    assert result == {"FINISHED"}, result
+    settings = bpy.context.scene.quatcurve
+    bone_frames = settings.last_targets * 10_001
+    return seconds, bone_frames, settings.last_keys
+
+
+def bench_blender():
+    clear_scene()
+    build_rig("Theirs", 300, seed=2)
+    bpy.context.view_layer.update()
+    begin = time.perf_counter()
+    bpy.ops.nla.bake(frame_start=0, frame_end=299, step=1, only_selected=True, visual_keying=True,
+                     bake_types={"POSE"})
+    seconds = time.perf_counter() - begin
+    return seconds, BONES * 300
+
+
+def main():
+    quatcurve_blender.register()
+    ours_s, ours_bf, keys = bench_ours()
+    theirs_s, theirs_bf = bench_blender()
+    ours_rate, theirs_rate = ours_bf / ours_s, theirs_bf / theirs_s
+    print("Blender %s" % bpy.app.version_string)
+    print("quatcurve.bake SQUAD  %d bones x 10,001 frames: %.3f s, %s keys, %.0f K bone-frames/s (target <= 1.0 s)"
+          % (BONES, ours_s, f"{keys:,}", ours_rate / 1e3))
+    print("nla.bake visual pose  %d bones x 300 frames:    %.3f s, %.1f K bone-frames/s"
+          % (BONES, theirs_s, theirs_rate / 1e3))
+    print("ratio: %.0fx (target >= 100x)" % (ours_rate / theirs_rate))
+    quatcurve_blender.unregister()
+
+
+main()
