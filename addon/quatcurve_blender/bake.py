@@ -16,6 +16,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
+import bpy
 import numpy as np
 
 from . import fcurves, native
@@ -73,7 +74,11 @@ def check_settings(settings):
 
 
 def _num(x):
-    return ("%g" % x) if isinstance(x, (int, float)) else repr(x)
+    """A number as a person writes it: whole numbers in full (100000000, not 1e+08)."""
+    if isinstance(x, (int, float, np.floating, np.integer)):
+        x = float(x)
+        return "%d" % x if x.is_integer() and abs(x) < 1e16 else "%g" % x
+    return repr(x)
 
 
 # ---- targets ----------------------------------------------------------------------------------------
@@ -167,13 +172,18 @@ class RotationKeys:
     frames: np.ndarray
     values: np.ndarray
     fcurves: list
+    notes: list = field(default_factory=list)   # what the bake report should tell the animator
+    nla: bool = False                           # values are Blender's NLA-evaluated result
 
     @property
     def is_euler(self):
         return self.mode in fcurves.EULER_ORDERS
 
     def evaluate(self, frames):
-        """Blender's evaluation of the channels at any `frames`: (N, 3|4) channel values."""
+        """Blender's evaluation of the channels at any `frames`: (N, 3|4) channel values (with NLA
+        strips present: the whole animation evaluated, scene.frame_set)."""
+        if self.nla:
+            return evaluate_in_scene(self.target, self.prop, frames)
         return evaluate_channels(self.target, self.prop, self.fcurves, frames)
 
     def quats(self, frames=None):
@@ -187,7 +197,12 @@ class RotationKeys:
         qc = native.require()
         if self.is_euler:
             return qc.Curve.from_euler(self.frames, self.values, order=self.mode, method=method, **options)
-        return qc.Curve(self.frames, self.quats(), method=method, **options)
+        quats = self.quats()  # refuses zero quaternions / axes, naming the frame
+        if self.mode == "QUATERNION":
+            # The stored components as they are: QUAT_COMPONENTS lerps them before normalizing, as
+            # Blender does, which differs from lerping normalized keys when they are not unit length.
+            quats = self.values
+        return qc.Curve(self.frames, quats, method=method, **options)
 
 
 def evaluate_channels(target, prop, channel_fcurves, frames):
@@ -201,25 +216,116 @@ def evaluate_channels(target, prop, channel_fcurves, frames):
     return out
 
 
+def evaluate_in_scene(target, prop, frames):
+    """(N, C) values of target.prop as the whole animation system plays them at `frames` (NLA strips
+    included): scene.frame_set at each frame, then the scene's frame is restored."""
+    scene = bpy.context.scene
+    current = scene.frame_current, scene.frame_subframe
+    out = []
+    try:
+        for frame in np.asarray(frames, dtype=np.float64):
+            whole = math.floor(frame)
+            scene.frame_set(int(whole), subframe=float(frame - whole))
+            out.append(tuple(getattr(target.owner, prop)))
+    finally:
+        scene.frame_set(current[0], subframe=current[1])
+    return np.array(out, dtype=np.float64).reshape(len(out), -1)
+
+
 def read_rotation_keys(target, action=None):
     """RotationKeys of `target` in its current rotation mode, from `action` (default: its active
-    action). Raises BakeError when the mode's channels have no keys or hold NaN/infinite values."""
+    action, and the NLA strips that play on it).
+
+    Raises BakeError when the mode's channels have no keys, hold NaN/infinite values, have two keys
+    with different values on one frame, or are driven by a driver. Notes (RotationKeys.notes) tell
+    what a bake keeps: channels held at their current value, F-curve modifiers read at the keys,
+    constraints that still apply, NLA strips whose evaluated result is read at every frame."""
     mode = target.owner.rotation_mode
     prop, count = fcurves.rotation_property(mode)
+    path = target.data_path(prop)
+    _refuse_drivers(target, prop, count)
     channels = fcurves.Channels.of(target.id_data, action)
-    found = channels.find_all(target.data_path(prop), count) if channels is not None else [None] * count
+    found = channels.find_all(path, count) if channels is not None else [None] * count
     found = [f if f is not None and fcurves.key_count(f) else None for f in found]
-    if not any(found):
+    strips = [] if action is not None else [
+        strip for strip, strip_channels in fcurves.nla_strips(target.id_data)
+        if strip_channels is not None and any(strip_channels.find(path, i) is not None for i in range(count))]
+    if not any(found) and not strips:
         raise BakeError("%s: no rotation animation (rotation mode %s, no keys on %s)%s"
                         % (target.name, mode, prop, _other_keyed_hint(target, channels, prop)))
-    frames = fcurves.key_frames(found)
-    values = evaluate_channels(target, prop, found, frames)
+    for i, fcurve in enumerate(found):
+        if fcurve is not None:
+            _refuse_jumps(target, prop, i, fcurve)
+    notes = _channel_notes(target, prop, found, bool(strips))
+    if strips:
+        keyed = fcurves.key_frames(found)
+        lo = min([s.frame_start for s in strips] + list(keyed[:1]))
+        hi = max([s.frame_end for s in strips] + list(keyed[-1:]))
+        frames = np.union1d(np.arange(math.floor(lo), math.ceil(hi) + 1, dtype=np.float64), keyed)
+        values = evaluate_in_scene(target, prop, frames)
+        notes.append("%s: NLA strips (%s) play on it: baked Blender's evaluated result (NLA included), "
+                     "read at every frame %s..%s" % (target.name, ", ".join(s.name for s in strips),
+                                                     _num(frames[0]), _num(frames[-1])))
+    else:
+        frames = fcurves.key_frames(found)
+        values = evaluate_channels(target, prop, found, frames)
     bad = ~np.isfinite(values)
     if bad.any():
         k, i = np.argwhere(bad)[0]
-        where = "at frame %s" % _num(float(frames[k])) if found[i] is not None else "(unkeyed value)"
+        where = "at frame %s" % _num(float(frames[k])) if found[i] is not None or strips else "(unkeyed value)"
         raise BakeError("%s: %s[%d] is %s %s" % (target.name, prop, i, values[k, i], where))
-    return RotationKeys(target, mode, prop, frames, values, found)
+    return RotationKeys(target, mode, prop, frames, values, found, notes, nla=bool(strips))
+
+
+def _refuse_drivers(target, prop, count):
+    """A driver on a rotation channel overrides any keys: refuse, naming the channel."""
+    anim = target.id_data.animation_data
+    if anim is None:
+        return
+    path = target.data_path(prop)
+    for i in range(count):
+        if anim.drivers.find(path, index=i) is not None:
+            raise BakeError("%s: %s[%d] is driven by a driver, which would override any baked keys "
+                            "(remove the driver, or bake the driven result with Blender's own bake)"
+                            % (target.name, prop, i))
+
+
+def _refuse_jumps(target, prop, index, fcurve):
+    """Two keys on one frame with different values (a jump) cannot be kept with one key per frame."""
+    frames, values = fcurves.read_keys(fcurve)
+    order = np.argsort(frames, kind="stable")
+    frames, values = frames[order], values[order]
+    same = np.flatnonzero(frames[1:] == frames[:-1])
+    for k in same:
+        group = values[frames == frames[k]]
+        if (group != group[0]).any():
+            shown = [_num(round(float(v), 6)) for v in group]
+            raise BakeError("%s: %s[%d] has %d keys on frame %s (%s): a jump that one key per frame "
+                            "cannot keep" % (target.name, prop, index, len(group), _num(frames[k]),
+                                             ", ".join(shown[:-1]) + " and " + shown[-1]))
+
+
+def _channel_notes(target, prop, found, nla):
+    notes = []
+    held = [i for i, f in enumerate(found) if f is None]
+    if held and not nla:
+        current = getattr(target.owner, prop)
+        notes.append("%s: %s not keyed: held at the current value%s (%s), as Blender plays %s"
+                     % (target.name, "%s[%d]" % (prop, held[0]) + "".join(", [%d]" % i for i in held[1:]),
+                        "s" if len(held) > 1 else "", ", ".join(_num(round(current[i], 6)) for i in held),
+                        "them" if len(held) > 1 else "it"))
+    for i, fcurve in enumerate(found):
+        if fcurve is not None and len(fcurve.modifiers):
+            kinds = ", ".join(m.type for m in fcurve.modifiers)
+            notes.append("%s: %s[%d] has F-curve modifier%s %s: Blender's evaluation at the key frames is "
+                         "baked, the modifier's motion between keys is not" % (
+                             target.name, prop, i, "s" if len(fcurve.modifiers) > 1 else "", kinds))
+    constraints = [c.name for c in target.owner.constraints if not c.mute]
+    if constraints:
+        notes.append("%s: constraint%s (%s) still appl%s on top of the baked rotation channels"
+                     % (target.name, "s" if len(constraints) > 1 else "", ", ".join(constraints),
+                        "y" if len(constraints) > 1 else "ies"))
+    return notes
 
 
 def _other_keyed_hint(target, channels, prop):
@@ -370,6 +476,8 @@ class TargetBake:
     output_mode: str
     frames: np.ndarray = None
     values: np.ndarray = None    # (N, 3|4) output channel values
+    own_action: bool = False     # in place was asked for, but others play the action: copy it
+    notes: list = field(default_factory=list)
 
 
 @dataclass
@@ -380,6 +488,7 @@ class TargetResult:
     source_keys: int
     keys_written: int
     action: str
+    notes: list = field(default_factory=list)
 
 
 @dataclass
@@ -396,9 +505,17 @@ class BakeResult:
                                                 f"{self.keys_written:,}", self.seconds)
 
     def lines(self):
-        return ["%s: %s %s → %s, %d source keys → %s keys in '%s'"
-                % (t.name, self.method, t.source_mode, t.output_mode, t.source_keys,
-                   f"{t.keys_written:,}", t.action) for t in self.targets]
+        """One line per target, each followed by its notes (held channels, modifiers, NLA, …)."""
+        out = []
+        for t in self.targets:
+            out.append("%s: %s %s → %s, %d source keys → %s keys in '%s'"
+                       % (t.name, self.method, t.source_mode, t.output_mode, t.source_keys,
+                          f"{t.keys_written:,}", t.action))
+            out.extend(t.notes)
+        return out
+
+    def notes(self):
+        return [note for t in self.targets for note in t.notes]
 
 
 class BakePlan:
@@ -454,26 +571,33 @@ class BakePlan:
         begin = time.perf_counter()
         settings = self.settings
         result = BakeResult(settings.method, float(self.frames[0]), float(self.frames[-1]))
-        copies = {}  # original action → its baked copy (shared by every target using that action)
+        copies = {}        # original action → its baked copy (shared by every target using it)
+        destination = {}   # ID → the action its targets are written into
         for item in self.items:
             id_data = item.target.id_data
-            original = fcurves.active_action(id_data)
-            action = original
-            if settings.new_action:
-                if original not in copies:
-                    copies[original] = fcurves.copy_action(original, "%s_%s" % (original.name, settings.method.lower()))
-                action = copies[original]
+            if id_data.name_full not in destination:
+                original = fcurves.active_action(id_data)
+                if original is None:  # only NLA strips: the baked result becomes the active action
+                    action = fcurves.new_action(id_data, "%s_%s" % (id_data.name, settings.method.lower()))
+                elif settings.new_action or item.own_action:
+                    if original not in copies:
+                        copies[original] = fcurves.copy_action(
+                            original, "%s_%s" % (original.name, settings.method.lower()))
+                    action = copies[original]
+                else:
+                    action = original
+                destination[id_data.name_full] = action
+            action = destination[id_data.name_full]
             channels = fcurves.Channels.of(id_data, action, create=True)
             result.keys_written += _write_target(channels, item)
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
-                                               len(item.source.frames), item.values.size, action.name))
-        assigned = set()
+                                               len(item.source.frames), item.values.size, action.name,
+                                               item.source.notes + item.notes))
         for item in self.items:
             id_data = item.target.id_data
-            original = fcurves.active_action(id_data)
-            if id_data.name_full not in assigned and original in copies:
-                fcurves.assign_action(id_data, copies[original])
-                assigned.add(id_data.name_full)
+            action = destination[id_data.name_full]
+            if fcurves.active_action(id_data) != action:
+                fcurves.assign_action(id_data, action)
             item.target.owner.rotation_mode = item.output_mode
         for original in copies:
             original.use_fake_user = True
@@ -509,13 +633,39 @@ def prepare(targets, settings):
     for target in targets:
         check_editable(target, settings.new_action)
     sources = [read_rotation_keys(t) for t in targets]
+    if settings.rotation_mode != "KEEP":
+        for target in targets:
+            _refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))
     start, end = settings.frame_start, settings.frame_end
     if start is None:
         start = math.floor(min(s.frames[0] for s in sources))
     if end is None:
         end = math.ceil(max(s.frames[-1] for s in sources))
     frames = bake_frames(start, end, settings.step)
-    return BakePlan(targets, settings, sources, frames, time.perf_counter() - begin)
+    plan = BakePlan(targets, settings, sources, frames, time.perf_counter() - begin)
+    if not settings.new_action:
+        _keep_shared_actions(plan)
+    return plan
+
+
+def _keep_shared_actions(plan):
+    """In place was asked for, but an action a target plays is also played by objects that are not
+    being baked (through the same slot, ≥ 4.4): changing it would silently change them, so those
+    targets get their own new action instead, and the report says so."""
+    ids = {item.target.id_data.name_full for item in plan.items}
+    for item in plan.items:
+        id_data = item.target.id_data
+        action = fcurves.active_action(id_data)
+        if action is None:
+            continue
+        others = [o.name for o in fcurves.action_users(action, fcurves.slot_identifier(id_data))
+                  if o.name_full not in ids]
+        if others:
+            item.own_action = True
+            item.notes.append("%s: action '%s' is also used by %s: baked into a new action instead of in "
+                              "place, so %s keep%s playing it" % (
+                                  item.target.name, action.name, ", ".join(sorted(others)),
+                                  "they" if len(others) > 1 else "it", "" if len(others) > 1 else "s"))
 
 
 def bake(targets, settings):

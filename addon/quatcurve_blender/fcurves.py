@@ -184,6 +184,55 @@ class Channels:
         return fcurve
 
 
+def nla_strips(id_data):
+    """The NLA strips that play on `id_data` (unmuted strips of unmuted tracks, while the NLA is
+    used), each with the Channels of its action for the strip's slot (≥ 4.4) — or None when the
+    strip's action has no channels for it."""
+    anim = id_data.animation_data
+    if anim is None or not anim.use_nla:
+        return []
+    found = []
+    for track in anim.nla_tracks:
+        if track.mute:
+            continue
+        for strip in track.strips:
+            if strip.mute or strip.action is None:
+                continue
+            if not SLOTTED:
+                found.append((strip, Channels(strip.action)))
+                continue
+            slot = strip.action_slot
+            bag = _channelbag(strip.action, slot, False) if slot is not None else None
+            found.append((strip, Channels(strip.action, slot, bag) if bag is not None else None))
+    return found
+
+
+def action_users(action, slot_identifier=None):
+    """Objects playing `action` (as their active action or in an NLA strip) — on ≥ 4.4 only through
+    the slot `slot_identifier` when given (other slots hold other channels)."""
+    users = []
+    for obj in bpy.data.objects:
+        anim = obj.animation_data
+        if anim is None:
+            continue
+        uses = anim.action == action and (not SLOTTED or slot_identifier is None or
+                                          _slot_identifier(obj) == slot_identifier)
+        for track in anim.nla_tracks:
+            for strip in track.strips:
+                if strip.action == action and (not SLOTTED or slot_identifier is None or
+                                               (strip.action_slot is not None and
+                                                strip.action_slot.identifier == slot_identifier)):
+                    uses = True
+        if uses:
+            users.append(obj)
+    return users
+
+
+def slot_identifier(id_data):
+    """Identifier of the action slot `id_data` plays (≥ 4.4), else None."""
+    return _slot_identifier(id_data) if SLOTTED else None
+
+
 def _channelbag(action, slot, create):
     for layer in action.layers:
         for strip in layer.strips:

@@ -65,6 +65,8 @@ class QUATCURVE_OT_bake(bpy.types.Operator):
         scene_settings = getattr(context.scene, "quatcurve", None)
         if scene_settings is not None:
             props.store_result(scene_settings, result)
+        for note in result.notes():
+            self.report({"WARNING"}, note)
         self.report({"INFO"}, "Baked " + result.summary())
         return {"FINISHED"}
 
