@@ -438,40 +438,6 @@ def _get_enum(points, prop, n):
     return buf
 
 
-def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolation="BEZIER"):
-    """(N, C) values of C channels keyed (key_frames[k], key_values[k, c]) as Blender evaluates them
-    at `frames`, for comparing Blender's own interpolation with ours (compare.py).
-
-    interpolation: 'BEZIER' — Blender's default for new keys: AUTO_CLAMPED handles, computed by Blender
-    (fcurve.update()) — or 'LINEAR' / 'CONSTANT'. The F-curves (on `data_path`, indices 0..C-1) live in
-    a scratch action that is removed before returning, so no user data is touched."""
-    key_frames = np.asarray(key_frames, dtype=np.float64)
-    key_values = np.asarray(key_values, dtype=np.float64).reshape(len(key_frames), -1)
-    frames = np.asarray(frames, dtype=np.float64)
-    out = np.empty((len(frames), key_values.shape[1]))
-    with scratch_channels("quatcurve evaluate") as channels:
-        for c in range(key_values.shape[1]):
-            fcurve = channels.new_fcurve(data_path, c)
-            write_keys(fcurve, key_frames, key_values[:, c], interpolation=interpolation)
-            if interpolation == "BEZIER":
-                _set_auto_clamped(fcurve.keyframe_points, len(key_frames))
-                fcurve.update()  # computes the automatic handles
-            out[:, c] = evaluate(fcurve, frames)
-    return out
-
-
-def _set_auto_clamped(points, n):
-    """Handle types AUTO_CLAMPED on every key (in bulk; key by key where Blender 3.4 ignores it)."""
-    auto = _enum_value(bpy.types.Keyframe, "handle_left_type", "AUTO_CLAMPED")
-    buf = np.full(n, auto, dtype=np.int32)
-    points.foreach_set("handle_left_type", buf)
-    points.foreach_set("handle_right_type", buf)
-    if n and not ((_get_enum(points, "handle_left_type", n) == auto).all()
-                  and (_get_enum(points, "handle_right_type", n) == auto).all()):
-        for point in points:
-            point.handle_left_type = point.handle_right_type = "AUTO_CLAMPED"
-
-
 # ---- digests ----------------------------------------------------------------------------------------
 
 def fcurve_digest(fcurve, h=None):
