@@ -51,12 +51,18 @@ def draw_last_result(layout, settings, max_lines=8):
     if not settings.last_summary:
         return
     box = layout.box()
-    box.label(text="Last bake: " + settings.last_summary, icon="INFO")
+    box.label(text="Last bake", icon="INFO")
+    col = box.column(align=True)
+    col.label(text="Targets: %d" % settings.last_targets)
+    col.label(text="Keys written: {:,}".format(settings.last_keys))
+    col.label(text="Seconds: %.2f" % settings.last_seconds)
     lines = settings.last_lines.splitlines()
+    col = box.column(align=True)
+    col.scale_y = 0.8
     for line in lines[:max_lines]:
-        box.label(text=line)
+        col.label(text=line)
     if len(lines) > max_lines:
-        box.label(text="… and %d more" % (len(lines) - max_lines))
+        col.label(text="… and %d more" % (len(lines) - max_lines))
 
 
 def draw_compare_settings(layout, settings):

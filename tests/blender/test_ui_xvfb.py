@@ -1,0 +1,146 @@
+"""The sidebar panel in a real window: Debian's Blender under Xvfb opens the "QuatCurve" tab in the 3D
+Viewport and in the Graph Editor, after a bake, and saves a screenshot of each; the panels must
+have drawn without a Python error.
+
+Runs in the Blender 3.4.1 binary's pass only (it starts that executable under xvfb-run); skips, saying
+why, in the bpy-module passes and where xvfb-run is missing. The session script below is written to
+a temporary folder and run as `xvfb-run -a blender --factory-startup --enable-event-simulate
+--python SESSION -- VERDICT.json`. Sidebar tabs cannot be chosen from Python in 3.4
+(Region.active_panel_category came later), so the session clicks down the tab strip with simulated
+mouse events until the panel draws."""
+
+import json
+import os
+import shutil
+import subprocess
+import textwrap
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import ADDON_DIR
+
+SESSION = textwrap.dedent('''
+    import json, math, os, sys, traceback
+    import bpy
+    sys.path.insert(0, ADDON_DIR)
+    import quatcurve_blender
+    from quatcurve_blender import ui
+
+    OUT = sys.argv[sys.argv.index("--") + 1]
+    verdict = {"ok": False, "drawn": {}, "errors": [], "clicks": 0, "screenshots": []}
+
+    def record_draws(cls):
+        draw = cls.draw
+        def recording_draw(self, context):
+            try:
+                draw(self, context)
+            except Exception:
+                verdict["errors"].append(traceback.format_exc())
+                raise
+            verdict["drawn"][cls.__name__] = verdict["drawn"].get(cls.__name__, 0) + 1
+        cls.draw = recording_draw
+
+    record_draws(ui.QUATCURVE_PT_view3d)
+    record_draws(ui.QUATCURVE_PT_graph)
+    quatcurve_blender.register()
+    cube = bpy.data.objects["Cube"]  # the factory startup scene's
+    cube.rotation_mode = "XYZ"
+    for frame, z in ((1, 0), (21, 90)):
+        cube.rotation_euler = (0, 0, math.radians(z))
+        cube.keyframe_insert("rotation_euler", frame=frame)
+    verdict["bake"] = sorted(bpy.ops.quatcurve.bake(method="SQUAD", rotation_mode="QUATERNION"))
+    win = bpy.context.window_manager.windows[0]
+    area = next(a for a in win.screen.areas if a.type == "VIEW_3D")
+
+    def screenshot(name):
+        path = OUT + "." + name + ".png"
+        with bpy.context.temp_override(window=win, area=area):
+            bpy.ops.screen.screenshot(filepath=path)
+        verdict["screenshots"].append(path)
+
+    def open_tab(panel):
+        """Shows the sidebar and clicks down its tab strip (right edge) until `panel` draws."""
+        area.spaces.active.show_region_ui = True
+        yield
+        yield
+        region = next(r for r in area.regions if r.type == "UI")
+        x = region.x + region.width - 9
+        for y in range(region.y + region.height - 12, region.y, -12):
+            if verdict["drawn"].get(panel):
+                break
+            win.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)
+            win.event_simulate(type="LEFTMOUSE", value="PRESS", x=x, y=y)
+            win.event_simulate(type="LEFTMOUSE", value="RELEASE", x=x, y=y)
+            verdict["clicks"] += 1
+            yield
+        yield
+
+    def session():
+        yield from open_tab("QUATCURVE_PT_view3d")
+        screenshot("view3d")
+        area.type = "GRAPH_EDITOR"
+        yield from open_tab("QUATCURVE_PT_graph")
+        screenshot("graph")
+
+    steps = session()
+
+    def tick():
+        try:
+            next(steps)
+            return 0.1
+        except StopIteration:
+            pass
+        except Exception:
+            verdict["errors"].append(traceback.format_exc())
+        verdict["ok"] = not verdict["errors"]
+        with open(OUT, "w") as f:
+            json.dump(verdict, f, indent=1)
+        bpy.ops.wm.quit_blender()
+
+    bpy.app.timers.register(tick, first_interval=0.5)
+''')
+
+
+def debian_blender():
+    """The running Blender executable when this is the Blender 3.4 binary's pass, else None."""
+    path = bpy.app.binary_path
+    if not path or not os.path.basename(path).startswith("blender") or bpy.app.version[:2] != (3, 4):
+        return None
+    return path
+
+
+def test_sidebar_panels_draw_in_a_window(tmp_path):
+    blender = debian_blender()
+    if blender is None:
+        pytest.skip("the window test runs in the Debian Blender 3.4.1 binary's pass (this is %s, %s)"
+                    % (bpy.app.version_string, bpy.app.binary_path or "the bpy module"))
+    xvfb = shutil.which("xvfb-run")
+    if xvfb is None:
+        pytest.skip("xvfb-run is missing (Debian: apt-get install xvfb xauth): no window for the UI test")
+    session = tmp_path / "ui_session.py"
+    session.write_text("ADDON_DIR = %r\n" % ADDON_DIR + SESSION)
+    verdict_path = tmp_path / "verdict.json"
+    env = dict(os.environ, PATH="/usr/local/bin:/usr/bin:/bin")  # the system Python's home (see CMake)
+    proc = subprocess.run([xvfb, "-a", blender, "--factory-startup", "--enable-event-simulate",
+                           "--python", str(session), "--", str(verdict_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=240, env=env)
+    log = proc.stdout
+    assert verdict_path.exists(), "the window session wrote no verdict (exit %s):\n%s" % (proc.returncode, log[-4000:])
+    verdict = json.loads(verdict_path.read_text())
+    assert verdict["ok"], "the session failed:\n%s\n%s" % ("\n".join(verdict["errors"]), log[-3000:])
+    assert verdict["bake"] == ["FINISHED"]
+    assert verdict["drawn"].get("QUATCURVE_PT_view3d") and verdict["drawn"].get("QUATCURVE_PT_graph"), verdict
+    assert "Traceback" not in log and "Error: Python" not in log, log[-3000:]
+    for path in verdict["screenshots"]:
+        image = bpy.data.images.load(path)
+        try:
+            width, height = image.size
+            assert width >= 640 and height >= 480
+            pixels = np.empty(width * height * 4, dtype=np.float32)
+            image.pixels.foreach_get(pixels)
+            assert pixels.reshape(-1, 4)[:, :3].std() > 0.02, "blank screenshot %s" % path
+        finally:
+            bpy.data.images.remove(image)
+    print("screenshots: %s" % ", ".join(verdict["screenshots"]))
