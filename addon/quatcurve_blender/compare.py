@@ -402,15 +402,19 @@ def recommend(comparison):
               if s.metrics["max_velocity_jump"] <= SMOOTH_JUMP_FRACTION * mean_speed + 1e-9}
     pool = smooth or engine
 
-    def ranks(key):
-        ordered = sorted(pool, key=key)
-        return {n: ordered.index(n) for n in pool}
+    # Values equal to 1e-6 tie (methods that coincide, e.g. every method on two keys); a tie goes to
+    # the method listed first in ENGINE_METHODS (SLERP, the simplest).
+    def value(n, name):
+        return round(comparison.sources[n].metrics[name], 6)
 
-    speed_rank = ranks(lambda n: pool[n].metrics["speed_ratio"])
-    deviation_rank = ranks(lambda n: pool[n].metrics["max_deviation"])
-    method = min(pool, key=lambda n: (speed_rank[n] + deviation_rank[n], pool[n].metrics["speed_ratio"],
-                                      pool[n].metrics["max_deviation"]))
-    steadiest = min(engine, key=lambda n: (engine[n].metrics["speed_ratio"], engine[n].metrics["max_deviation"]))
+    def ranks(name):  # competition ranking: the number of methods strictly better
+        return {n: sum(value(o, name) < value(n, name) for o in pool) for n in pool}
+
+    speed_rank, deviation_rank = ranks("speed_ratio"), ranks("max_deviation")
+    listed = ENGINE_METHODS.index
+    method = min(pool, key=lambda n: (speed_rank[n] + deviation_rank[n], value(n, "speed_ratio"),
+                                      value(n, "max_deviation"), listed(n)))
+    steadiest = min(engine, key=lambda n: (value(n, "speed_ratio"), value(n, "max_deviation"), listed(n)))
     order = max(comparison.euler_orders, key=lambda o: comparison.euler_orders[o][0])
     m, s = pool[method].metrics, engine[steadiest].metrics
     text = "%s: speed ratio %s, %.2f° from SLERP%s" % (
