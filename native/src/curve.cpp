@@ -258,12 +258,27 @@ void Curve::build() {
         if (seg >= 0) m.kseg.push_back(seg);
     };
     const bool split = method_ != Method::EULER && !(method_ == Method::QUAT_COMPONENTS && !has_euler_keys());
+    // Every segment gets its rotation vector r (angle may exceed π) and its end quaternion on the
+    // chain q0·exp(r/2); a segment turning more than π is split along r's own axis into ≤ 2π/3
+    // sub-arcs, so every method turns the full amount at the constant rate SLERP promises.
+    auto add_segment = [&](std::size_t i, const Vec3& r, const Quat& next) {
+        const Quat q0 = m.kq.back();
+        rotvecs_[i] = r;
+        const double theta = glm::length(r);
+        const std::size_t parts =
+            split && theta > kPi * (1.0 + 1e-12) ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0))) : 1;
+        const double h = times_[i + 1] - times_[i];
+        for (std::size_t j = 1; j <= parts; ++j) {
+            const double f = static_cast<double>(j) / static_cast<double>(parts);
+            m.kr.push_back(r / static_cast<double>(parts));
+            if (j == parts)
+                add_knot(times_[i + 1], next, static_cast<int>(i + 1), static_cast<int>(i));
+            else
+                add_knot(times_[i] + f * h, detail::qmul(q0, detail::qexp(f * r)), -1, static_cast<int>(i));
+        }
+    };
     if (has_euler_keys()) {
-        // Each segment follows its Euler path: a path of at most π keeps the rotation vector that
-        // follows it continuously (the shortest rotation, or the path's side at exactly π); a longer
-        // path is cut at equal path length into m ≤ 2π/3 sub-arcs whose sub-keys lie on the Euler
-        // path, so every method turns as the path turns (0 → 720° about Z turns twice).
-        m.kq.reserve(K);
+        // Each segment turns as its Euler path turns (spins beyond π are kept in every method).
         add_knot(times_[0], euler_to_quat(angles_[0], order_), 0, -1);
         for (std::size_t i = 0; i + 1 < K; ++i) {
             const Vec3 a0 = angles_[i], da = angles_[i + 1] - angles_[i];
@@ -271,12 +286,26 @@ void Curve::build() {
             std::vector<double> cum;
             euler_path_length(a0, angles_[i + 1], order_, cum);
             const double L = cum.back();
-            const bool spin = L > kPi * (1.0 + 1e-9);
-            std::size_t parts = 1;
-            if (split && spin) parts = static_cast<std::size_t>(std::ceil(L / (kTwoPi / 3.0)));
+            if (L < kTwoPi - 0.5) {
+                // A path shorter than a turn never comes back near its start's rotation from the
+                // far side, so following its rotation vector continuously is unambiguous: r is the
+                // side the path goes round (beyond π when it goes the long way), split along r's
+                // axis — SLERP keeps a constant speed even on a curved Euler path.
+                const Quat q0 = m.kq.back();
+                const Vec3 r = lift_euler_path(a0, angles_[i + 1], order_, q0);
+                Quat next = euler_to_quat(angles_[i + 1], order_);
+                if (detail::qdot(next, detail::qmul(q0, detail::qexp(r))) < 0.0) next = -next;
+                add_segment(i, r, next);
+                continue;
+            }
+            // A path of a turn or more (spins): its whole turns are counted by its length and the
+            // sub-keys lie on the Euler path itself, so every method turns as the path turns
+            // (0 → 720° about Z turns twice, also with a tilt).
+            const std::size_t parts = split ? static_cast<std::size_t>(std::ceil(L / (kTwoPi / 3.0))) : 1;
             const Quat q0 = m.kq.back();
             for (std::size_t j = 1; j <= parts; ++j) {
-                const double f = j == parts ? 1.0 : path_parameter(cum, L * static_cast<double>(j) / static_cast<double>(parts));
+                const double f =
+                    j == parts ? 1.0 : path_parameter(cum, L * static_cast<double>(j) / static_cast<double>(parts));
                 const Vec3 a = j == parts ? angles_[i + 1] : a0 + f * da;
                 const Quat prev = m.kq.back();
                 const double fprev = j == 1 ? 0.0 : (m.kt.back() - times_[i]) / h;
@@ -287,23 +316,20 @@ void Curve::build() {
                 add_knot(j == parts ? times_[i + 1] : times_[i] + f * h, q, j == parts ? static_cast<int>(i + 1) : -1,
                          static_cast<int>(i));
             }
-            if (!spin) {
-                rotvecs_[i] = m.kr.back();
-            } else {  // the net rotation with the whole number of turns nearest the path length
-                const Vec3 net = detail::rotvec_principal(detail::qmul(detail::qconj(q0), m.kq.back()));
-                const double t0 = glm::length(net);
-                Vec3 u = t0 > 1e-12 ? net / t0 : Vec3(0.0);
-                if (t0 <= 1e-12) {
-                    Vec3 sum(0.0);
-                    for (std::size_t j = m.kr.size() - parts; j < m.kr.size(); ++j) sum += m.kr[j];
-                    if (parts == 1) sum = da;  // EULER keeps the keys only: the angles' direction
-                    u = glm::length(sum) > 0.0 ? glm::normalize(sum) : Vec3(0.0, 0.0, 1.0);
-                }
-                const double k_pos = std::nearbyint((L - t0) / kTwoPi), k_neg = std::nearbyint((L + t0) / kTwoPi);
-                rotvecs_[i] = std::fabs(t0 + kTwoPi * k_pos - L) <= std::fabs(kTwoPi * k_neg - t0 - L)
-                                  ? (t0 + kTwoPi * k_pos) * u
-                                  : -(kTwoPi * k_neg - t0) * u;
+            // The segment's net rotation with the whole number of turns nearest the path length.
+            const Vec3 net = detail::rotvec_principal(detail::qmul(detail::qconj(q0), m.kq.back()));
+            const double t0 = glm::length(net);
+            Vec3 u = t0 > 1e-12 ? net / t0 : Vec3(0.0);
+            if (t0 <= 1e-12) {
+                Vec3 sum(0.0);
+                for (std::size_t j = m.kr.size() - parts; j < m.kr.size(); ++j) sum += m.kr[j];
+                if (parts == 1) sum = da;  // EULER keeps the keys only: the angles' direction
+                u = glm::length(sum) > 0.0 ? glm::normalize(sum) : Vec3(0.0, 0.0, 1.0);
             }
+            const double k_pos = std::nearbyint((L - t0) / kTwoPi), k_neg = std::nearbyint((L + t0) / kTwoPi);
+            rotvecs_[i] = std::fabs(t0 + kTwoPi * k_pos - L) <= std::fabs(kTwoPi * k_neg - t0 - L)
+                              ? (t0 + kTwoPi * k_pos) * u
+                              : -(kTwoPi * k_neg - t0) * u;
         }
         quats_.clear();
         for (std::size_t j = 0; j < m.kq.size(); ++j)
@@ -328,19 +354,7 @@ void Curve::build() {
             } else {
                 r = rotvec_keyed(d, i);
             }
-            rotvecs_[i] = r;
-            const double theta = glm::length(r);
-            const std::size_t parts =
-                split && theta > kPi * (1.0 + 1e-12) ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0))) : 1;
-            const double h = times_[i + 1] - times_[i];
-            for (std::size_t j = 1; j <= parts; ++j) {
-                const double f = static_cast<double>(j) / static_cast<double>(parts);
-                m.kr.push_back(r / static_cast<double>(parts));
-                if (j == parts)
-                    add_knot(times_[i + 1], next, static_cast<int>(i + 1), static_cast<int>(i));
-                else
-                    add_knot(times_[i] + f * h, detail::qmul(q0, detail::qexp(f * r)), -1, static_cast<int>(i));
-            }
+            add_segment(i, r, next);
         }
     }
     m.first_q = m.kq.front();

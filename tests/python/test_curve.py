@@ -139,6 +139,22 @@ def test_large_turns_between_keys_stay_continuous(method):
         assert np.max(np.linalg.norm(left - right, axis=1)) <= 1e-4 * (1 + np.max(speed))
 
 
+def test_slerp_from_curved_euler_paths_keeps_constant_speed():
+    """A curved Euler path whose turn stays below a full turn is one constant-speed arc, on the side
+    the path goes round (found by compare: a 176.9° segment used to be split on the Euler path)."""
+    c = qc.Curve.from_euler([1, 8, 30, 35], np.radians([[0, 0, 0], [40, 10, -30], [80, 60, 20], [10, -20, 170]]),
+                            "XYZ", "SLERP")
+    rng = np.random.default_rng(3)
+    d = qc.Curve.from_euler(np.arange(12.0), np.cumsum(rng.uniform(-1.5, 1.5, (12, 3)), axis=0), "ZXY", "SLERP")
+    for curve in (c, d):
+        for t0, t1 in zip(curve.times[:-1], curve.times[1:]):
+            ts = np.linspace(t0, t1, 51)
+            speed = np.linalg.norm(curve.angular_velocity(ts[:-1]), axis=1)
+            assert np.ptp(speed) <= 1e-9 * (1 + speed.max())
+            step = angle(curve.sample(ts[:-1]), curve.sample(ts[1:]))
+            np.testing.assert_allclose(step, speed * (ts[1] - ts[0]), rtol=1e-6, atol=1e-12)
+
+
 def test_spline_c2_acceleration_is_continuous():
     t, q, a = keys(10, 8, max_angle=2.5)
     e = 1e-5
