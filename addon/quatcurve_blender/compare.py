@@ -287,7 +287,7 @@ def _ratio_text(r):
 
 def _frames_text(frames):
     frames = [("%g" % f) for f in frames]
-    return ", ".join(frames) if len(frames) <= 6 else "%s … %s (%d)" % (frames[0], frames[-1], len(frames))
+    return ", ".join(frames) if len(frames) <= 6 else "%s ... %s (%d)" % (frames[0], frames[-1], len(frames))  # the plot font has no "…"
 
 
 # ---- Blender's modes in a scratch action ----------------------------------------------------------------
@@ -485,7 +485,8 @@ def image_name(target_name):
 
 def make_images(report):
     """One image datablock per target holding its plot (shown in Blender's Image Editor), replaced
-    when it already exists; packed, so it is saved with the .blend. Returns the images."""
+    when it already exists; packed and given a fake user, so it is saved with the .blend (an image
+    nothing uses is dropped on save). Returns the images."""
     images = []
     for t in report.targets:
         pixels = t.render_plot()
@@ -499,6 +500,7 @@ def make_images(report):
         image.pixels.foreach_set(flat)
         image.update()
         image.pack()
+        image.use_fake_user = True
         t.image_name = image.name
         images.append(image)
     return images

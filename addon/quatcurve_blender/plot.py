@@ -247,7 +247,11 @@ class Panel:
             c.fill_rect(left, py, right, py + 1, GRID)
             c.fill_rect(left - 5, py, left, py + 1, INK)
             c.text(left - 8, py, format_tick(yv, self.y_step), align="right", valign="middle")
-        for kf in key_frames:  # dashed vertical lines at the keys
+        # Dashed vertical lines at the keys, unless they would hatch the panel (a key every frame,
+        # as in motion capture): at most one line per 12 pixels on average.
+        if len(key_frames) > (right - left) / 12:
+            key_frames = ()
+        for kf in key_frames:
             px = int(round(float(self.to_pixels(kf, 0)[0])))
             for y in range(top, bottom, 8):
                 c.fill_rect(px, y, px + 1, min(y + 4, bottom), KEY_LINE)

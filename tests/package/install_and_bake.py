@@ -52,7 +52,7 @@ obj.rotation_quaternion = (1, 0, 0, 0)
 obj.keyframe_insert("rotation_quaternion", frame=1)
 obj.rotation_quaternion = (math.cos(math.radians(75)), 0, 0, math.sin(math.radians(75)))
 obj.keyframe_insert("rotation_quaternion", frame=11)
-if not hasattr(bpy.ops.quatcurve, "bake"):
+if not hasattr(bpy.types, "QUATCURVE_OT_bake"):
     fail("the bake operator is not registered")
 result = bpy.ops.quatcurve.bake(method="SLERP", rotation_mode="QUATERNION")
 if result != {"FINISHED"}:
