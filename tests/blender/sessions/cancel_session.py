@@ -1,0 +1,143 @@
+"""Esc during a modal bake, in a Blender with a window (run under Xvfb by tests/blender/test_session.py):
+
+    xvfb-run -a blender --factory-startup --enable-event-simulate \
+        --python tests/blender/sessions/cancel_session.py -- VERDICT.json
+
+Builds a 100-bone rig keyed over 10,000 frames, records the file state, starts the bake the way the
+Bake button does (INVOKE_DEFAULT: modal, target by target, with progress), and once some but not all
+targets are computed simulates an Esc key press (Window.event_simulate). Then checks that the
+operator ended CANCELLED half way and that the file is unchanged: no new action, every action's
+digest, assignments and rotation modes as before. The verdict goes to VERDICT.json."""
+
+import json
+import os
+import sys
+import time
+import traceback
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+
+import quatcurve_blender  # noqa: E402
+from quatcurve_blender import bake, fcurves, operators  # noqa: E402
+
+VERDICT = sys.argv[sys.argv.index("--") + 1]
+BONES, LAST_FRAME, KEY_EVERY = 100, 10_000, 10
+
+progress = []      # fraction done after each computed target, as the modal bake yields it
+returned = []      # what each modal() call returned
+verdict = {"ok": False}
+phase = {"name": "start", "since": 0.0, "before": None}
+
+
+def record_progress():
+    original = bake.BakePlan.compute_steps
+
+    def compute_steps(self):
+        for done in original(self):
+            progress.append(done)
+            yield done
+
+    bake.BakePlan.compute_steps = compute_steps
+    modal = operators.QUATCURVE_OT_bake.modal
+
+    def recording_modal(self, context, event):
+        result = modal(self, context, event)
+        returned.append(sorted(result))
+        return result
+
+    operators.QUATCURVE_OT_bake.modal = recording_modal
+
+
+def state():
+    out = {"actions": {a.name: [fcurves.action_digest(a), a.use_fake_user] for a in bpy.data.actions}}
+    for obj in bpy.data.objects:
+        action = fcurves.active_action(obj)
+        out["object " + obj.name] = [action.name if action else None, obj.rotation_mode,
+                                     [pb.rotation_mode for pb in obj.pose.bones] if obj.pose else []]
+    return out
+
+
+def build_rig():
+    for obj in list(bpy.context.scene.objects):
+        bpy.data.objects.remove(obj)
+    arm = bpy.data.armatures.new("Rig")
+    rig = bpy.data.objects.new("Rig", arm)
+    bpy.context.scene.collection.objects.link(rig)
+    rig.select_set(True)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    for i in range(BONES):
+        bone = arm.edit_bones.new("Bone%03d" % i)
+        bone.head, bone.tail = (i * 0.1, 0, 0), (i * 0.1, 0, 1)
+    bpy.ops.object.mode_set(mode="POSE")
+    fcurves.new_action(rig, "RigAction")
+    channels = fcurves.Channels.of(rig, create=True)
+    rng = np.random.default_rng(7)
+    frames = np.arange(0, LAST_FRAME + 1, KEY_EVERY, dtype=np.float64)
+    for pb in rig.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+        quats = rng.normal(size=(len(frames), 4))
+        quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        for i in range(4):
+            channels.write(pb.path_from_id("rotation_quaternion"), i, frames, quats[:, i], group=pb.name)
+        if bpy.app.version >= (5, 0, 0):
+            pb.select = True
+        else:
+            pb.bone.select = True
+
+
+def window_override():
+    window = bpy.context.window_manager.windows[0]
+    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
+    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
+
+
+def finish():
+    with open(VERDICT, "w") as f:
+        json.dump(verdict, f, indent=1)
+    bpy.ops.wm.quit_blender()
+    return None
+
+
+def step():
+    """A timer driving the session through its phases; returns the next interval (None: done)."""
+    try:
+        now = time.perf_counter()
+        if phase["name"] == "start":
+            quatcurve_blender.register()
+            record_progress()
+            with window_override():
+                build_rig()
+                bpy.context.view_layer.update()
+                phase["before"] = state()
+                verdict["invoke"] = sorted(bpy.ops.quatcurve.bake("INVOKE_DEFAULT", True, method="SQUAD",
+                                                                  rotation_mode="QUATERNION"))
+            phase.update(name="running", since=now)
+        elif phase["name"] == "running":
+            if progress and progress[-1] < 1.0:
+                verdict["progress_at_esc"] = progress[-1]
+                bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="PRESS")
+                phase.update(name="cancelled", since=now)
+            elif (progress and progress[-1] >= 1.0) or now - phase["since"] > 60:
+                verdict["error"] = "the bake finished (or never started) before Esc could be sent: %s" % progress[-3:]
+                return finish()
+        elif phase["name"] == "cancelled" and now - phase["since"] > 1.0:
+            after = state()
+            verdict["modal_returned"] = returned[-1] if returned else None
+            verdict["targets_computed"] = len(progress)
+            verdict["progress_final"] = progress[-1] if progress else None
+            verdict["unchanged"] = after == phase["before"]
+            verdict["new_actions"] = sorted(set(after["actions"]) - set(phase["before"]["actions"]))
+            verdict["ok"] = True
+            return finish()
+        return 0.01
+    except Exception:  # noqa: BLE001 — the verdict carries it
+        verdict["error"] = traceback.format_exc()
+        return finish()
+
+
+bpy.app.timers.register(step, first_interval=0.5)

@@ -1,0 +1,98 @@
+"""Undo after a bake, in a Blender with a window (run under Xvfb by tests/blender/test_session.py):
+
+    xvfb-run -a blender --factory-startup --python tests/blender/sessions/undo_session.py -- VERDICT.json
+
+A timer (the window must exist first) builds a scene — an object with Euler rotation keys in a
+group and location keys — pushes an undo step and records the file state; then, twice (into a new
+action, and in place), bakes through the operator with an undo push (as a button press does),
+checks that the bake changed the file, runs ed.undo and compares the state with the recording. The
+verdict goes to VERDICT.json; Blender then quits."""
+
+import json
+import math
+import os
+import sys
+import traceback
+
+import bpy
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+
+import quatcurve_blender  # noqa: E402
+from quatcurve_blender import fcurves  # noqa: E402
+
+VERDICT = sys.argv[sys.argv.index("--") + 1]
+
+
+def state():
+    """Every action's digest and fake user, each object's action, rotation modes (objects and pose
+    bones), the current rotation values at frame 5."""
+    bpy.context.scene.frame_set(5)
+    out = {"actions": {a.name: [fcurves.action_digest(a), a.use_fake_user] for a in bpy.data.actions}}
+    for obj in bpy.data.objects:
+        action = fcurves.active_action(obj)
+        bones = [[pb.name, pb.rotation_mode, [round(v, 6) for v in pb.rotation_quaternion]]
+                 for pb in obj.pose.bones] if obj.pose else []
+        out["object " + obj.name] = [action.name if action else None, obj.rotation_mode,
+                                     [round(v, 6) for v in obj.rotation_euler], bones]
+    return out
+
+
+def build():
+    scene = bpy.context.scene
+    for obj in list(scene.objects):
+        bpy.data.objects.remove(obj)
+    cube = bpy.data.objects.new("Cube", None)
+    scene.collection.objects.link(cube)
+    cube.rotation_mode = "XYZ"
+    for frame, z in ((1, 0), (11, 90), (21, 200)):
+        cube.rotation_euler = (0, math.radians(z / 3), math.radians(z))
+        cube.keyframe_insert("rotation_euler", frame=frame, group="Turn")
+        cube.location = (frame * 0.1, 0, 0)
+        cube.keyframe_insert("location", frame=frame)
+    for obj in scene.objects:
+        obj.select_set(obj == cube)
+    bpy.context.view_layer.objects.active = cube
+
+
+def window_override():
+    window = bpy.context.window_manager.windows[0]
+    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
+    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
+
+
+def run():
+    verdict = {"ok": False}
+    try:
+        quatcurve_blender.register()
+        with window_override():
+            build()
+            bpy.ops.ed.undo_push(message="quatcurve test: scene")
+            before = state()
+            verdict["rounds"] = []
+            for kwargs in (dict(method="SQUAD", rotation_mode="QUATERNION", new_action=True),
+                           dict(method="SLERP", rotation_mode="KEEP", new_action=False)):
+                # undo=True: push an undo step as the UI does for an operator with the UNDO flag
+                # (a plain call from a script does not).
+                result = bpy.ops.quatcurve.bake("EXEC_DEFAULT", True, **kwargs)
+                baked = state()
+                bpy.ops.ed.undo()
+                after = state()
+                verdict["rounds"].append({
+                    "bake": kwargs, "result": sorted(result), "bake_changed_file": baked != before,
+                    "new_actions": sorted(set(baked["actions"]) - set(after["actions"])),
+                    "restored": after == before,
+                    "differences": {k: [before.get(k), after.get(k)] for k in set(before) | set(after)
+                                    if before.get(k) != after.get(k)}})
+        verdict["ok"] = True
+    except Exception:  # noqa: BLE001 — the verdict carries it
+        verdict["error"] = traceback.format_exc()
+    with open(VERDICT, "w") as f:
+        json.dump(verdict, f, indent=1)
+    bpy.ops.wm.quit_blender()
+    return None
+
+
+bpy.app.timers.register(run, first_interval=0.5)
