@@ -756,10 +756,12 @@ def build_angular_deviation(fn, d):
     if d.chance(0.1, "mismatch"):
         args[1] = ref[:-1] if ref.shape[0] else np.zeros((1, 4))
         must_fail = must_fail or "lengths differ"
+    given = list(args)
     must_fail = maybe_junk(d, args, [(4,), (4,)], ["quats", "reference"], must_fail)
 
     def check(out):
-        shape_is(out, (p.rows,))
+        if all(a is g for a, g in zip(args, given)):
+            shape_is(out, (p.rows,))
         in_range(out, 0, np.pi)
     return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
 
@@ -772,10 +774,12 @@ def build_interval_speeds(fn, d):
     p = draw_path(d)
     args = [p.times, p.quats]
     must_fail = path_only_fail(p, "times", "quats") or needs(p.rows >= 2, "fewer than 2 samples")
+    given = list(args)
     must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
 
     def check(out):
-        shape_is(out, (p.rows - 1,))
+        if all(a is g for a, g in zip(args, given)):
+            shape_is(out, (p.rows - 1,))
         in_range(out, 0, DMAX, "speeds")
     return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
 
@@ -784,10 +788,12 @@ def build_segment_speed_ratios(fn, d):
     p = draw_path(d)
     args = [p.times, p.quats, p.keys]
     must_fail = p.must_fail
+    given = list(args)
     must_fail = maybe_junk(d, args, [(), (4,), ()], ["times", "quats", "key_times"], must_fail)
 
     def check(out):
-        shape_is(out, (max(p.keys.size - 1, 0),))
+        if all(a is g for a, g in zip(args, given)):
+            shape_is(out, (max(p.keys.size - 1, 0),))
         finite(out, "speed ratios", allow_posinf=True)
         expect(np.all(out >= 1 - 1e-12), f"speed ratio below 1: {out.min()!r}")
     return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)
@@ -801,10 +807,12 @@ def build_segment_speed_ratios_from_velocity(fn, d):
     if "quats" in p.must_fail and p.rows:
         poison(d.rng, vel, "vec", True)
         must_fail = "poisoned velocities"
+    given = list(args)
     must_fail = maybe_junk(d, args, [(), (3,), ()], ["times", "velocities", "key_times"], must_fail)
 
     def check(out):
-        shape_is(out, (max(p.keys.size - 1, 0),))
+        if all(a is g for a, g in zip(args, given)):
+            shape_is(out, (max(p.keys.size - 1, 0),))
         finite(out, "speed ratios", allow_nan=True, allow_posinf=True)
         ok = out[~np.isnan(out)]
         expect(np.all(ok >= 1 - 1e-12), f"speed ratio below 1: {ok.min() if ok.size else None!r}")
@@ -826,12 +834,14 @@ def build_path_length(fn, d):
 def build_key_jumps(fn, d):
     p = draw_path(d)
     args = [p.times, p.quats, p.keys]
+    given = list(args)
     must_fail = maybe_junk(d, args, [(), (4,), ()], ["times", "quats", "key_times"], p.must_fail)
 
     def check(out):
         expect(isinstance(out, tuple) and len(out) == 2, "key_jumps: not a pair")
         for name, o in zip(("velocity", "acceleration"), out):
-            shape_is(o, (p.keys.size,), name)
+            if all(a is g for a, g in zip(args, given)):
+                shape_is(o, (p.keys.size,), name)
             finite(o, name + " jumps", allow_nan=True)
             in_range(o[~np.isnan(o)], 0, DMAX, name + " jumps")
     return Case(lambda: fn(*args), max(p.rows, 1), check, must_fail, p.rows * 8, args)

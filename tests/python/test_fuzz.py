@@ -307,6 +307,26 @@ def test_reduce_euler_refuses_angles_beyond_float32():
         qc.reduce_keys_euler([-80.0, -79.0], angles, "XYZ", 4.0, "BEZIER")
 
 
+@pytest.mark.parametrize("euler", [False, True], ids=["quats", "euler"])
+def test_reduce_linear_bound_holds_or_input_is_refused(euler):
+    """LINEAR, tolerance 0, detailed: a value beyond float32 (Blender stores float32) made
+    max_error π — the bound the result promises did not hold, and nothing said so."""
+    times = np.arange(2.0, 6.0)
+    if euler:
+        values = np.array([[-np.pi / 2, np.pi / 2, np.pi / 2], [5.19, 1.34, 2.88], [0.55, 5.47, 3.97],
+                           [-0.077, 3.6e-247, 2.3714408279079944e+258]])
+        call = lambda: qc.reduce_keys_euler(times, values, "XYZ", 0.0, "LINEAR", detailed=True)  # noqa: E731
+    else:
+        values = np.array([[1.44e-223, 2.36e-224, -1.21e-223, 8.14e-224], [1.0, 6.4e-136, -3e-159, -2.9e-38],
+                           [-1e-155, -0.10257528408332377, 1.4492596851314581, -3.55e-188], [DMAX, 0.0, 1.0, 0.0]])
+        call = lambda: qc.reduce_keys(times, values, 0.0, "LINEAR", detailed=True)  # noqa: E731
+    try:
+        result = call()
+    except ValueError:
+        return
+    assert result.max_error <= 1e-6, f"max_error {result.max_error} rad for tolerance 0"
+
+
 def test_reduce_refuses_frames_and_values_beyond_float32():
     quats = [[1.0, 0, 0, 0], [0, 1.0, 0, 0], [1.0, 0, 0, 0]]
     with pytest.raises(ValueError):
