@@ -108,9 +108,9 @@ class Target:
         return self.owner.path_from_id(prop)
 
 
-def gather_targets(context):
+def gather_targets(context, verb="bake"):
     """The selection: selected pose bones in Pose mode, selected objects otherwise; sorted by name.
-    Raises BakeError when nothing is selected."""
+    Raises BakeError when nothing is selected ("Nothing to <verb>: …")."""
     if context.mode == "POSE":
         bones = list(getattr(context, "selected_pose_bones", None) or [])
         targets = [Target(pb.id_data, pb.name) for pb in bones]
@@ -122,7 +122,7 @@ def gather_targets(context):
         targets = [Target(o) for o in objects]
         what = "objects selected (Object mode)"
     if not targets:
-        raise BakeError("Nothing to bake: no %s" % what)
+        raise BakeError("Nothing to %s: no %s" % (verb, what))
     return sorted(targets, key=lambda t: (t.object.name, t.bone or ""))
 
 
@@ -460,9 +460,12 @@ def output_values(quats, mode, reference=None):
     return angles
 
 
-# Key reduction (issue 6). None until `quatcurve.reduce_keys` exists; then a function
-# reduce_keys(frames, quats, values, mode, tolerance_radians) -> (frames, values[, handles]) replaces
-# the dense keys of one target. check_settings refuses tolerance > 0 while it is None.
+# Key reduction hook (issue 6). While None, check_settings refuses tolerance > 0. Set it to a function
+#     reduce_keys(frames (N,), values (N, C), mode, tolerance_radians) -> reduced
+# where `reduced` has .interpolation ('LINEAR' or 'BEZIER'), .keys — per channel (frames, values,
+# handle_left, handle_right), handles (K, 2) for BEZIER or None — .key_count and .max_error (radians);
+# it raises ValueError when it cannot reduce. The bake then writes those keys instead of the dense ones
+# and reports keys and max error. (reduce.reduce_values has exactly this shape.)
 reduce_keys = None
 
 
@@ -477,6 +480,7 @@ class TargetBake:
     frames: np.ndarray = None
     values: np.ndarray = None    # (N, 3|4) output channel values
     own_action: bool = False     # in place was asked for, but others play the action: copy it
+    reduced: object = None       # reduce_keys' result when tolerance > 0
     notes: list = field(default_factory=list)
 
 
@@ -563,6 +567,15 @@ class BakePlan:
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
             raise BakeError("%s: the %s curve gave non-finite values" % (item.target.name, settings.method))
+        if settings.tolerance > 0:
+            try:
+                item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
+                                           math.radians(settings.tolerance))
+            except ValueError as error:
+                raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
+            item.notes.append("%s: reduced to %s keys within %s° (max error %.4f°)" % (
+                item.target.name, f"{item.reduced.key_count:,}", _num(settings.tolerance),
+                math.degrees(item.reduced.max_error)))
 
     def write(self):
         """Writes every computed target (see module doc); returns the BakeResult."""
@@ -589,9 +602,10 @@ class BakePlan:
                 destination[id_data.name_full] = action
             action = destination[id_data.name_full]
             channels = fcurves.Channels.of(id_data, action, create=True)
-            result.keys_written += _write_target(channels, item)
+            written = _write_target(channels, item)
+            result.keys_written += written
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
-                                               len(item.source.frames), item.values.size, action.name,
+                                               len(item.source.frames), written, action.name,
                                                item.source.notes + item.notes))
         for item in self.items:
             id_data = item.target.id_data
@@ -618,6 +632,11 @@ def _write_target(channels, item):
     channels.remove(paths, count=4)  # rotation properties have at most 4 channels
     prop, count = fcurves.rotation_property(item.output_mode)
     path = target.data_path(prop)
+    if item.reduced is not None:
+        for i, (frames, values, left, right) in enumerate(item.reduced.keys):
+            channels.write(path, i, frames, values, group=group, interpolation=item.reduced.interpolation,
+                           handle_left=left, handle_right=right)
+        return item.reduced.key_count
     for i in range(count):
         channels.write(path, i, item.frames, item.values[:, i], group=group)
     return item.values.size

@@ -265,3 +265,31 @@ def test_panel_settings_drive_the_operator(scene):
     frames, _ = fcurves.read_keys(fcurves.Channels.of(obj).find("rotation_quaternion", 0))
     np.testing.assert_array_equal(frames, [11, 21])
     assert "NLERP" in settings.last_lines
+
+
+def test_tolerance_goes_through_the_reduction_hook(scene, monkeypatch):
+    """With a reducer plugged into bake.reduce_keys, tolerance > 0 writes its keys (here: every
+    other frame, LINEAR) and reports them."""
+    class Reduced:
+        interpolation = "LINEAR"
+
+        def __init__(self, frames, values):
+            self.keys = [(frames[::2], values[::2, i], None, None) for i in range(values.shape[1])]
+            self.key_count = sum(len(k[0]) for k in self.keys)
+            self.max_error = math.radians(0.05)
+
+    calls = []
+
+    def reducer(frames, values, mode, tolerance):
+        calls.append((mode, tolerance))
+        return Reduced(frames, values)
+
+    monkeypatch.setattr(bake, "reduce_keys", reducer)
+    obj = add_empty("Cube", "XYZ")
+    key(obj, "rotation_euler", [(1, (0, 0, 0)), (21, (0, 0, 90))], degrees=True)
+    select_objects(obj)
+    settings = run_bake(method="SLERP", rotation_mode="QUATERNION", tolerance=0.5)
+    assert calls == [("QUATERNION", pytest.approx(math.radians(0.5)))]
+    frames, _ = fcurves.read_keys(fcurves.Channels.of(obj).find("rotation_quaternion", 0))
+    np.testing.assert_array_equal(frames, np.arange(1, 22, 2))
+    assert settings.last_keys == 44 and "reduced to 44 keys within 0.5°" in settings.last_lines
