@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 from mathutils import Quaternion
 
-from bake_helpers import (add_empty, add_rig, angles_between, evaluated, key, select_bones, select_objects,
-                          set_interpolation)
+from bake_helpers import add_empty, add_rig, angles_between, evaluated, key, select_bones, select_objects
 from quatcurve_blender import bake, fcurves
 
 TOL = 2e-5  # rad: float32 key storage, far below any interpolation difference
