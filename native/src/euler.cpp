@@ -16,6 +16,11 @@ constexpr double kTwoPi = 2.0 * kPi;
 // cos(middle angle) at or below this is gimbal lock: the first and last axes coincide to the last
 // bit (cos(π/2) in double is 6.1e-17).
 constexpr double kLockCos = 16.0 * DBL_EPSILON;
+// euler_compat treats |cos(middle angle)| at or below this as locked, as Blender does
+// (16·FLT_EPSILON): rotations stored in float32 reach a 90° middle angle only to ~4e-8, and there the
+// two ordinary solutions are both far from a continuous neighbour while the locked family holds one
+// next to it. The family member then represents the input to within π·1.9e-6 rad.
+constexpr double kCompatLockCos = 16.0 * static_cast<double>(FLT_EPSILON);
 
 struct Axes {
     int i, j, k;  // first, middle, last axis (0 = X, 1 = Y, 2 = Z)
@@ -155,26 +160,27 @@ Vec3 euler_compat(const Vec3& given, EulerOrder order, const Vec3& ref) {
     const Axes ax = axes_of(order);
     const int i = ax.i, j = ax.j, k = ax.k;
     const double b = angles[j];
-    Vec3 out;
-    if (std::fabs(std::cos(b)) > kLockCos) {
-        // The two solutions, each angle moved by whole turns towards ref (L1 is separable per angle).
-        Vec3 first, second;
-        for (int n = 0; n < 3; ++n) first[n] = nearest_turn(angles[n], ref[n]);
-        second[i] = nearest_turn(angles[i] + kPi, ref[i]);
-        second[j] = nearest_turn(kPi - b, ref[j]);
-        second[k] = nearest_turn(angles[k] + kPi, ref[k]);
-        out = l1(second, ref) < l1(first, ref) ? second : first;
-    } else {
-        // Gimbal lock: only a − σ·c matters (mod 2π), where (a+t, b, c+σt) keeps the rotation;
-        // σ = +1 when the middle turn maps the first axis onto minus the last (even order, sin b > 0).
-        const double sigma = (std::sin(b) > 0.0) != ax.odd ? 1.0 : -1.0;
-        const double a = angles[i], c = angles[k];
-        const double d = std::remainder((ref[i] - a) - sigma * (ref[k] - c), kTwoPi);
-        // The L1 minimum is |d|, reached by splitting d evenly between the two angles.
-        out[i] = ref[i] - 0.5 * d;
-        out[k] = nearest_turn(c + sigma * (out[i] - a), ref[k]);
-        out[j] = nearest_turn(b, ref[j]);
-    }
+    // The two ordinary solutions, each angle moved by whole turns towards ref (L1 is separable).
+    Vec3 first, second;
+    for (int n = 0; n < 3; ++n) first[n] = nearest_turn(angles[n], ref[n]);
+    second[i] = nearest_turn(angles[i] + kPi, ref[i]);
+    second[j] = nearest_turn(kPi - b, ref[j]);
+    second[k] = nearest_turn(angles[k] + kPi, ref[k]);
+    Vec3 out = l1(second, ref) < l1(first, ref) ? second : first;
+    const double cos_b = std::fabs(std::cos(b));
+    if (cos_b > kCompatLockCos) return out;
+    // (Near) gimbal lock: only a − σ·c matters (mod 2π), where (a+t, b, c+σt) keeps the rotation;
+    // σ = +1 when the middle turn maps the first axis onto minus the last (even order, sin b > 0).
+    // The L1 minimum over that family is |d|, reached by splitting d evenly between the two angles.
+    const double sigma = (std::sin(b) > 0.0) != ax.odd ? 1.0 : -1.0;
+    const double a = angles[i], c = angles[k];
+    const double d = std::remainder((ref[i] - a) - sigma * (ref[k] - c), kTwoPi);
+    Vec3 family;
+    family[i] = ref[i] - 0.5 * d;
+    family[k] = nearest_turn(c + sigma * (family[i] - a), ref[k]);
+    family[j] = nearest_turn(b, ref[j]);
+    // At exact lock the family is the rotation; near it, it is a candidate beside the exact two.
+    if (cos_b <= kLockCos || l1(family, ref) < l1(out, ref)) out = family;
     return out;
 }
 

@@ -299,7 +299,12 @@ def test_quat_to_euler_compat_recovers_the_keyed_angles(rng, order):
     q = qc.euler_to_quat(angles, order)
     ref = angles + rng.uniform(-0.3, 0.3, (N, 3))
     got = qc.quat_to_euler(q, order, compat=ref)
-    assert rotation_angle(qc.euler_to_quat(got, order), q).max() < 5e-14
+    # Exact but within 16·FLT_EPSILON of gimbal lock, which compat treats as locked (as Blender does:
+    # float32 data reaches a lock only that closely), where the locked family nearest ref is returned.
+    locked = np.abs(np.cos(angles[:, MIDDLE[order]])) <= 16 * np.finfo(np.float32).eps
+    error = rotation_angle(qc.euler_to_quat(got, order), q)
+    assert error[~locked].max() < 5e-14
+    assert error.max() < 2 * np.pi * 16 * np.finfo(np.float32).eps
     far = np.abs(np.cos(angles[:, MIDDLE[order]])) > 1e-3
     np.testing.assert_allclose(got[far], angles[far], atol=1e-9)
     # never farther from ref than the keyed angles (the minimum over every equivalent triple)
