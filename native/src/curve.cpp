@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "curve_impl.hpp"
@@ -51,13 +53,80 @@ void check_per_key(const std::vector<double>& v, const char* name, double lo, do
     }
 }
 
-void check_times(const std::vector<double>& t) {
+// Key times the engine can follow in double precision (curve.hpp, "Key times"): finite, strictly
+// increasing, consecutive keys kMinSpacing..kMaxSpacing frames apart and at least kTimeResolution of
+// their magnitude apart (sub-keys and sample parameters stay resolvable: t = 1, 1 + ulp is refused);
+// for the methods whose tangents mix neighbouring segments (SQUAD, TCB, CATMULL_ROM, SPLINE_C2) also
+// neighbouring spacings within a factor kMaxSpacingRatio (beyond it the short segment's velocity
+// stretched over the long one is a rotation of ~1e6 turns, and SPLINE_C2's cubic loses the keys to
+// cancellation).
+constexpr double kMinSpacing = 1e-9;
+constexpr double kMaxSpacing = 1e12;
+constexpr double kTimeResolution = 0x1p-32;  // ≈ 2.3e-10
+constexpr double kMaxSpacingRatio = 1e6;
+
+// x in the fewest significant digits (up to 17) that read back as x.
+std::string num(double x) {
+    char buf[32];
+    for (int digits = 6; digits <= 17; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+        if (std::strtod(buf, nullptr) == x) break;
+    }
+    return buf;
+}
+
+void check_times(const std::vector<double>& t, Method method) {
     if (t.empty()) throw InvalidArgument("times: at least one key is needed");
+    const bool tangents = method == Method::SQUAD || method == Method::TCB || method == Method::CATMULL_ROM ||
+                          method == Method::SPLINE_C2;
+    auto name = [](std::size_t i) { return "times[" + std::to_string(i) + "]"; };
     for (std::size_t i = 0; i < t.size(); ++i) {
-        if (!std::isfinite(t[i])) throw InvalidArgument("times[" + std::to_string(i) + "]: not a finite number");
-        if (i > 0 && !(t[i] > t[i - 1]))
-            throw InvalidArgument("times[" + std::to_string(i) + "]: not increasing (" + std::to_string(t[i]) +
-                                  " after " + std::to_string(t[i - 1]) + ")");
+        if (!std::isfinite(t[i])) throw InvalidArgument(name(i) + ": not a finite number");
+        if (i == 0) continue;
+        if (!(t[i] > t[i - 1]))
+            throw InvalidArgument(name(i) + ": not increasing (" + num(t[i]) + " after " + num(t[i - 1]) + ")");
+        const double h = t[i] - t[i - 1];  // may overflow to inf: refused below
+        auto gap = [&] { return name(i) + ": " + num(h) + " frames after " + name(i - 1); };
+        if (!(h >= kMinSpacing))
+            throw InvalidArgument(gap() + "; consecutive keys must be at least " + num(kMinSpacing) + " frames apart");
+        if (!(h <= kMaxSpacing))
+            throw InvalidArgument(gap() + "; consecutive keys may be at most " + num(kMaxSpacing) + " frames apart");
+        const double mag = std::fmax(std::fabs(t[i]), std::fabs(t[i - 1]));
+        if (h < kTimeResolution * mag)
+            throw InvalidArgument(gap() + ", below the resolution of times near " + num(mag) +
+                                  " (keys must be at least 2^-32 of their magnitude apart)");
+        if (tangents && i >= 2) {
+            const double h0 = t[i - 1] - t[i - 2];
+            if (h > kMaxSpacingRatio * h0 || h0 > kMaxSpacingRatio * h)
+                throw InvalidArgument(gap() + " next to a spacing of " + num(h0) + " frames: " +
+                                      method_name(method) + " needs neighbouring key spacings within a factor of " +
+                                      num(kMaxSpacingRatio));
+        }
+    }
+}
+
+// Euler keys the engine can follow: every angle within ±kMaxEulerAngle (beyond it a double steps
+// by more than 1e-9 rad, so the path between keys cannot be followed), and every angle changing
+// by at most kMaxEulerTurn per segment (the path's turn is followed step by step: the work and the
+// sub-keys grow with it). 1e300 rad is refused rather than reduced to an arbitrary orientation.
+constexpr double kMaxEulerAngle = 1e6 * kTwoPi;
+constexpr double kMaxEulerTurn = 1e4 * kTwoPi;
+
+void check_euler_keys(const std::vector<Vec3>& angles) {
+    for (std::size_t i = 0; i < angles.size(); ++i) {
+        const Vec3& a = angles[i];
+        if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(a.z))
+            check_finite(a, "angles[" + std::to_string(i) + "]");
+        for (int k = 0; k < 3; ++k) {
+            auto name = [&] { return "angles[" + std::to_string(i) + "][" + std::to_string(k) + "]"; };
+            if (std::fabs(a[k]) > kMaxEulerAngle)
+                throw InvalidArgument(name() + ": " + num(a[k]) + " rad is beyond the supported ±1e6 turns (" +
+                                      num(kMaxEulerAngle) + " rad)");
+            if (i > 0 && std::fabs(a[k] - angles[i - 1][k]) > kMaxEulerTurn)
+                throw InvalidArgument(name() + ": segment turns " + num(a[k] - angles[i - 1][k]) + " rad from angles[" +
+                                      std::to_string(i - 1) + "], more than the supported 10000 turns (" +
+                                      num(kMaxEulerTurn) + " rad) per segment");
+        }
     }
 }
 
@@ -89,18 +158,32 @@ Vec3 lift_euler_path(const Vec3& a0, const Vec3& a1, EulerOrder order, const Qua
     return r;
 }
 
-// Cumulative turning angle of the Euler path a0 → a1 at n + 1 equally spaced parameters (steps of
-// at most 0.05 rad in ‖Δa‖₁, which bounds each step's rotation): cum[k] at s = k/n.
+// Cumulative turning angle of the Euler path a0 → a1 at n + 1 equally spaced parameters: cum[k] at
+// s = k/n. With R = R_last(a_l)·R_mid(a_m)·R_first(a_f) and a(s) = a0 + s·d the speed is
+//   |ω(s)|² = d_f² + d_m² + d_l² + 2ε·d_l·d_f·sin(a_m(s)),   ε = e_last·(e_mid × e_first),
+// (|ω|² = |R_lastᵀω|², and R_mid leaves e_mid fixed), so it depends on the middle angle only: constant
+// when d_m = 0 or d_l·d_f = 0 (n = 1), otherwise Simpson's rule on cells where the middle angle
+// moves at most 0.05 rad (relative error below 1e-8). The work grows with the middle angle's turn
+// only, which check_euler_keys bounds.
 void euler_path_length(const Vec3& a0, const Vec3& a1, EulerOrder order, std::vector<double>& cum) {
+    const char* name = euler_order_name(order);
+    const int f = name[0] - 'X', m = name[1] - 'X', l = name[2] - 'X';
+    Vec3 ef(0.0), em(0.0), el(0.0);
+    ef[f] = em[m] = el[l] = 1.0;
+    const double eps = glm::dot(el, glm::cross(em, ef));
     const Vec3 d = a1 - a0;
-    const double len = std::fabs(d.x) + std::fabs(d.y) + std::fabs(d.z);
-    const std::size_t n = static_cast<std::size_t>(std::ceil(len / 0.05)) + 1;
+    const double P = glm::dot(d, d), Q = 2.0 * eps * d[l] * d[f];
+    const double dm = d[m];
+    const std::size_t n = Q == 0.0 || dm == 0.0 ? 1 : static_cast<std::size_t>(std::ceil(std::fabs(dm) / 0.05));
+    auto speed = [&](double s) { return std::sqrt(std::fmax(0.0, P + Q * std::sin(a0[m] + s * dm))); };
     cum.assign(n + 1, 0.0);
-    Quat prev = euler_to_quat(a0, order);
+    const double ds = 1.0 / static_cast<double>(n);
+    double v0 = speed(0.0);
     for (std::size_t k = 1; k <= n; ++k) {
-        const Quat q = euler_to_quat(a0 + d * (static_cast<double>(k) / static_cast<double>(n)), order);
-        cum[k] = cum[k - 1] + angle_between(prev, q);
-        prev = q;
+        const double s1 = k == n ? 1.0 : static_cast<double>(k) * ds;
+        const double v1 = speed(s1), vm = speed(s1 - 0.5 * ds);
+        cum[k] = cum[k - 1] + ds * (v0 + 4.0 * vm + v1) / 6.0;
+        v0 = v1;
     }
 }
 
@@ -168,7 +251,7 @@ Curve::Curve(std::vector<double> times, const std::vector<Quat>& quats, Method m
     : Curve(method, std::move(options)) {
     if (method == Method::EULER)
         throw InvalidArgument("method: EULER interpolates Euler angles; build it with Curve::from_euler");
-    check_times(times);
+    check_times(times, method);
     if (quats.size() != times.size())
         throw InvalidArgument("quats: " + std::to_string(quats.size()) + " keys for " +
                               std::to_string(times.size()) + " times");
@@ -195,11 +278,11 @@ Curve Curve::from_euler(std::vector<double> times, const std::vector<Vec3>& angl
                         Method method, CurveOptions options) {
     Curve c(method, std::move(options));
     euler_order_name(order);
-    check_times(times);
+    check_times(times, method);
     if (angles.size() != times.size())
         throw InvalidArgument("angles: " + std::to_string(angles.size()) + " keys for " +
                               std::to_string(times.size()) + " times");
-    for (std::size_t i = 0; i < angles.size(); ++i) check_finite(angles[i], "angles[" + std::to_string(i) + "]");
+    check_euler_keys(angles);
     c.times_ = std::move(times);
     c.angles_ = angles;
     c.order_ = order;

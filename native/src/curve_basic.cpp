@@ -1,5 +1,6 @@
 // The one-segment-at-a-time methods: EULER (angles linear), QUAT_COMPONENTS and NLERP (components
 // linear, then normalized), SLERP (constant angular speed).
+#include <algorithm>
 #include <cmath>
 
 #include "curve_impl.hpp"
@@ -30,6 +31,21 @@ inline EulerEval euler_eval(const int* ax, const Vec3& a) {
     e.q = mul(e.q_last_mid, axis_q4(ax[0], a[ax[0]]));
     return e;
 }
+// Below this |p|² a lerped quaternion is normalized through its largest component (p may be tiny,
+// or exactly 0 in the middle of opposite QUAT_COMPONENTS keys).
+constexpr double kLerpTiny = 1e-200;
+inline double max_abs(const Q4& p) {
+    return std::fmax(std::fmax(std::fabs(p.w), std::fabs(p.x)), std::fmax(std::fabs(p.y), std::fabs(p.z)));
+}
+// p/|p| computed as (p/max|p_i|)/|…|; p = 0 gives (0, 1, 0, 0), as Blender's normalize_qt does.
+inline Q4 normalized_small(Q4 p) {
+    const double mx = max_abs(p);
+    if (mx == 0.0) return {0.0, 1.0, 0.0, 0.0};
+    p = {p.w / mx, p.x / mx, p.y / mx, p.z / mx};
+    const double k = 1.0 / std::sqrt(p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z);
+    return {p.w * k, p.x * k, p.y * k, p.z * k};
+}
+
 inline Vec3 unit(int axis, double value) {
     Vec3 v(0.0);
     v[axis] = value;
@@ -38,13 +54,31 @@ inline Vec3 unit(int axis, double value) {
 
 }  // namespace
 
-// NLERP / QUAT_COMPONENTS: p(s) = p[i] + s·(p[i+1] − p[i]) on the knots kt.
+// Scales a non-zero quaternion by a power of two (exact) so that its largest component lies in [1, 2);
+// returns the exponent removed.
+int scale_to_unit_exponent(Q4& q) {
+    const double m = std::fmax(std::fmax(std::fabs(q.w), std::fabs(q.x)), std::fmax(std::fabs(q.y), std::fabs(q.z)));
+    const int e = std::ilogb(m);
+    q = {std::ldexp(q.w, -e), std::ldexp(q.x, -e), std::ldexp(q.y, -e), std::ldexp(q.z, -e)};
+    return e;
+}
+
+// NLERP / QUAT_COMPONENTS: p(s) = p[i] + s·(p[i+1] − p[i]) on the knots kt. Only p's direction is
+// used, so both ends of a segment are scaled by one power of two (exact): raw keys of any size
+// (Blender's channels, 1.7e308 or 1e-300) lerp without overflow or underflow. Ends whose sizes differ
+// by more than 2^500 are brought to 2^500 apart, which changes the curve only within 2^-500 of a key
+// (where the true angular velocity is beyond any sensible range).
 void build_lerp(Curve::Impl& m, const std::vector<double>& kt, const std::vector<Quat>& p) {
     if (&kt != &m.kt) m.kt = kt;
     m.lerp.resize(kt.size() - 1);
     for (std::size_t i = 0; i + 1 < kt.size(); ++i) {
-        const Q4 a = q4(p[i]), b = q4(p[i + 1]);
-        m.lerp[i] = {kt[i], 1.0 / (kt[i + 1] - kt[i]), a, {b.w - a.w, b.x - a.x, b.y - a.y, b.z - a.z}};
+        Q4 a = q4(p[i]), b = q4(p[i + 1]);
+        const int ea = scale_to_unit_exponent(a), eb = scale_to_unit_exponent(b);
+        const int rel = std::max(-500, std::min(500, eb - ea));
+        if (rel < 0) b = {std::ldexp(b.w, rel), std::ldexp(b.x, rel), std::ldexp(b.y, rel), std::ldexp(b.z, rel)};
+        if (rel > 0) a = {std::ldexp(a.w, -rel), std::ldexp(a.x, -rel), std::ldexp(a.y, -rel), std::ldexp(a.z, -rel)};
+        const Q4 c = mul(b, {a.w, -a.x, -a.y, -a.z});
+        m.lerp[i] = {kt[i], kt[i + 1], 1.0 / (kt[i + 1] - kt[i]), a, b, Vec3(c.x, c.y, c.z)};
     }
 }
 
@@ -73,44 +107,53 @@ void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::ve
     m.last_q = to_quat(euler_eval(m.euler_axes, angles.back()).q);
 }
 
-// q = p/|p|. A zero p (only at the middle of exactly opposite QUAT_COMPONENTS keys) gives
-// (0, 1, 0, 0), as Blender's normalize_qt does.
+// q = p/|p|; below |p|² = kLerpTiny through p's largest component (normalized_small). A zero p
+// (only at the middle of exactly opposite QUAT_COMPONENTS keys) gives (0, 1, 0, 0), as Blender's
+// normalize_qt does.
 void sample_lerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const LerpSeg* seg = m.lerp.data();
     drive(
         m.kt, times, n,
         [&](std::size_t i, std::size_t j, double t) {
             const LerpSeg& g = seg[j];
-            const double s = (t - g.t0) * g.inv_h;
-            const Q4 p{g.p0.w + s * g.dp.w, g.p0.x + s * g.dp.x, g.p0.y + s * g.dp.y, g.p0.z + s * g.dp.z};
+            const double s = (t - g.t0) * g.inv_h, r = (g.t1 - t) * g.inv_h;
+            const Q4 p{r * g.a.w + s * g.b.w, r * g.a.x + s * g.b.x, r * g.a.y + s * g.b.y, r * g.a.z + s * g.b.z};
             const double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
-            if (n2 > 0.0) {
+            if (n2 > kLerpTiny) {
                 const double k = 1.0 / std::sqrt(n2);
                 store(Q4{p.w * k, p.x * k, p.y * k, p.z * k}, out + 4 * i);
             } else {
-                store(Q4{0.0, 1.0, 0.0, 0.0}, out + 4 * i);
+                store(normalized_small(p), out + 4 * i);
             }
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
-// ω = 2·vec(ṗ·conj(p))/|p|² (the radial part of ṗ does not turn q); zero where p = 0.
+// ω = 2·vec(ṗ·conj(p))/|p|² (the radial part of ṗ does not turn q) = 2·c/(h·|p|²) with
+// c = vec(b·conj(a)), since vec(a·conj(a)) = 0; zero where p = 0; for a tiny p through p's largest
+// component.
 void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const LerpSeg* seg = m.lerp.data();
     drive(
         m.kt, times, n,
         [&](std::size_t i, std::size_t j, double t) {
             const LerpSeg& g = seg[j];
-            const double s = (t - g.t0) * g.inv_h;
-            const Q4 p{g.p0.w + s * g.dp.w, g.p0.x + s * g.dp.x, g.p0.y + s * g.dp.y, g.p0.z + s * g.dp.z};
-            const double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
-            if (n2 > 0.0) {
-                const Q4 d = mul(g.dp, {p.w, -p.x, -p.y, -p.z});
-                const double k = 2.0 * g.inv_h / n2;
-                store(Vec3(d.x * k, d.y * k, d.z * k), out + 3 * i);
-            } else {
-                store(Vec3(0.0), out + 3 * i);
+            const double s = (t - g.t0) * g.inv_h, r = (g.t1 - t) * g.inv_h;
+            Q4 p{r * g.a.w + s * g.b.w, r * g.a.x + s * g.b.x, r * g.a.y + s * g.b.y, r * g.a.z + s * g.b.z};
+            double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
+            double k = 2.0 * g.inv_h;
+            if (!(n2 > kLerpTiny)) {  // p near 0: |p|² = mx²·|p/mx|², c/mx² taken in two steps
+                const double mx = max_abs(p);
+                if (mx == 0.0) {
+                    store(Vec3(0.0), out + 3 * i);
+                    return;
+                }
+                p = {p.w / mx, p.x / mx, p.y / mx, p.z / mx};
+                n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
+                store((k / n2) * ((g.c / mx) / mx), out + 3 * i);
+                return;
             }
+            store((k / n2) * g.c, out + 3 * i);
         },
         [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
 }

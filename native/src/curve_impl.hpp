@@ -15,10 +15,14 @@ namespace quatcurve {
 
 namespace detail {
 
-// p(s) = p0 + s·dp, q = p/|p| (NLERP, QUAT_COMPONENTS).
+// p = r·a + s·b with s = (t − t0)/h, r = (t1 − t)/h, q = p/|p| (NLERP, QUAT_COMPONENTS);
+// c = vec(b·conj(a)), so that ω = 2·c/(h·|p|²). The two weights make p exactly a multiple of a at t0
+// and of b at t1 even when |a| and |b| differ by many orders of magnitude (a + s·(b − a) loses b to
+// cancellation, and 1 − s at t1 may be an ulp instead of 0).
 struct LerpSeg {
-    double t0, inv_h;
-    Q4 p0, dp;
+    double t0, t1, inv_h;
+    Q4 a, b;
+    Vec3 c;
 };
 // q(s) = a·cos(sθ/2) + b·sin(sθ/2)/θ with a = Q, b = Q·(0, r), θ² = r2 (SLERP).
 struct SlerpSeg {

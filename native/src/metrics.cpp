@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 
 #include "quatcurve/errors.hpp"
@@ -17,6 +19,16 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Key times match sample times within this many frames (Blender stores frames as float32; callers
 // pass sample grids that contain the key times exactly, so this only absorbs rounding).
 constexpr double kTimeMatch = 1e-6;
+
+// x in the fewest significant digits (up to 17) that read back as x.
+std::string shortest(double x) {
+    char buf[32];
+    for (int digits = 6; digits <= 17; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+        if (std::strtod(buf, nullptr) == x) break;
+    }
+    return buf;
+}
 
 std::string element(const std::string& name, std::size_t i) {
     return name + "[" + std::to_string(i) + "]";
@@ -186,8 +198,16 @@ std::vector<double> interval_speeds(const std::vector<double>& times, const std:
                                                 std::to_string(times.size()));
     const std::vector<Quat> q = normalized_all(quats, "quats");
     std::vector<double> out(q.size() - 1);
-    for (std::size_t i = 0; i + 1 < q.size(); ++i)
-        out[i] = angle_between(q[i], q[i + 1]) / (times[i + 1] - times[i]);
+    for (std::size_t i = 0; i + 1 < q.size(); ++i) {
+        // An interval too short for its angle (subnormal spacing) has a speed beyond double range:
+        // refused rather than reported as inf. An interval whose length overflows gives 0.
+        const double angle = angle_between(q[i], q[i + 1]);
+        out[i] = angle / (times[i + 1] - times[i]);
+        if (!std::isfinite(out[i]))
+            throw InvalidArgument(element("times", i + 1) + ": speed over the interval from " + element("times", i) +
+                                  " overflows (" + shortest(angle) + " rad in " +
+                                  shortest(times[i + 1] - times[i]) + " frames)");
+    }
     return out;
 }
 

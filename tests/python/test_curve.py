@@ -352,6 +352,12 @@ def test_tcb_options():
     (([0, 1], [[1, 0, 0, 0]] * 2, "TCB"), {"ease_in": -0.1}, "ease_in"),
     (([0, 1], [[1, 0, 0, 0]] * 2, "TCB"), {"ease_out": [[0.1]]}, "ease_out"),
     (([0, 1], [[1, 0, 0, 0], [-1, 0, 0, 0]]), {"shortest_path": False}, "opposite"),
+    # key times double precision cannot follow
+    (([0, 5e-324], [[1, 0, 0, 0]] * 2), {}, r"times\[1\].*at least 1e-09 frames"),
+    (([-1.7976931348623157e308, 0.0, 1.7976931348623157e308], [[1, 0, 0, 0]] * 3), {}, r"times\[1\].*at most 1e\+12"),
+    (([1.0, np.nextafter(1.0, 2.0)], [[1, 0, 0, 0]] * 2), {}, r"times\[1\].*at least 1e-09 frames"),
+    (([1e15, 1e15 + 1], [[1, 0, 0, 0]] * 2), {}, r"times\[1\].*resolution"),
+    (([0, 1e-3, 1e4], [[1, 0, 0, 0]] * 3, "SPLINE_C2"), {}, r"times\[2\].*SPLINE_C2.*factor of 1e\+06"),
 ])
 def test_bad_input_raises_value_error(args, kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -369,6 +375,11 @@ def test_bad_input_from_euler_and_sampling():
         qc.Curve.from_euler([0, 1], np.zeros((2, 4)))
     with pytest.raises(ValueError, match="method"):
         qc.Curve.from_euler([0, 1], np.zeros((2, 3)), "XYZ", "BEZIER")
+    for method in ALL:  # a turn double precision cannot follow is refused at once, never followed
+        with pytest.raises(ValueError, match=r"angles\[1\]\[2\]: segment turns 100000 rad.*10000 turns"):
+            qc.Curve.from_euler([0, 1], [[0, 0, 0], [0, 0, 1e5]], method=method)
+        with pytest.raises(ValueError, match=r"angles\[0\]\[1\]: 1e\+300 rad is beyond"):
+            qc.Curve.from_euler([0, 1], [[0, 1e300, 0], [0, 1e300, 0]], method=method)
     c = qc.Curve([0, 1], [[1, 0, 0, 0]] * 2)
     with pytest.raises(ValueError, match=r"times\[1\]"):
         c.sample([0.5, np.nan])
@@ -376,3 +387,32 @@ def test_bad_input_from_euler_and_sampling():
         c.angular_velocity([np.inf])
     with pytest.raises(ValueError, match="times"):
         c.sample("x")
+
+
+def test_local_methods_accept_uneven_spacing_and_keep_long_spins():
+    """The spacing-ratio limit is for the tangent methods only; a spin of 9,000 turns in one segment
+    is accepted and kept (its length from the closed-form Euler speed, bounded work)."""
+    keys = R.random(3, random_state=5).as_quat(scalar_first=True)
+    for method in ("QUAT_COMPONENTS", "NLERP", "SLERP"):
+        c = qc.Curve([0, 1e-3, 1e4], keys, method=method)
+        assert np.max(angle(c.sample([0, 1e-3, 1e4]), keys)) <= 1e-9
+    turn = 9000 * 2 * np.pi
+    for method in ("SLERP", "SPLINE_C2"):
+        c = qc.Curve.from_euler([0, 1], [[0, 0, 0], [0.3, 0.2, turn]], method=method)
+        speed = np.linalg.norm(c.angular_velocity([0.5]), axis=-1)[0]
+        assert speed == pytest.approx(turn, rel=1e-3)
+
+
+@pytest.mark.parametrize("method", ["QUAT_COMPONENTS", "NLERP"])
+def test_lerp_keys_of_very_different_size_pass_through_their_keys(method):
+    """QUAT_COMPONENTS lerps the keys as given: 1.7e308 and 1e-300 components neither overflow nor
+    lose the smaller key to cancellation (two-weight form, power-of-two scaling)."""
+    keys = np.array([[-5.09e36, 1.99e36, 1.17e36, -3.83e36], [1.0, 1.7e-159, 0, 9.6e-171],
+                     [1.7e308, 1.7e308, 0, 0], [1e-300, 0, 2e-300, 0]])
+    c = qc.Curve([0.0, 2.0, 3.0, 5.0], keys, method=method)
+    t = np.array([0.0, 2.0, 3.0, 5.0])
+    assert np.max(qc.angle_between(c.sample(t), keys)) <= 1e-12
+    mid = np.linspace(0, 5, 41)
+    q = c.sample(mid)
+    assert np.all(np.isfinite(q)) and np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-14)
+    assert np.all(np.isfinite(c.angular_velocity(mid)))

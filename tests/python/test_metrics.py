@@ -141,6 +141,8 @@ def test_path_metrics_keys():
     (lambda: quatcurve.angular_deviation(np.ones((3, 3)), np.ones((3, 4))), "quats: expected shape"),
     (lambda: quatcurve.interval_speeds([0.0, 2.0, 1.0], np.ones((3, 4))), "times[2]: not increasing"),
     (lambda: quatcurve.interval_speeds([[0.0, 1.0]], np.ones((2, 4))), "times: expected shape (N,)"),
+    (lambda: quatcurve.interval_speeds([0.0, 5e-324], [[1, 0, 0, 0], [0, 1, 0, 0]]),
+     "times[1]: speed over the interval from times[0] overflows"),
     (lambda: quatcurve.segment_speed_ratios([0.0, 1.0, 2.0], np.ones((3, 4)), [0.0, 1.5]),
      "key_times[1]: not a sample time"),
     (lambda: quatcurve.key_jumps([0.0, 1.0, 2.0], [[1, 0, 0, 0], [1, 0, 0, 0], [np.nan, 0, 0, 0]],

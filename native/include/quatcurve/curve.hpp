@@ -28,6 +28,13 @@
 // survive. A segment turning more than π is split internally into equal sub-arcs of at most 2π/3
 // along its turn (sub-keys that are never reported), so every method keeps the full turn.
 //
+// Key times and Euler keys the engine refuses (InvalidArgument naming the element), because double
+// precision cannot follow them: consecutive keys closer than 1e-9 frames, farther than 1e12 frames,
+// or closer than 2^-32 of their magnitude (t = 1, 1 + ulp: no sub-key or sample fits between them);
+// for SQUAD, TCB, CATMULL_ROM and SPLINE_C2 also neighbouring spacings differing by more than 1e6
+// times (their tangents carry one segment's velocity over the other). Euler angles beyond ±1e6 turns,
+// or changing by more than 1e4 turns within one segment (the path is followed step by step).
+//
 // Output: quaternions (w, x, y, z), sign-continuous along the curve (at a key the sample may be the
 // key's negative, the same rotation); angular velocity in radians per frame in the world frame,
 // computed analytically (q̇ = ½·ω·q). Outside [times.front(), times.back()] the curve is constant
@@ -74,8 +81,9 @@ void set_option(CurveOptions& options, Method method, const std::string& name,
 
 class Curve {
 public:
-    // Keys from quaternions (w, x, y, z; normalized here). times strictly increasing and finite,
-    // quats finite and non-zero, same count ≥ 1. EULER throws (it needs Euler keys).
+    // Keys from quaternions (w, x, y, z; normalized here). times strictly increasing and finite with
+    // the spacing limits above, quats finite and non-zero (any size: QUAT_COMPONENTS lerps them as
+    // given, without overflow), same count ≥ 1. EULER throws (it needs Euler keys).
     Curve(std::vector<double> times, const std::vector<Quat>& quats, Method method = Method::SLERP,
           CurveOptions options = {});
     // Raw form: n times, n quaternions as 4n doubles (w, x, y, z).
@@ -84,7 +92,8 @@ public:
 
     // Keys from Euler angles (ax, ay, az) in `order`. Every segment keeps the turn of its Euler
     // path: its relative rotation is the rotation vector that follows the path continuously, so
-    // 0 → 720° about Z turns twice, and a path of at most 180° gives the shortest rotation.
+    // 0 → 720° about Z turns twice, and a path of at most 180° gives the shortest rotation. Angles
+    // within ±1e6 turns, changing by at most 1e4 turns per segment.
     static Curve from_euler(std::vector<double> times, const std::vector<Vec3>& angles,
                             EulerOrder order, Method method = Method::SLERP,
                             CurveOptions options = {});

@@ -29,7 +29,8 @@ std::vector<double> angular_deviation(const std::vector<Quat>& path,
 // ---- speed --------------------------------------------------------------------------------------
 // Mean angular speed over each sampling interval: s[i] = angle_between(q[i], q[i+1]) / (t[i+1] - t[i]),
 // i < N-1 (belongs to the interval's midpoint). Exact for constant-speed paths; for a smooth path
-// it is the speed at the midpoint up to O(dt²). N ≥ 2.
+// it is the speed at the midpoint up to O(dt²). N ≥ 2. A speed beyond double range (an interval of
+// subnormal length, e.g. 5e-324 frames) throws InvalidArgument naming the interval's end.
 std::vector<double> interval_speeds(const std::vector<double>& times, const std::vector<Quat>& quats);
 
 // Per segment j: max/min of the speed at every sample in [k[j], k[j+1]], estimated from the interval
