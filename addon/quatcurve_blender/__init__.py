@@ -17,7 +17,7 @@ bl_info = {
 if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
     import importlib
 
-    for _name in ("native", "fcurves", "bake", "props", "operators", "plot", "compare", "operators_compare", "ui"):
+    for _name in ("native", "fcurves", "bake", "props", "operators", "plot", "compare", "operators_compare", "reduce", "operators_reduce", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
@@ -26,8 +26,9 @@ import bpy  # noqa: E402
 from . import native, ui  # noqa: E402
 from . import bake, fcurves, operators, props  # noqa: E402, F401
 from . import compare, operators_compare, plot  # noqa: E402, F401
+from . import operators_reduce, reduce  # noqa: E402, F401
 
-_modules = (props, operators, operators_compare, ui)
+_modules = (props, operators, operators_compare, operators_reduce, ui)
 
 
 def register():

@@ -41,7 +41,7 @@ class BakeSettings:
     frame_start: float = None         # None: the keyed range of the targets (default_frame_range)
     frame_end: float = None
     step: float = 1.0                 # frames between baked keys (≥ 1)
-    tolerance: float = 0.0            # degrees; > 0 asks for key reduction (not available yet)
+    tolerance: float = 0.0            # degrees; > 0 asks for key reduction (through reduce_keys below)
     new_action: bool = True           # bake into a copy of each action; False: replace in place
     tension: float = 0.0              # TCB
     continuity: float = 0.0           # TCB

@@ -52,7 +52,7 @@ def bake_properties():
                               description="Frames between baked keys (at least 1)"),
         "tolerance": P.FloatProperty(name="Tolerance (°)", default=0.0, soft_min=0.0, soft_max=10.0, precision=3,
                                      description="Degrees. 0: a key every Step frames. Above 0: as few keys as "
-                                                 "the angular bound allows (key reduction; not available yet)"),
+                                                 "the angular bound allows (key reduction, Bezier keys)"),
         "new_action": P.BoolProperty(name="New Action", default=True,
                                      description="Bake into a new action named after the original, which is "
                                                  "kept (fake user) and untouched; off: replace the rotation "

@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import native, operators_compare
+from . import native, operators_compare, operators_reduce
 
 
 def draw_status(layout):
@@ -136,6 +136,11 @@ class _SidebarPanel:
             box.label(text="Compare", icon="GRAPH")
             draw_compare_settings(box, compare_settings)
             draw_compare_table(layout, compare_settings)
+        reduce_settings = getattr(context.scene, "quatcurve_reduce", None)
+        if reduce_settings is not None:
+            box = layout.box()
+            box.label(text="Reduce Keys", icon="IPO_BEZIER")
+            operators_reduce.draw_settings(box, reduce_settings)
 
 
 class QUATCURVE_PT_view3d(_SidebarPanel, bpy.types.Panel):
@@ -157,6 +162,7 @@ def draw_bake_menu_item(self, context):
     self.layout.separator()
     self.layout.operator("quatcurve.bake", icon="ACTION")
     self.layout.operator("quatcurve.compare", icon="GRAPH")
+    self.layout.operator("quatcurve.reduce", icon="IPO_BEZIER")
 
 
 def register():

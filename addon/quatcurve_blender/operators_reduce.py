@@ -1,0 +1,104 @@
+"""The `quatcurve.reduce` operator and the reduce settings and last result (`scene.quatcurve_reduce`).
+
+Reduces the existing rotation keys of the selected objects (Object mode) or pose bones (Pose mode)
+— imported motion capture, bakes — into a new action by default, or in place. Reports the rotation
+keys before and after and the largest error, measured at every frame and original key. Properties
+not given by the caller come from the panel's settings.
+"""
+
+import bpy
+
+from . import bake, native, reduce
+
+INTERPOLATION_ITEMS = (
+    ("BEZIER", "Bezier", "Bezier keys with fitted handles (FREE, broken at keys): the fewest keys"),
+    ("LINEAR", "Linear", "Linear keys: every kept key is an original sample"),
+)
+
+
+def reduce_properties():
+    """The reduce settings as property definitions, shared by scene.quatcurve_reduce and the operator."""
+    P = bpy.props
+    return {
+        "tolerance": P.FloatProperty(
+            name="Tolerance (°)", default=0.1, min=0.0, soft_max=10.0, precision=3,
+            description="Largest rotation error allowed at every frame and original key, in degrees"),
+        "interpolation": P.EnumProperty(name="Interpolation", items=INTERPOLATION_ITEMS, default="BEZIER",
+                                        description="Interpolation of the written keys"),
+        "synchronized": P.BoolProperty(
+            name="Synchronized", default=False,
+            description="Same key frames on every rotation channel of a target (glTF export, hand "
+                        "editing); off: each channel keeps its own keys where that saves keys"),
+        "new_action": P.BoolProperty(
+            name="New Action", default=True,
+            description="Write into a new action named after the original, which is kept (fake user) "
+                        "and untouched; off: replace the rotation curves in place"),
+    }
+
+
+class QuatCurveReduceSettings(bpy.types.PropertyGroup):
+    """scene.quatcurve_reduce: the panel's reduce settings and the last reduction's summary."""
+    __annotations__ = dict(
+        reduce_properties(),
+        last_summary=bpy.props.StringProperty(name="Last Reduce", default=""),
+        last_lines=bpy.props.StringProperty(name="Last Reduce Details", default="",
+                                            description="One line per target, newline-separated"),
+    )
+
+
+def draw_settings(layout, settings, max_lines=6):
+    """The panel's reduce box: settings, button, last result."""
+    col = layout.column(align=True)
+    col.prop(settings, "tolerance")
+    col.prop(settings, "interpolation", text="")
+    col.prop(settings, "synchronized")
+    col.prop(settings, "new_action")
+    layout.operator("quatcurve.reduce", text="Reduce Keys", icon="IPO_BEZIER")
+    if settings.last_summary:
+        col = layout.column(align=True)
+        col.scale_y = 0.8
+        for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
+            col.label(text=line)
+
+
+class QUATCURVE_OT_reduce(bpy.types.Operator):
+    """Reduce the rotation keys of the selected objects or pose bones to as few as an angular bound allows"""
+    bl_idname = "quatcurve.reduce"
+    bl_label = "Reduce Rotation Keys"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = reduce_properties()
+
+    def execute(self, context):
+        scene_settings = getattr(context.scene, "quatcurve_reduce", None)
+        if scene_settings is not None:
+            for name in reduce_properties():
+                if not self.properties.is_property_set(name):
+                    setattr(self, name, getattr(scene_settings, name))
+        settings = reduce.ReduceSettings(tolerance=self.tolerance, interpolation=self.interpolation,
+                                         synchronized=self.synchronized, new_action=self.new_action)
+        try:
+            native.require()
+            result = reduce.reduce(bake.gather_targets(context, verb="reduce"), settings)
+        except (reduce.ReduceError, bake.BakeError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        if scene_settings is not None:
+            scene_settings.last_summary = result.summary()
+            scene_settings.last_lines = "\n".join(result.lines())
+        self.report({"INFO"}, "Reduced " + result.summary())
+        return {"FINISHED"}
+
+
+_classes = (QuatCurveReduceSettings, QUATCURVE_OT_reduce)
+
+
+def register():
+    for cls in _classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.quatcurve_reduce = bpy.props.PointerProperty(type=QuatCurveReduceSettings)
+
+
+def unregister():
+    del bpy.types.Scene.quatcurve_reduce
+    for cls in reversed(_classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,324 @@
+"""Key reduction in Blender (issue 6): the `quatcurve.reduce` operator and reduce.py, verified by
+Blender's own evaluation of the written F-curves at every frame, in every supported Blender.
+
+The motion is real motion capture (../shared/data/mocap, read with tests/python/bvh.py and keyed
+densely through the add-on's F-curve adapter — Debian Blender 3.4's BVH importer cannot open files
+under Python 3.11) or, when ../shared is absent, smooth synthetic motion.
+"""
+
+import math
+import os
+import sys
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import ROOT, SHARED
+
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+import bvh  # noqa: E402
+
+from quatcurve_blender import fcurves, reduce  # noqa: E402
+
+MOCAP = os.path.join(SHARED, "data", "mocap", "mocapbank.bvh")
+
+
+@pytest.fixture
+def reducer(scene):
+    """An empty scene, the add-on (with the reduce operator) registered."""
+    assert hasattr(bpy.types, "QUATCURVE_OT_reduce")
+    return scene
+
+
+def motion(count=3):
+    """[(name, frames, quats (N, 4), euler (N, 3), blender order)] for `count` joints."""
+    if os.path.exists(MOCAP):
+        clip = bvh.read_bvh(MOCAP)
+        frames = np.arange(1, clip.frames + 1, dtype=np.float64)
+        joints = clip.rotating_joints()[:count]
+        return [(j.name, frames, clip.quaternions(j), clip.euler_radians(j), j.blender_order)
+                for j in joints]
+    rng = np.random.default_rng(5)
+    frames = np.arange(1, 301, dtype=np.float64)
+    out = []
+    for k in range(count):
+        t = frames[:, None] / 40.0
+        e = np.sin(t * rng.uniform(0.5, 2, 3) + rng.uniform(0, 6, 3)) * rng.uniform(0.3, 1.2, 3)
+        out.append(("joint%d" % k, frames, bvh.euler_to_quat(e, "XYZ"), e, "XYZ"))
+    return out
+
+
+def keyed_object(name, frames, values, mode):
+    """An object keyed at every frame with `values` in rotation mode `mode` (LINEAR keys)."""
+    obj = bpy.data.objects.new(name, None)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.rotation_mode = mode
+    fcurves.new_action(obj, name + "Action")
+    channels = fcurves.Channels.of(obj, create=True)
+    prop, count = fcurves.rotation_property(mode)
+    for i in range(count):
+        channels.write(prop, i, frames, values[:, i], group="Object Transforms")
+    return obj
+
+
+def select_only(*objects):
+    if bpy.context.mode != "OBJECT":
+        bpy.ops.object.mode_set(mode="OBJECT")
+    bpy.context.view_layer.update()  # objects linked just now get their bases (else select_set is lost)
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(obj in objects)
+    bpy.context.view_layer.objects.active = objects[0] if objects else None
+
+
+def rotation_curves(id_data, data_path, count, action=None):
+    channels = fcurves.Channels.of(id_data, action)
+    return channels.find_all(data_path, count)
+
+
+def blender_quats(curves, frames, mode):
+    """Blender's rotation from the evaluated channel F-curves: (N, 4) unit quaternions."""
+    values = np.stack([fcurves.evaluate(f, frames) for f in curves], axis=1)
+    if mode == "QUATERNION":
+        return values / np.linalg.norm(values, axis=1, keepdims=True)
+    return bvh.euler_to_quat(values, mode)
+
+
+def max_angle_deg(a, b):
+    dot = np.abs(np.sum(a * b, axis=1)) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+    return float(np.degrees(2 * np.arccos(np.minimum(dot, 1.0))).max())
+
+
+def key_total(curves):
+    return sum(fcurves.key_count(f) for f in curves)
+
+
+# ---- the operator on objects -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("interpolation,synchronized", [("BEZIER", False), ("BEZIER", True),
+                                                        ("LINEAR", True), ("LINEAR", False)])
+@pytest.mark.parametrize("tolerance", [0.1, 1.0])
+def test_quaternion_bound_holds_under_blender_evaluation(reducer, interpolation, synchronized, tolerance):
+    joints = motion(3)
+    objects = [keyed_object(name, frames, q, "QUATERNION") for name, frames, q, _, _ in joints]
+    originals = [fcurves.active_action(o) for o in objects]
+    digests = [fcurves.action_digest(a) for a in originals]
+    select_only(*objects)
+    result = bpy.ops.quatcurve.reduce(tolerance=tolerance, interpolation=interpolation,
+                                      synchronized=synchronized)
+    assert result == {"FINISHED"}
+    before = after = 0
+    for obj, original, digest, (name, frames, q, _, _) in zip(objects, originals, digests, joints):
+        action = fcurves.active_action(obj)
+        assert action != original and original.use_fake_user
+        assert fcurves.action_digest(original) == digest  # the original is untouched
+        curves = rotation_curves(obj, "rotation_quaternion", 4)
+        assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= tolerance
+        if interpolation == "BEZIER":
+            assert all(k.interpolation == "BEZIER" and k.handle_left_type == "FREE"
+                       for f in curves for k in f.keyframe_points)
+        before += 4 * len(frames)
+        after += key_total(curves)
+    assert after < before * (0.6 if interpolation == "LINEAR" else 0.25)
+
+
+@pytest.mark.parametrize("interpolation,synchronized", [("BEZIER", False), ("LINEAR", True)])
+def test_euler_bound_holds_under_blender_evaluation(reducer, interpolation, synchronized):
+    joints = motion(3)
+    objects = [keyed_object(name, frames, e, order) for name, frames, _, e, order in joints]
+    select_only(*objects)
+    assert bpy.ops.quatcurve.reduce(tolerance=0.1, interpolation=interpolation,
+                                    synchronized=synchronized) == {"FINISHED"}
+    for obj, (name, frames, q, e, order) in zip(objects, joints):
+        assert obj.rotation_mode == order
+        curves = rotation_curves(obj, "rotation_euler", 3)
+        reference = bvh.euler_to_quat(e, order)
+        assert max_angle_deg(blender_quats(curves, frames, order), reference) <= 0.1
+        assert key_total(curves) < 3 * len(frames)
+
+
+def test_in_place_replaces_the_rotation_curves_only(reducer):
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object(name, frames, q, "QUATERNION")
+    channels = fcurves.Channels.of(obj)
+    channels.write("location", 0, frames, np.sin(frames / 10.0), group="Object Transforms")
+    action = fcurves.active_action(obj)
+    location = fcurves.fcurve_digest(channels.find("location", 0)).hexdigest()
+    select_only(obj)
+    assert bpy.ops.quatcurve.reduce(tolerance=0.2, new_action=False) == {"FINISHED"}
+    assert fcurves.active_action(obj) == action
+    assert fcurves.fcurve_digest(fcurves.Channels.of(obj).find("location", 0)).hexdigest() == location
+    curves = rotation_curves(obj, "rotation_quaternion", 4)
+    assert key_total(curves) < len(frames)
+    assert all(f.group is not None and f.group.name == "Object Transforms" for f in curves)
+    assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= 0.2
+
+
+def test_pose_bones_only_the_selected_bones_change(reducer):
+    joints = motion(3)
+    arm_data = bpy.data.armatures.new("Rig")
+    rig = bpy.data.objects.new("Rig", arm_data)
+    bpy.context.scene.collection.objects.link(rig)
+    select_only(rig)
+    bpy.ops.object.mode_set(mode="EDIT")
+    for k, (name, *_rest) in enumerate(joints):
+        bone = arm_data.edit_bones.new(name)
+        bone.head, bone.tail = (k, 0, 0), (k, 0, 1)
+    bpy.ops.object.mode_set(mode="POSE")
+    fcurves.new_action(rig, "RigAction")
+    channels = fcurves.Channels.of(rig, create=True)
+    for name, frames, q, _, _ in joints:
+        rig.pose.bones[name].rotation_mode = "QUATERNION"
+        path = rig.pose.bones[name].path_from_id("rotation_quaternion")
+        for i in range(4):
+            channels.write(path, i, frames, q[:, i], group=name)
+    untouched = joints[2][0]
+    for pb in rig.pose.bones:  # PoseBone.select from 5.0, Bone.select before
+        if bpy.app.version >= (5, 0, 0):
+            pb.select = pb.name != untouched
+        else:
+            pb.bone.select = pb.name != untouched
+    digest = [fcurves.fcurve_digest(f).hexdigest() for f in
+              channels.find_all(rig.pose.bones[untouched].path_from_id("rotation_quaternion"), 4)]
+    original = fcurves.active_action(rig)
+    assert bpy.ops.quatcurve.reduce(tolerance=0.1) == {"FINISHED"}
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert fcurves.active_action(rig) != original
+    for name, frames, q, _, _ in joints:
+        curves = rotation_curves(rig, rig.pose.bones[name].path_from_id("rotation_quaternion"), 4)
+        if name == untouched:
+            assert [fcurves.fcurve_digest(f).hexdigest() for f in curves] == digest
+        else:
+            assert key_total(curves) < len(frames)
+            assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= 0.1
+            assert all(f.group is not None and f.group.name == name for f in curves)
+
+
+def test_result_reports_keys_and_the_measured_error(reducer):
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object(name, frames, q, "QUATERNION")
+    result = reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings(tolerance=0.1))
+    assert result.keys_before == 4 * len(frames)
+    curves = rotation_curves(obj, "rotation_quaternion", 4)
+    assert result.keys_after == key_total(curves) < result.keys_before
+    measured = max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q)
+    assert result.max_error_deg == pytest.approx(measured, abs=1e-4)
+    assert "→" in result.summary() and "max error" in result.summary()
+
+
+def test_hemisphere_flips_in_the_source_are_harmless(reducer):
+    name, frames, q, _, _ = motion(1)[0]
+    flipped = q.copy()
+    flipped[::7] *= -1  # sign flips every 7th frame: the same rotations
+    obj = keyed_object(name, frames, flipped, "QUATERNION")
+    select_only(obj)
+    assert bpy.ops.quatcurve.reduce(tolerance=0.1) == {"FINISHED"}
+    curves = rotation_curves(obj, "rotation_quaternion", 4)
+    assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= 0.1
+    assert key_total(curves) < len(frames)
+
+
+# ---- errors: CANCELLED, nothing changed --------------------------------------------------------------
+# In background mode an operator's error report is raised as RuntimeError (its return value is
+# CANCELLED); the message is what the user would see.
+
+def refused(match):
+    with pytest.raises(RuntimeError, match=match):
+        bpy.ops.quatcurve.reduce()
+
+
+def test_nothing_selected(reducer):
+    select_only()
+    refused("Nothing to .*: no objects selected")
+
+
+def test_axis_angle_is_refused(reducer):
+    frames = np.arange(1, 21, dtype=np.float64)
+    values = np.column_stack([frames / 20.0, np.zeros(20), np.zeros(20), np.ones(20)])
+    obj = keyed_object("aa", frames, values, "AXIS_ANGLE")
+    select_only(obj)
+    action = fcurves.active_action(obj)
+    digest = fcurves.action_digest(action)
+    refused("aa: rotation mode AXIS_ANGLE")
+    assert fcurves.active_action(obj) == action and fcurves.action_digest(action) == digest
+    with pytest.raises(reduce.ReduceError, match="AXIS_ANGLE"):
+        reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings())
+
+
+def test_fcurve_modifiers_are_refused(reducer):
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object(name, frames, q, "QUATERNION")
+    rotation_curves(obj, "rotation_quaternion", 4)[2].modifiers.new("NOISE")
+    select_only(obj)
+    action = fcurves.active_action(obj)
+    refused(r"rotation_quaternion\[2\] has F-curve modifiers")
+    assert fcurves.active_action(obj) == action
+    with pytest.raises(reduce.ReduceError, match="modifiers"):
+        reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings())
+
+
+def test_no_rotation_animation_and_bad_settings(reducer):
+    obj = bpy.data.objects.new("static", None)
+    bpy.context.scene.collection.objects.link(obj)
+    select_only(obj)
+    refused("static: no rotation animation")
+    name, frames, q, _, _ = motion(1)[0]
+    keyed = keyed_object(name, frames, q, "QUATERNION")
+    target = reduce.bake.Target(keyed)
+    for bad in (reduce.ReduceSettings(tolerance=-1.0), reduce.ReduceSettings(tolerance=math.nan),
+                reduce.ReduceSettings(interpolation="CUBIC")):
+        with pytest.raises(reduce.ReduceError):
+            reduce.reduce([target], bad)
+
+
+# ---- the bake with tolerance > 0 (the reduction hook) -------------------------------------------------
+
+@pytest.mark.parametrize("output", ["QUATERNION", "XYZ"])
+def test_bake_with_tolerance_writes_reduced_keys_within_the_bound(reducer, output):
+    from bake_helpers import add_empty, key
+    from quatcurve_blender import native
+
+    qc = native.require()
+    obj = add_empty("Baked", "XYZ")
+    keys = [(1, (0, 0, 0)), (31, (40, 80, 10)), (61, (120, -30, 60)), (91, (10, 10, 170)), (121, (0, 45, 0))]
+    key(obj, "rotation_euler", keys, degrees=True)
+    select_only(obj)
+    assert bpy.ops.quatcurve.bake(method="SQUAD", rotation_mode=output, tolerance=0.1) == {"FINISHED"}
+    frames = np.arange(1, 122, dtype=np.float64)
+    key_frames = np.array([k[0] for k in keys], dtype=np.float64)
+    key_angles = np.radians([k[1] for k in keys])
+    dense = np.asarray(qc.Curve.from_euler(key_frames, key_angles, order="XYZ", method="SQUAD").sample(frames))
+    prop, count = ("rotation_quaternion", 4) if output == "QUATERNION" else ("rotation_euler", 3)
+    curves = rotation_curves(obj, prop, count)
+    assert obj.rotation_mode == output
+    assert max_angle_deg(blender_quats(curves, frames, output), dense) <= 0.1
+    assert key_total(curves) < 0.25 * count * len(frames)
+    assert all(k.interpolation == "BEZIER" for f in curves for k in f.keyframe_points)
+    assert "reduced to" in bpy.context.scene.quatcurve.last_lines
+
+
+def test_bake_with_tolerance_refuses_axis_angle_output(reducer):
+    from bake_helpers import add_empty, key
+
+    obj = add_empty("AA", "XYZ")
+    key(obj, "rotation_euler", [(1, (0, 0, 0)), (21, (0, 0, 90))], degrees=True)
+    select_only(obj)
+    action = fcurves.active_action(obj)
+    digest = fcurves.action_digest(action)
+    with pytest.raises(RuntimeError, match="AXIS_ANGLE"):
+        bpy.ops.quatcurve.bake(method="SLERP", rotation_mode="AXIS_ANGLE", tolerance=0.1)
+    assert fcurves.active_action(obj) == action and fcurves.action_digest(action) == digest
+
+
+def test_panel_settings_drive_the_reduce_operator(reducer):
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object(name, frames, q, "QUATERNION")
+    settings = bpy.context.scene.quatcurve_reduce
+    settings.tolerance, settings.interpolation, settings.synchronized = 0.5, "LINEAR", True
+    select_only(obj)
+    assert bpy.ops.quatcurve.reduce() == {"FINISHED"}
+    curves = rotation_curves(obj, "rotation_quaternion", 4)
+    assert all(k.interpolation == "LINEAR" for f in curves for k in f.keyframe_points)
+    assert len({fcurves.key_count(f) for f in curves}) == 1  # synchronized
+    assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= 0.5
+    assert "0.5°" in settings.last_summary and name in settings.last_lines
