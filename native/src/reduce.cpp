@@ -98,8 +98,9 @@ struct Problem {
     // angle jump above π). A segment may not span one: between the two samples Blender would pass
     // through a near-zero quaternion or spin, and a Bezier fit could hide that at the samples.
     std::vector<std::size_t> breaks;
-    // step[k]: rotation angle between samples k and k+1 (for the between-samples guard).
-    std::vector<double> step;
+    // step_tan[k] = tan(kBetweenStep/2 × the rotation angle between samples k and k+1), for the
+    // between-samples guard.
+    std::vector<double> step_tan;
     // Euler: the order's axes (first applied, middle, last) as indices into (X, Y, Z).
     int axis_first = 0, axis_mid = 1, axis_last = 2;
 
@@ -176,8 +177,9 @@ void check_tolerance(double tolerance) {
                               std::to_string(tolerance));
 }
 
-// Discontinuities between consecutive samples (see Problem::breaks).
-void compute_breaks(Problem& p) {
+// Discontinuities between consecutive samples (see Problem::breaks) and, when the between-samples
+// guard will run (`guard`), the step tangents.
+void compute_breaks(Problem& p, bool guard) {
     p.breaks.assign(p.n, 0);
     for (std::size_t k = 1; k < p.n; ++k) {
         const double* a = p.row(k - 1);
@@ -190,8 +192,9 @@ void compute_breaks(Problem& p) {
         }
         p.breaks[k] = p.breaks[k - 1] + (jump ? 1 : 0);
     }
-    p.step.assign(p.n, 0.0);
-    for (std::size_t k = 0; k + 1 < p.n; ++k) p.step[k] = angle_between(p.ref[k], p.ref[k + 1]);
+    p.step_tan.assign(p.n, 0.0);
+    for (std::size_t k = 0; guard && k + 1 < p.n; ++k)
+        p.step_tan[k] = std::tan(0.5 * kBetweenStep * angle_between(p.ref[k], p.ref[k + 1]));
 }
 
 // Slopes for default tangents: central differences inside, one-sided at the ends and next to a
@@ -208,7 +211,9 @@ void compute_slopes(Problem& p) {
     }
 }
 
-Problem make_quat_problem(const std::vector<double>& times, const std::vector<Quat>& quats) {
+// guard: the between-samples guard will run (BEZIER), so compute what it needs.
+Problem make_quat_problem(const std::vector<double>& times, const std::vector<Quat>& quats,
+                          bool guard) {
     check_times(times);
     if (quats.size() != times.size())
         throw InvalidArgument("quats: " + std::to_string(quats.size()) +
@@ -238,13 +243,13 @@ Problem make_quat_problem(const std::vector<double>& times, const std::vector<Qu
             p.unit[k * 4 + a] = u[a];
         }
     }
-    compute_breaks(p);
+    compute_breaks(p, guard);
     compute_slopes(p);
     return p;
 }
 
 Problem make_euler_problem(const std::vector<double>& times, const std::vector<Vec3>& angles,
-                           EulerOrder order) {
+                           EulerOrder order) {  // Euler fits are always guarded
     check_times(times);
     if (angles.size() != times.size())
         throw InvalidArgument("angles: " + std::to_string(angles.size()) + " triples for " +
@@ -275,7 +280,7 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
         // Gram matrix is the identity except u_first·u_last = ±sin(middle angle).
         p.gimbal[k] = perm * std::sin(angles[k][p.axis_mid]);
     }
-    compute_breaks(p);
+    compute_breaks(p, true);
     compute_slopes(p);
     return p;
 }
@@ -435,24 +440,13 @@ private:
         return solve_handles_t<3, 1>(i, j, chans, kappa, p1, p2);
     }
 
-    // Row `row` of the metric M_k (see Problem) times e, and the entries M_k[row][col].
-    template <int C>
-    double metric_times(std::size_t k, int row, const double* e, double kappa) const {
-        if (C == 4) {
-            const double* u = &p_.unit[k * 4];
-            const double ue = u[0] * e[0] + u[1] * e[1] + u[2] * e[2] + u[3] * e[3];
-            return (4.0 * e[row] - kappa * u[row] * ue) / p_.norm2[k];
-        }
+    // Euler metric M_k (see Problem): row `row` times e, and the entry M_k[row][col].
+    double euler_metric_times(std::size_t k, int row, const double* e) const {
         if (row == p_.axis_first) return e[row] + p_.gimbal[k] * e[p_.axis_last];
         if (row == p_.axis_last) return e[row] + p_.gimbal[k] * e[p_.axis_first];
         return e[row];
     }
-    template <int C>
-    double metric_entry(std::size_t k, int row, int col, double kappa) const {
-        if (C == 4) {
-            const double* u = &p_.unit[k * 4];
-            return ((row == col ? 4.0 : 0.0) - kappa * u[row] * u[col]) / p_.norm2[k];
-        }
+    double euler_metric_entry(std::size_t k, int row, int col) const {
         if (row == col) return 1.0;
         if ((row == p_.axis_first && col == p_.axis_last) ||
             (row == p_.axis_last && col == p_.axis_first))
@@ -487,15 +481,34 @@ private:
             }
             const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
             const double s11 = w1 * b[1], s12 = w1 * b[2], s22 = w2 * b[2];
-            for (int a = 0; a < NC; ++a) {
-                const double Me = metric_times<C>(k, ch[a], e0, kappa);
-                g[0][a] -= w1 * Me;
-                g[1][a] -= w2 * Me;
-                for (int bb = 0; bb <= a; ++bb) {
-                    const double m = metric_entry<C>(k, ch[a], ch[bb], kappa);
-                    A[0][a][bb] += s11 * m;
-                    A[1][a][bb] += s12 * m;
-                    A[2][a][bb] += s22 * m;
+            if constexpr (C == 4) {
+                // M = (4·I − κ·ûûᵀ)/|q|², with û·e and 1/|q|² computed once per sample.
+                const double* u = &p_.unit[k * 4];
+                const double inv = 1.0 / p_.norm2[k];
+                const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+                for (int a = 0; a < NC; ++a) {
+                    const double ua = u[ch[a]];
+                    const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
+                    g[0][a] -= w1 * Me;
+                    g[1][a] -= w2 * Me;
+                    for (int bb = 0; bb <= a; ++bb) {
+                        const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
+                        A[0][a][bb] += s11 * m;
+                        A[1][a][bb] += s12 * m;
+                        A[2][a][bb] += s22 * m;
+                    }
+                }
+            } else {
+                for (int a = 0; a < NC; ++a) {
+                    const double Me = euler_metric_times(k, ch[a], e0);
+                    g[0][a] -= w1 * Me;
+                    g[1][a] -= w2 * Me;
+                    for (int bb = 0; bb <= a; ++bb) {
+                        const double m = euler_metric_entry(k, ch[a], ch[bb]);
+                        A[0][a][bb] += s11 * m;
+                        A[1][a][bb] += s12 * m;
+                        A[2][a][bb] += s22 * m;
+                    }
                 }
             }
         }
@@ -572,7 +585,8 @@ private:
             }
         }
         if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
-            const double half_fit = kBetweenFactor * std::atan(std::sqrt(limit));
+            // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
+            const double tan_fit = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
             double prev_u = 0.0;
             for (std::size_t k = i; k < j; ++k) {
                 const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
@@ -597,10 +611,10 @@ private:
                 }
                 const Quat ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
                                                        : euler_rotation(p_, mean);
-                const double half = half_fit + 0.5 * kBetweenStep * p_.step[k];
-                const double between_limit = half < 0.5 * kPi
-                                                 ? std::tan(half) * std::tan(half)
-                                                 : std::numeric_limits<double>::infinity();
+                const double denom = 1.0 - tan_fit * p_.step_tan[k];
+                const double t = (tan_fit + p_.step_tan[k]) / denom;
+                const double between_limit =
+                    denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
                 if (!(error_tan2(p_, ref, f) <= between_limit)) {
                     between_failed_ = true;
                     return std::numeric_limits<double>::infinity();
@@ -971,7 +985,8 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
 ReducedKeys reduce_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
                         double tolerance, KeyInterpolation interpolation, bool synchronized) {
     check_tolerance(tolerance);
-    return reduce(make_quat_problem(times, quats), tolerance, interpolation, synchronized);
+    return reduce(make_quat_problem(times, quats, interpolation == KeyInterpolation::BEZIER),
+                  tolerance, interpolation, synchronized);
 }
 
 ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vector<Vec3>& angles,
