@@ -915,8 +915,41 @@ double tan2_half(double angle) {
     return t * t;
 }
 
+// Blender keeps key values as float32: a sample whose float32 form is a different rotation (a
+// component beyond ±3.4e38, a quaternion whose components all underflow, an angle too large for
+// float32 to resolve) cannot be kept within any bound, so it is refused up front. Allowed: the
+// tolerance, and never less than 1e-6 rad (float32 rounding of ordinary values is ~1e-7 rad).
+void check_float32_storage(const Problem& p, double tolerance) {
+    const double allowed = std::max(tolerance, 1e-6);
+    const char* name = p.kind == Kind::QUAT ? "quats[" : "angles[";
+    for (std::size_t k = 0; k < p.n; ++k) {
+        const double* y = p.row(k);
+        double v[4] = {0.0, 0.0, 0.0, 0.0};
+        for (int c = 0; c < p.C; ++c) {
+            v[c] = f32(y[c]);
+            if (!std::isfinite(v[c]))
+                throw InvalidArgument(name + std::to_string(k) + "]: " + std::to_string(y[c]) +
+                                      " is beyond float32 range (Blender stores keys as float32)");
+        }
+        Quat stored;
+        if (p.kind == Kind::QUAT) {
+            stored = Quat(v[0], v[1], v[2], v[3]);
+            if (!nonzero_problem(stored).empty())
+                throw InvalidArgument(name + std::to_string(k) +
+                                      "]: every component underflows float32 (Blender stores keys as float32)");
+        } else {
+            stored = euler_to_quat(Vec3(v[0], v[1], v[2]), p.order);
+        }
+        const double moved = angle_between(p.ref[k], stored);
+        if (moved > allowed)
+            throw InvalidArgument(name + std::to_string(k) + "]: storing it as float32 (as Blender does) turns it by " +
+                                  std::to_string(moved) + " rad, more than the tolerance allows");
+    }
+}
+
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized) {
     check_tolerance(tolerance);
+    check_float32_storage(p, tolerance);
     const int C = p.C;
     // Verification threshold (margin for Blender's own float32 rotation building) and fit target.
     const double verify_angle =
