@@ -12,20 +12,28 @@
 #include <cstddef>
 #include <initializer_list>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 namespace quatcurve::bindings {
 
 namespace py = pybind11;
-using DArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+template <class T>
+using ArrayOf = py::array_t<T, py::array::c_style | py::array::forcecast>;
+using DArray = ArrayOf<double>;
+using CArray = ArrayOf<std::complex<double>>;
 
-struct Batch {
-    DArray array;
+// An array of T (double, or complex for the 2×2 complex matrix representation) with its batch shape.
+template <class T>
+struct BatchOf {
+    ArrayOf<T> array;
     std::vector<py::ssize_t> batch_shape;  // leading dimensions
     std::size_t count = 0;                 // product of batch_shape
-    const double* data() const { return array.data(); }
+    const T* data() const { return array.data(); }
 };
+using Batch = BatchOf<double>;
+using ComplexBatch = BatchOf<std::complex<double>>;
 
 inline std::string shape_string(const py::array& a) {
     std::string s = "(";
@@ -34,14 +42,17 @@ inline std::string shape_string(const py::array& a) {
 }
 
 // `tail` is the required trailing shape, e.g. {4} for quaternions, {3, 3} for matrices, {} for scalars.
-inline Batch as_batch(py::handle obj, std::initializer_list<py::ssize_t> tail, const char* name) {
-    DArray arr;
+template <class T>
+BatchOf<T> as_batch_of(py::handle obj, std::initializer_list<py::ssize_t> tail, const char* name) {
+    ArrayOf<T> arr;
     try {
-        arr = DArray::ensure(obj);
+        arr = ArrayOf<T>::ensure(obj);
     } catch (const py::error_already_set&) {
-        arr = DArray();
+        arr = ArrayOf<T>();
     }
-    if (!arr) throw py::value_error(std::string(name) + ": expected an array of numbers");
+    if (!arr)
+        throw py::value_error(std::string(name) + (std::is_same_v<T, double> ? ": expected an array of numbers"
+                                                                              : ": expected an array of (complex) numbers"));
     const py::ssize_t nt = static_cast<py::ssize_t>(tail.size());
     bool ok = arr.ndim() >= nt;
     py::ssize_t i = arr.ndim() - nt;
@@ -52,7 +63,7 @@ inline Batch as_batch(py::handle obj, std::initializer_list<py::ssize_t> tail, c
         throw py::value_error(std::string(name) + ": expected shape " + want + "), got " +
                               shape_string(arr));
     }
-    Batch b;
+    BatchOf<T> b;
     b.count = 1;
     for (py::ssize_t d = 0; d < arr.ndim() - nt; ++d) {
         b.batch_shape.push_back(arr.shape(d));
@@ -62,11 +73,18 @@ inline Batch as_batch(py::handle obj, std::initializer_list<py::ssize_t> tail, c
     return b;
 }
 
-inline DArray make_output(const std::vector<py::ssize_t>& batch_shape,
-                          std::initializer_list<py::ssize_t> tail) {
+inline Batch as_batch(py::handle obj, std::initializer_list<py::ssize_t> tail, const char* name) {
+    return as_batch_of<double>(obj, tail, name);
+}
+inline ComplexBatch as_complex_batch(py::handle obj, std::initializer_list<py::ssize_t> tail, const char* name) {
+    return as_batch_of<std::complex<double>>(obj, tail, name);
+}
+
+template <class T = double>
+ArrayOf<T> make_output(const std::vector<py::ssize_t>& batch_shape, std::initializer_list<py::ssize_t> tail) {
     std::vector<py::ssize_t> shape = batch_shape;
     shape.insert(shape.end(), tail.begin(), tail.end());
-    return DArray(shape);
+    return ArrayOf<T>(shape);
 }
 
 // Element name for messages: "q[3]" for the flat batch index 3 ("q" for a single value).
@@ -166,52 +184,6 @@ inline std::string element_name(const char* name, const std::vector<py::ssize_t>
     Batch b;
     b.batch_shape = batch_shape;
     return element_name(name, b, flat);
-}
-
-// Complex128 counterpart of Batch / as_batch / make_output.
-using CArray = py::array_t<std::complex<double>, py::array::c_style | py::array::forcecast>;
-
-struct ComplexBatch {
-    CArray array;
-    std::vector<py::ssize_t> batch_shape;
-    std::size_t count = 0;
-    const std::complex<double>* data() const { return array.data(); }
-};
-
-inline ComplexBatch as_complex_batch(py::handle obj, std::initializer_list<py::ssize_t> tail,
-                                     const char* name) {
-    CArray arr;
-    try {
-        arr = CArray::ensure(obj);
-    } catch (const py::error_already_set&) {
-        arr = CArray();
-    }
-    if (!arr) throw py::value_error(std::string(name) + ": expected an array of (complex) numbers");
-    const py::ssize_t nt = static_cast<py::ssize_t>(tail.size());
-    bool ok = arr.ndim() >= nt;
-    py::ssize_t i = arr.ndim() - nt;
-    for (py::ssize_t t : tail) ok = ok && arr.shape(i++) == t;
-    if (!ok) {
-        std::string want = "(...";
-        for (py::ssize_t t : tail) want += ", " + std::to_string(t);
-        throw py::value_error(std::string(name) + ": expected shape " + want + "), got " +
-                              shape_string(arr));
-    }
-    ComplexBatch b;
-    b.count = 1;
-    for (py::ssize_t d = 0; d < arr.ndim() - nt; ++d) {
-        b.batch_shape.push_back(arr.shape(d));
-        b.count *= static_cast<std::size_t>(arr.shape(d));
-    }
-    b.array = std::move(arr);
-    return b;
-}
-
-inline CArray make_complex_output(const std::vector<py::ssize_t>& batch_shape,
-                                  std::initializer_list<py::ssize_t> tail) {
-    std::vector<py::ssize_t> shape = batch_shape;
-    shape.insert(shape.end(), tail.begin(), tail.end());
-    return CArray(shape);
 }
 
 }  // namespace quatcurve::bindings

@@ -420,7 +420,7 @@ void bind_core(py::module_& m) {
     m.def("quat_to_complex2",
           [](py::handle qo) {
               const Batch q = as_batch(qo, {4}, "q");
-              CArray out = make_complex_output(q.batch_shape, {2, 2});
+              CArray out = make_output<std::complex<double>>(q.batch_shape, {2, 2});
               std::complex<double>* o = out.mutable_data();
               for (std::size_t i = 0; i < q.count; ++i) {
                   const auto c = quat_to_complex2(read_quat(q, i, "q", Need::finite));
