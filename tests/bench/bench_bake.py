@@ -15,48 +15,20 @@ import sys
 import time
 
 import bpy
-import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import fcurves  # noqa: E402
+import rigs  # noqa: E402
 
 BONES = 100
 KEY_EVERY = 10
 
 
 def build_rig(name, last_frame, seed):
-    """An armature of BONES bones in a chain-free row, each with random quaternion keys every
-    KEY_EVERY frames from frame 0 to last_frame, written in bulk; all bones selected, Pose mode."""
-    arm = bpy.data.armatures.new(name)
-    rig = bpy.data.objects.new(name, arm)
-    bpy.context.scene.collection.objects.link(rig)
-    for obj in bpy.context.view_layer.objects:
-        obj.select_set(obj == rig)
-    bpy.context.view_layer.objects.active = rig
-    bpy.ops.object.mode_set(mode="EDIT")
-    for i in range(BONES):
-        bone = arm.edit_bones.new("Bone%03d" % i)
-        bone.head, bone.tail = (i * 0.1, 0, 0), (i * 0.1, 0, 1)
-    bpy.ops.object.mode_set(mode="POSE")
-    fcurves.new_action(rig, name + "Action")
-    channels = fcurves.Channels.of(rig, create=True)
-    rng = np.random.default_rng(seed)
-    frames = np.arange(0, last_frame + 1, KEY_EVERY, dtype=np.float64)
-    for pb in rig.pose.bones:
-        pb.rotation_mode = "QUATERNION"
-        quats = rng.normal(size=(len(frames), 4))
-        quats /= np.linalg.norm(quats, axis=1, keepdims=True)
-        path = pb.path_from_id("rotation_quaternion")
-        for i in range(4):
-            channels.write(path, i, frames, quats[:, i], group=pb.name)
-        if bpy.app.version >= (5, 0, 0):
-            pb.select = True
-        else:
-            pb.bone.select = True
-    return rig
+    return rigs.build_rig(name, last_frame, seed, BONES, KEY_EVERY)
 
 
 def clear_scene():

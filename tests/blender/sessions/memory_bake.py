@@ -16,13 +16,13 @@ import sys
 import time
 
 import bpy
-import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import fcurves  # noqa: E402
+import rigs  # noqa: E402
 
 RESULT = sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else sys.argv[1]
 BONES, LAST_FRAME, KEY_EVERY = 100, 10_000, 10
@@ -39,30 +39,7 @@ def current_mib():
 
 def build_rig():
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    arm = bpy.data.armatures.new("Rig")
-    rig = bpy.data.objects.new("Rig", arm)
-    bpy.context.scene.collection.objects.link(rig)
-    rig.select_set(True)
-    bpy.context.view_layer.objects.active = rig
-    bpy.ops.object.mode_set(mode="EDIT")
-    for i in range(BONES):
-        bone = arm.edit_bones.new("Bone%03d" % i)
-        bone.head, bone.tail = (i * 0.1, 0, 0), (i * 0.1, 0, 1)
-    bpy.ops.object.mode_set(mode="POSE")
-    fcurves.new_action(rig, "RigAction")
-    channels = fcurves.Channels.of(rig, create=True)
-    rng = np.random.default_rng(3)
-    frames = np.arange(0, LAST_FRAME + 1, KEY_EVERY, dtype=np.float64)
-    for pb in rig.pose.bones:
-        pb.rotation_mode = "QUATERNION"
-        quats = rng.normal(size=(len(frames), 4))
-        quats /= np.linalg.norm(quats, axis=1, keepdims=True)
-        for i in range(4):
-            channels.write(pb.path_from_id("rotation_quaternion"), i, frames, quats[:, i], group=pb.name)
-        if bpy.app.version >= (5, 0, 0):
-            pb.select = True
-        else:
-            pb.bone.select = True
+    rigs.build_rig("Rig", LAST_FRAME, 3, BONES, KEY_EVERY)
 
 
 def main():
