@@ -7,10 +7,28 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "quatcurve/types.hpp"
 
 namespace quatcurve::detail {
+
+// ---- preconditions -----------------------------------------------------------------------------------
+// QUATCURVE_EXPECTS(cond, what) states a precondition of a private kernel: the ranges its formulas
+// need. Callers guarantee them (the public API validates input and splits segments so they hold);
+// the sanitizer build (QUATCURVE_ASSERTS, CMake's QUATCURVE_SANITIZE) checks them and aborts with
+// the condition, so a broken guarantee is found where it breaks, not as a wrong number downstream.
+[[noreturn]] inline void precondition_failed(const char* cond, const char* what, const char* file, int line) {
+    std::fprintf(stderr, "quatcurve: precondition failed: %s (%s) at %s:%d\n", what, cond, file, line);
+    std::abort();
+}
+#ifdef QUATCURVE_ASSERTS
+#define QUATCURVE_EXPECTS(cond, what) \
+    ((cond) ? void(0) : ::quatcurve::detail::precondition_failed(#cond, what, __FILE__, __LINE__))
+#else
+#define QUATCURVE_EXPECTS(cond, what) ((void)0)
+#endif
 
 constexpr double kPi = 3.141592653589793238462643383279502884;
 constexpr double kTwoPi = 2.0 * kPi;
@@ -49,6 +67,7 @@ inline Vec3 rot_inv(const Quat& q, const Vec3& v) { return rot(qconj(q), v); }
 // For θ ≤ 2π: Taylor series of the quarter angle x = θ/4 (|x| ≤ π/2, truncation below 1e-19),
 // then the double-angle step c = cos²x − sin²x, k = 2·cos x·sin x/θ. Beyond 2π: libm.
 inline void exp_coeffs(double theta2, double& c, double& k) {
+    QUATCURVE_EXPECTS(theta2 >= 0.0 && theta2 < 1e300, "exp_coeffs: θ² finite and non-negative");
     if (theta2 <= kTwoPi * kTwoPi) {
         // Taylor coefficients: cos x = Σ (−1)^n x^2n/(2n)!, sin x/x = Σ (−1)^n x^2n/(2n+1)!, n ≤ 11.
         static constexpr double kCos[12] = {
@@ -100,6 +119,8 @@ inline double atan_over_x_small(double x) {
 // φ/n with φ = atan2(n, w) ∈ [0, π/2], for n ≥ 0, w ≥ 0, n² + w² ≈ 1 (a unit quaternion's vector
 // length and scalar after the hemisphere fix). Finite at n = 0 (→ 1/w). No libm call.
 inline double atan2_over_n(double n, double w) {
+    QUATCURVE_EXPECTS(n >= 0.0 && w >= 0.0 && std::fabs(n * n + w * w - 1.0) <= 1e-6,
+                      "atan2_over_n: a unit quaternion's |v| and w, both non-negative");
     if (n <= 0.66 * w) return atan_over_x_small(n / w) / w;   // small angles, including n = 0
     if (w <= 0.66 * n) {                                      // near π/2: π/2 − atan(w/n)
         const double x = w / n;
@@ -153,6 +174,20 @@ inline Vec3 rotvec_near(const Quat& q, const Vec3& ref) {
     return (t0 + kTwoPi * k) * u;
 }
 
+// Rotation angle between the unit quaternions a and b (w, x, y, z arrays; either sign), in [0, π]:
+// 4·atan2(|a − b|, |a + b|) with b taken in a's hemisphere, accurate also for tiny angles (where
+// 2·acos(a·b) loses half its digits).
+inline double angle_between(const double* a, const double* b) {
+    const double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0 ? -1.0 : 1.0;
+    double d2 = 0.0, s2 = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        const double d = a[k] - sign * b[k], s = a[k] + sign * b[k];
+        d2 += d * d;
+        s2 += s * s;
+    }
+    return 4.0 * std::atan2(std::sqrt(d2), std::sqrt(s2));
+}
+
 // ---- Jacobians of the exponential map ----------------------------------------------------------------
 // A = (1−cos θ)/θ², B = (θ−sin θ)/θ³, C = (1 − (θ/2)·cot(θ/2))/θ², Ã = A'/θ, B̃ = B'/θ; series below
 // θ = 0.5 (enough terms for 1e-17), closed forms above (1−cos θ written as 2 sin²(θ/2)).
@@ -189,6 +224,7 @@ inline Vec3 jl_apply(const Vec3& rho, const Vec3& v) {
 }
 // J_l(ρ)⁻¹·v = v − ½ ρ×v + C ρ×(ρ×v)   (|ρ| < 2π)
 inline Vec3 jl_inv_apply(const Vec3& rho, const Vec3& v) {
+    QUATCURVE_EXPECTS(glm::dot(rho, rho) < kTwoPi * kTwoPi, "jl_inv_apply: |ρ| < 2π (C is singular at 2π)");
     const JacCoeffs j = jac_coeffs(glm::dot(rho, rho));
     const Vec3 a = glm::cross(rho, v);
     return v - 0.5 * a + j.C * glm::cross(rho, a);
@@ -211,6 +247,7 @@ inline Mat3 jr_matrix(const Vec3& rho) {
     return Mat3(1.0) - j.A * K + j.B * (K * K);
 }
 inline Mat3 jr_inv_matrix(const Vec3& rho) {
+    QUATCURVE_EXPECTS(glm::dot(rho, rho) < kTwoPi * kTwoPi, "jr_inv_matrix: |ρ| < 2π (C is singular at 2π)");
     const JacCoeffs j = jac_coeffs(glm::dot(rho, rho));
     const Mat3 K = skew(rho);
     return Mat3(1.0) + 0.5 * K + j.C * (K * K);

@@ -8,7 +8,14 @@
 // (D(r; v) the derivative of J_r at r along v), is a block-tridiagonal system, nonlinear through the
 // D-term, solved by Newton's method. End velocities: the end segments' slerp velocities r/h (as
 // scipy's RotationSpline), so two keys give SLERP.
+//
+// The solve is checked: Newton stops when its step is below 1e-12 of the largest knot velocity, and
+// must get there within 50 iterations with every residual below 1e-9 of its terms' size; a pivot
+// block that is singular or not finite, or a solve that does not converge, throws InvalidArgument
+// naming the keys around the knot (the curve is not built half-way). Preconditions: every knot
+// segment turns at most π (Curve splits longer ones), so J_r⁻¹ exists; knot times increase.
 #include <cmath>
+#include <string>
 
 #include "curve_impl.hpp"
 
@@ -38,8 +45,35 @@ NTerm n_term(const Vec3& r, const Vec3& b, const JacCoeffs& j) {
 
 }  // namespace
 
+namespace {
+
+// "keys i and j" (or "the sub-key between keys i and j") around knot j, for error messages.
+std::string knot_name(const Curve::Impl& m, std::size_t j) {
+    if (m.kkey[j] >= 0) return "key " + std::to_string(m.kkey[j]) + " (frame " + std::to_string(m.kt[j]) + ")";
+    const int seg = m.kseg[j - 1];
+    return "the sub-key at frame " + std::to_string(m.kt[j]) + " between keys " + std::to_string(seg) + " and " +
+           std::to_string(seg + 1);
+}
+
+// Inverse of a 3×3 pivot block, refused when singular or not finite.
+Mat3 checked_inverse(const Mat3& a, const Curve::Impl& m, std::size_t knot) {
+    const double det = glm::determinant(a);
+    double scale = 0.0;
+    for (int c = 0; c < 3; ++c) scale = std::fmax(scale, glm::length(a[c]));
+    if (!std::isfinite(det) || !(std::fabs(det) > 1e-14 * scale * scale * scale))
+        throw InvalidArgument("SPLINE_C2: the C2 solve is singular at " + knot_name(m, knot) +
+                              " (pivot determinant " + std::to_string(det) + "); the keys around it cannot be "
+                              "joined with continuous angular acceleration");
+    return glm::inverse(a);
+}
+
+}  // namespace
+
 void build_spline(Curve::Impl& m) {
     const std::size_t S = m.kr.size();
+    for (std::size_t i = 0; i < S; ++i)
+        QUATCURVE_EXPECTS(glm::length(m.kr[i]) <= kPi * (1.0 + 1e-9) && m.kt[i + 1] > m.kt[i],
+                          "build_spline: knot segments turn at most π, knot times increase");
     std::vector<double> h(S);
     std::vector<Mat3> E(S), Jr(S);
     std::vector<JacCoeffs> jc(S);
@@ -59,10 +93,14 @@ void build_spline(Curve::Impl& m) {
     if (n > 0) {
         std::vector<Mat3> L(n), D(n), U(n);
         std::vector<Vec3> F(n);
-        for (int iter = 0; iter < 50; ++iter) {
+        bool converged = false;
+        double residual = 0.0;
+        std::size_t worst = 1;
+        for (int iter = 0; iter < 50 && !converged; ++iter) {
             double wmax = 0.0;
             for (const Vec3& v : w) wmax = std::fmax(wmax, glm::length(v));
             // residuals and Jacobian blocks of F_j = G_{j−1} − S_j (row m = j − 1)
+            residual = 0.0;
             for (std::size_t j = 1; j < S; ++j) {
                 const std::size_t i = j - 1;  // segment arriving at knot j
                 const Vec3& r = m.kr[i];
@@ -73,29 +111,41 @@ void build_spline(Curve::Impl& m) {
                 const Vec3 a1 = h[j] * w[j], b1 = h[j] * (E[j] * w[j + 1]);
                 const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
                 F[j - 1] = G - Sj;
+                const double size = glm::length(G) + glm::length(Sj);
+                const double rel = size > 0.0 ? glm::length(F[j - 1]) / size : 0.0;
+                if (!(rel <= residual)) {
+                    residual = rel;
+                    worst = j;
+                }
                 L[j - 1] = (2.0 / h[i]) * Jr[i];
                 D[j - 1] = (1.0 / h[i]) * (nt.jac * E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
                 U[j - 1] = (2.0 / h[j]) * E[j];
             }
             // block Thomas: J·Δ = −F
-            std::vector<Mat3> Dp(n);
+            std::vector<Mat3> Dinv(n);
             std::vector<Vec3> y(n);
-            Dp[0] = D[0];
+            Dinv[0] = checked_inverse(D[0], m, 1);
             y[0] = -F[0];
             for (std::size_t k = 1; k < n; ++k) {
-                const Mat3 f = L[k] * glm::inverse(Dp[k - 1]);
-                Dp[k] = D[k] - f * U[k - 1];
+                const Mat3 f = L[k] * Dinv[k - 1];
+                Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k + 1);
                 y[k] = -F[k] - f * y[k - 1];
             }
             double step = 0.0;
-            Vec3 x = glm::inverse(Dp[n - 1]) * y[n - 1];
+            Vec3 x = Dinv[n - 1] * y[n - 1];
             for (std::size_t k = n; k-- > 0;) {
-                if (k < n - 1) x = glm::inverse(Dp[k]) * (y[k] - U[k] * x);
+                if (k < n - 1) x = Dinv[k] * (y[k] - U[k] * x);
                 w[k + 1] += x;
                 step = std::fmax(step, glm::length(x));
             }
-            if (!(step > 1e-15 * (1.0 + wmax))) break;
+            if (!std::isfinite(step))
+                throw InvalidArgument("SPLINE_C2: the C2 solve diverged near " + knot_name(m, worst));
+            converged = step <= 1e-12 * wmax;
         }
+        if (!converged && !(residual <= 1e-9))
+            throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 50 Newton steps; the angular "
+                                  "acceleration at " + knot_name(m, worst) + " still jumps by " +
+                                  std::to_string(residual) + " of its size");
     }
     m.spline.resize(S);
     for (std::size_t i = 0; i < S; ++i) {
