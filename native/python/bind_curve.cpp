@@ -60,6 +60,7 @@ py::dict options_dict(const Curve& c) {
     const CurveOptions& o = c.options();
     for (const std::string& name : option_names(c.method())) {
         if (name == "shortest_path") d["shortest_path"] = o.shortest_path;
+        else if (name == "clamped") d["clamped"] = o.clamped;
         else if (name == "tension") d["tension"] = per_key_value(o.tension);
         else if (name == "continuity") d["continuity"] = per_key_value(o.continuity);
         else if (name == "bias") d["bias"] = per_key_value(o.bias);
@@ -80,12 +81,15 @@ void bind_curve(py::module_& m) {
     py::tuple names(method_names().size());
     for (std::size_t i = 0; i < method_names().size(); ++i) names[i] = method_names()[i];
     m.attr("METHODS") = names;
+    m.attr("PATH_RULE_FACTOR") = kPathRuleFactor;
+    m.attr("PATH_RULE_SLACK") = kPathRuleSlack;
 
     py::class_<Curve>(m, "Curve",
                       "Orientation curve through keys (times in frames, quaternions w, x, y, z).\n\n"
                       "Curve(times, quats, method='SLERP', **options); Curve.from_euler(times, angles, "
                       "order='XYZ', method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
-                      "(SLERP, bool); tension, continuity, bias in [-1, 1] and ease_in, ease_out in [0, 1] "
+                      "(SLERP, bool); clamped (SQUAD, TCB, CATMULL_ROM, bool, default True: overshoot-free "
+                      "tangents; False: the textbook ones); tension, continuity, bias in [-1, 1] and ease_in, ease_out in [0, 1] "
                       "(TCB; a number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
                       "(..., 3) in rad/frame, world frame; constant outside the keys.")
         .def(py::init([](py::handle times, py::handle quats, const std::string& method, const py::kwargs& kwargs) {
@@ -141,6 +145,24 @@ void bind_curve(py::module_& m) {
                 return out;
             },
             py::arg("times"), "World-frame angular velocity (rad/frame), exact, shape times.shape + (3,).")
+        .def(
+            "segment_paths",
+            [](const Curve& c, std::size_t samples_per_segment) {
+                std::vector<SegmentPath> p;
+                {
+                    py::gil_scoped_release release;
+                    p = c.segment_paths(samples_per_segment);
+                }
+                DArray a({static_cast<py::ssize_t>(p.size()), py::ssize_t(2)});
+                for (std::size_t i = 0; i < p.size(); ++i) {
+                    a.mutable_data()[2 * i] = p[i].arc;
+                    a.mutable_data()[2 * i + 1] = p[i].length;
+                }
+                return a;
+            },
+            py::arg("samples_per_segment") = 64,
+            "Per key segment (K-1, 2): the keyed arc and the sampled path length (radians). The path rule: "
+            "length <= PATH_RULE_FACTOR * arc + PATH_RULE_SLACK.")
         .def_property_readonly("times",
                                [](const Curve& c) {
                                    const auto& t = c.times();

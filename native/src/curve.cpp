@@ -216,16 +216,21 @@ const std::vector<std::string>& method_names() { return kMethodNames; }
 
 std::vector<std::string> option_names(Method method) {
     if (method == Method::SLERP) return {"shortest_path"};
-    if (method == Method::TCB) return kTcbOptions;
+    if (method == Method::SQUAD || method == Method::CATMULL_ROM) return {"clamped"};
+    if (method == Method::TCB) {
+        std::vector<std::string> names{"clamped"};
+        names.insert(names.end(), kTcbOptions.begin(), kTcbOptions.end());
+        return names;
+    }
     return {};
 }
 
 void set_option(CurveOptions& options, Method method, const std::string& name,
                 const std::vector<double>& values) {
-    const bool known = name == "shortest_path" || tcb_field(options, name) != nullptr;
+    const bool known = name == "shortest_path" || name == "clamped" || tcb_field(options, name) != nullptr;
     if (!known)
-        throw InvalidArgument(name + ": unknown option (options: shortest_path for SLERP; " + join(kTcbOptions) +
-                              " for TCB)");
+        throw InvalidArgument(name + ": unknown option (options: shortest_path for SLERP; clamped for SQUAD, TCB "
+                              "and CATMULL_ROM; " + join(kTcbOptions) + " for TCB)");
     const auto valid = option_names(method);
     if (std::find(valid.begin(), valid.end(), name) == valid.end())
         throw InvalidArgument(name + ": not an option of method " + method_name(method) +
@@ -234,10 +239,10 @@ void set_option(CurveOptions& options, Method method, const std::string& name,
     for (std::size_t i = 0; i < values.size(); ++i)
         if (!std::isfinite(values[i]))
             throw InvalidArgument(name + "[" + std::to_string(i) + "]: not a finite number");
-    if (name == "shortest_path") {
+    if (name == "shortest_path" || name == "clamped") {
         if (values.size() != 1 || (values[0] != 0.0 && values[0] != 1.0))
-            throw InvalidArgument("shortest_path: expected a bool");
-        options.shortest_path = values[0] != 0.0;
+            throw InvalidArgument(name + ": expected a bool");
+        (name == "clamped" ? options.clamped : options.shortest_path) = values[0] != 0.0;
         return;
     }
     *tcb_field(options, name) = values;
@@ -316,6 +321,8 @@ void Curve::build() {
     // ---- options
     if (method_ != Method::SLERP && !options_.shortest_path)
         throw InvalidArgument(std::string("shortest_path: not an option of method ") + method_name(method_));
+    if (!options_.clamped && method_ != Method::SQUAD && method_ != Method::TCB && method_ != Method::CATMULL_ROM)
+        throw InvalidArgument(std::string("clamped: not an option of method ") + method_name(method_));
     if (method_ == Method::TCB) {
         check_per_key(options_.tension, "tension", -1.0, 1.0, K);
         check_per_key(options_.continuity, "continuity", -1.0, 1.0, K);
@@ -457,9 +464,9 @@ void Curve::build() {
             break;
         case Method::NLERP: detail::build_lerp(m, m.kt, m.kq); break;
         case Method::SLERP: detail::build_slerp(m); break;
-        case Method::SQUAD: detail::build_squad(m, nullptr, K); break;
-        case Method::TCB: detail::build_squad(m, &options_, K); break;
-        case Method::CATMULL_ROM: detail::build_bezier(m); break;
+        case Method::SQUAD:
+        case Method::TCB:
+        case Method::CATMULL_ROM: detail::build_tangent_curve(m, method_, options_); break;
         case Method::SPLINE_C2: detail::build_spline(m); break;
     }
 }
@@ -504,6 +511,30 @@ void Curve::angular_velocity(const double* times, std::size_t n, double* out) co
         case Method::CATMULL_ROM: detail::velocity_bezier(m, times, n, out); break;
         case Method::SPLINE_C2: detail::velocity_spline(m, times, n, out); break;
     }
+}
+
+std::vector<SegmentPath> Curve::segment_paths(std::size_t samples_per_segment) const {
+    if (samples_per_segment < 1) throw InvalidArgument("samples_per_segment: must be at least 1");
+    const Impl& m = *impl_;
+    std::vector<SegmentPath> paths(rotvecs_.size());
+    if (paths.empty()) return paths;
+    const std::vector<double> arcs = detail::key_arcs(m);
+    for (std::size_t i = 0; i < paths.size(); ++i) paths[i] = {arcs[i], 0.0};
+    const std::vector<double>& knots = m.kt;  // keys and sub-keys; m.kseg maps knot segments to keys
+    const std::size_t S = knots.size() - 1;
+    std::vector<double> t(S * samples_per_segment + 1), q(4 * t.size());
+    for (std::size_t j = 0; j < S; ++j)
+        for (std::size_t k = 0; k < samples_per_segment; ++k)
+            t[j * samples_per_segment + k] =
+                knots[j] + (knots[j + 1] - knots[j]) * static_cast<double>(k) / static_cast<double>(samples_per_segment);
+    t.back() = knots.back();
+    sample(t.data(), t.size(), q.data());
+    for (std::size_t j = 0; j < S; ++j) {
+        const std::size_t seg = static_cast<std::size_t>(m.kseg[j]);
+        for (std::size_t k = j * samples_per_segment; k < (j + 1) * samples_per_segment; ++k)
+            paths[seg].length += detail::angle_between(q.data() + 4 * k, q.data() + 4 * k + 4);
+    }
+    return paths;
 }
 
 std::vector<Quat> Curve::sample(const std::vector<double>& times) const {

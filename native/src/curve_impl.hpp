@@ -40,11 +40,13 @@ struct SquadSeg {
     double r2, psi2;
     Vec3 r, psi;
 };
-// Spherical cubic Bezier b0..b3 (de Casteljau with slerp); d01, d12, d23 the rotation vectors
-// between consecutive control rotations (local frames).
+// Spherical cubic Bezier with control rotations b0..b3 in the cumulative form (Kim, Kim & Shin):
+// q(s) = sign·b0·exp(β1 d01/2)·exp(β2 d12/2)·exp(β3 d23/2), β1 = 1 − (1−s)³, β2 = 3s² − 2s³,
+// β3 = s³; d01, d12, d23 the rotation vectors between consecutive control rotations (local frames);
+// b0 carries the sign (±) that keeps the output sign-continuous across knots.
 struct BezierSeg {
     double t0, inv_h;
-    Quat b0, b1, b2;
+    Q4 b0;
     Vec3 d01, d12, d23;
 };
 // q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2).
@@ -62,6 +64,8 @@ struct EulerSeg {
 // Index j of the segment with knots[j] ≤ t < knots[j+1] (the last segment for t = knots.back()),
 // for knots[0] ≤ t ≤ knots.back(); `hint` is the previous answer, so sorted times cost O(1) each.
 inline std::size_t locate(const double* knots, std::size_t segments, double t, std::size_t& hint) {
+    QUATCURVE_EXPECTS(segments >= 1 && hint < segments && t >= knots[0] && t <= knots[segments],
+                      "locate: a time inside the knots and a hint naming a segment");
     std::size_t j = hint;
     if (t >= knots[j]) {
         if (j + 1 >= segments || t < knots[j + 1]) {
@@ -75,6 +79,11 @@ inline std::size_t locate(const double* knots, std::size_t segments, double t, s
     }
     hint = j;
     return j;
+}
+
+// A per-key option (one value for every key, or one per key) at key `key`.
+inline double per_key(const std::vector<double>& v, int key) {
+    return v.size() == 1 ? v[0] : v[static_cast<std::size_t>(key)];
 }
 
 [[noreturn]] inline void bad_time(std::size_t i) {
@@ -175,9 +184,24 @@ void build_lerp(Curve::Impl& m, const std::vector<double>& kt, const std::vector
 void build_slerp(Curve::Impl& m);                                                            // curve.cpp
 void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::vector<Vec3>& angles,
                  EulerOrder order);                                                          // curve.cpp
-void build_squad(Curve::Impl& m, const CurveOptions* tcb, std::size_t keys);  // curve_squad.cpp
-void build_bezier(Curve::Impl& m);                                            // curve_squad.cpp
 void build_spline(Curve::Impl& m);                                            // curve_spline.cpp
+
+// SQUAD, TCB and CATMULL_ROM: knot tangents (curve_tangents.cpp), then the method's segments.
+// A tangent is a rotation vector per unit segment parameter s in its knot's local frame: out[j]
+// leaves knot j into knot segment j, in[j] arrives at knot j from knot segment j − 1.
+struct KnotTangents {
+    std::vector<Vec3> out, in;
+};
+void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& options);  // curve_tangents.cpp
+// The keyed arc of every key segment: the sum of its knot segments' angles — the angle between its
+// keys, or for a spin from Euler keys the turn of the geodesic chain through its sub-keys.
+std::vector<double> key_arcs(const Curve::Impl& m);
+SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_squad.cpp
+void set_squad_ease(Curve::Impl& m, const CurveOptions& tcb, std::size_t keys);                // curve_squad.cpp
+Q4 squad_at(const SquadSeg& g, double s);                                                      // curve_squad.cpp
+BezierSeg make_bezier_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_catmull_rom.cpp
+Q4 bezier_at(const BezierSeg& g, double s);                                                       // curve_catmull_rom.cpp
+void chain_bezier_signs(Curve::Impl& m);                                                          // curve_catmull_rom.cpp
 
 void sample_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void velocity_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
@@ -193,6 +217,12 @@ void sample_bezier(const Curve::Impl& m, const double* t, std::size_t n, double*
 void velocity_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void sample_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void velocity_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+
+inline std::vector<double> key_arcs(const Curve::Impl& m) {
+    std::vector<double> arcs(m.kseg.empty() ? 0 : static_cast<std::size_t>(m.kseg.back()) + 1, 0.0);
+    for (std::size_t j = 0; j < m.kseg.size(); ++j) arcs[static_cast<std::size_t>(m.kseg[j])] += glm::length(m.kr[j]);
+    return arcs;
+}
 
 inline void store(const Q4& q, double* out) {
     out[0] = q.w;

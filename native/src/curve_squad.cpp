@@ -1,9 +1,5 @@
-// SQUAD and TCB (Shoemake's spherical quadrangle with tangents from the neighbouring keys) and
-// CATMULL_ROM (spherical cubic Bezier by de Casteljau with slerp).
-//
-// Tangents are rotation vectors per unit segment parameter s in the local frame of their knot.
-// A segment's incoming rotation g1 = r[j−1] and outgoing g2 = r[j] are the same vector in the knot's
-// frame (a rotation leaves its own axis fixed), so they combine directly.
+// SQUAD and TCB: Shoemake's spherical quadrangle through the knots with the knot tangents of
+// curve_tangents.cpp, and TCB's ease (3ds Max's Ease To / Ease From) as a time warp per key segment.
 #include <cmath>
 
 #include "curve_impl.hpp"
@@ -11,10 +7,6 @@
 namespace quatcurve::detail {
 
 namespace {
-
-double per_key(const std::vector<double>& v, int key) {
-    return v.size() == 1 ? v[0] : v[static_cast<std::size_t>(key)];
-}
 
 // 3ds Max's ease curve of a segment: u ↦ u' with zero slope at u = 0 when a > 0 (ease out of the
 // first key) and at u = 1 when b > 0 (ease in to the second key): parabola on [0, a], line, parabola
@@ -63,12 +55,6 @@ inline Q4 squad_from(const SquadSeg& g, double s, double C1, double K1, double C
     k3 *= gf;
     return mul(A, {c3, k3 * X.x, k3 * X.y, k3 * X.z});
 }
-inline Q4 squad_at(const SquadSeg& g, double s) {
-    double c1, k1, c2, k2;
-    exp_coeffs(s * s * g.r2, c1, k1);
-    exp_coeffs(s * s * g.psi2, c2, k2);
-    return squad_from(g, s, c1, k1 * s, c2, k2 * s);
-}
 
 // The same construction with jets: exact world angular velocity; s advances at sd per frame.
 inline RJet squad_jet(const SquadSeg& g, double s, double sd) {
@@ -76,20 +62,6 @@ inline RJet squad_jet(const SquadSeg& g, double s, double sd) {
     const RJet B = jmul(jconst(to_quat(g.a)), jexp({s * g.psi, sd * g.psi}));
     const VJet chi = jlog_unflipped(jmul(jinv(A), B));
     return jmul(A, jexp(jscale(2.0 * s * (1.0 - s), (2.0 - 4.0 * s) * sd, chi)));
-}
-
-// Spherical cubic Bezier by de Casteljau with slerp, with jets. Each slerp's rotation vector takes
-// the branch nearest the Euclidean de Casteljau's difference vector, so it stays continuous in s.
-inline RJet bezier_jet(const BezierSeg& g, double s, double sd) {
-    const RJet P01 = jmul(jconst(g.b0), jexp({s * g.d01, sd * g.d01}));
-    const RJet P12 = jmul(jconst(g.b1), jexp({s * g.d12, sd * g.d12}));
-    const RJet P23 = jmul(jconst(g.b2), jexp({s * g.d23, sd * g.d23}));
-    const VJet L = jlog_near(jmul(jinv(P01), P12), (1.0 - s) * g.d01 + s * g.d12);
-    const VJet R = jlog_near(jmul(jinv(P12), P23), (1.0 - s) * g.d12 + s * g.d23);
-    const RJet P012 = jmul(P01, jexp(jscale(s, sd, L)));
-    const RJet P123 = jmul(P12, jexp(jscale(s, sd, R)));
-    const VJet M = jlog_near(jmul(jinv(P012), P123), (1.0 - s) * L.v + s * R.v);
-    return jmul(P012, jexp(jscale(s, sd, M)));
 }
 
 // Runs inside(i, segment, s, ds/dt) over the knot segments; for an eased TCB curve the time is first
@@ -124,102 +96,51 @@ void drive_eased(const Curve::Impl& m, const std::vector<double>& key_times, con
 
 }  // namespace
 
-// Kochanek–Bartels tangents at every knot (tension t, continuity c, bias b; all 0 for SQUAD and at
-// sub-keys), scaled for the neighbouring segment lengths (KB's adjustment for unequal spacing):
-//   out_j = [(1−t)(1+c)(1+b)/2·g1 + (1−t)(1−c)(1−b)/2·g2] · 2h_j/(h_{j−1}+h_j)
-//   in_j  = [(1−t)(1−c)(1+b)/2·g1 + (1−t)(1+c)(1−b)/2·g2] · 2h_{j−1}/(h_{j−1}+h_j)
-// so with c = 0 both give the angular velocity (g1+g2)/(h_{j−1}+h_j)·(1−t)(…) per frame: C1. End
-// keys take (1−t)·(their segment's rotation). The quadrangle's control rotations then are
-// a_i = q_i·exp(α/2), α = (out_i − r_i)/2 and b_{i+1} = q_{i+1}·exp(β/2), β = (r_i − in_{i+1})/2,
-// which gives q'(0) = out_i and q'(1) = in_{i+1} (per s). At uniform spacing with t = c = b = 0 this
-// is Shoemake's a_i = q_i·exp(−(log(q_i⁻¹q_{i+1}) + log(q_i⁻¹q_{i−1}))/4).
-void build_squad(Curve::Impl& m, const CurveOptions* tcb, std::size_t keys) {
-    const std::size_t S = m.kr.size();
-    std::vector<Vec3> out(S + 1), in(S + 1);
-    for (std::size_t j = 0; j <= S; ++j) {
-        double t = 0.0, c = 0.0, b = 0.0;
-        if (tcb && m.kkey[j] >= 0) {
-            t = per_key(tcb->tension, m.kkey[j]);
-            c = per_key(tcb->continuity, m.kkey[j]);
-            b = per_key(tcb->bias, m.kkey[j]);
-        }
-        if (j == 0) {
-            out[j] = (1.0 - t) * m.kr[0];
-            continue;
-        }
-        if (j == S) {
-            in[j] = (1.0 - t) * m.kr[S - 1];
-            continue;
-        }
-        const Vec3& g1 = m.kr[j - 1];
-        const Vec3& g2 = m.kr[j];
-        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
-        const Vec3 td = 0.5 * (1.0 - t) * ((1.0 + c) * (1.0 + b) * g1 + (1.0 - c) * (1.0 - b) * g2);
-        const Vec3 ts = 0.5 * (1.0 - t) * ((1.0 - c) * (1.0 + b) * g1 + (1.0 + c) * (1.0 - b) * g2);
-        out[j] = td * (2.0 * h1 / (h0 + h1));
-        in[j] = ts * (2.0 * h0 / (h0 + h1));
-    }
-    m.squad.resize(S);
-    for (std::size_t i = 0; i < S; ++i) {
-        const Vec3& r = m.kr[i];
-        const Vec3 alpha = 0.5 * (out[i] - r);
-        const Vec3 beta = 0.5 * (r - in[i + 1]);
-        // Every quaternion of the quadrangle is taken on the segment's own chain: the end is
-        // q_i·exp(r/2) (= ±q_{i+1}, whatever sign is stored) and the inner slerp a → b runs to b as
-        // it stands (plain slerp, as Shoemake's formula). Then X = A⁻¹B is exp(α/2) at s = 0 and
-        // exp(β/2) at s = 1, so the outer slerp needs no hemisphere choice and the curve is C1
-        // even when stored neighbours sit in opposite hemispheres.
-        const Quat a = qmul(m.kq[i], qexp(alpha));
-        const Quat b = qmul(qmul(m.kq[i], qexp(r)), qexp(beta));
-        const Vec3 psi = rotvec_unflipped(qmul(qconj(a), b));
-        SquadSeg& g = m.squad[i];
-        g.t0 = m.kt[i];
-        g.inv_h = 1.0 / (m.kt[i + 1] - m.kt[i]);
-        g.A = q4(m.kq[i]);
-        g.BA = mul(g.A, {0.0, r.x, r.y, r.z});
-        g.a = q4(a);
-        g.Ba = mul(g.a, {0.0, psi.x, psi.y, psi.z});
-        g.r2 = glm::dot(r, r);
-        g.psi2 = glm::dot(psi, psi);
-        g.r = r;
-        g.psi = psi;
-    }
-    if (tcb) {
-        m.ease_a.resize(keys - 1);
-        m.ease_b.resize(keys - 1);
-        for (std::size_t k = 0; k + 1 < keys; ++k) {
-            m.ease_a[k] = per_key(tcb->ease_out, static_cast<int>(k));
-            m.ease_b[k] = per_key(tcb->ease_in, static_cast<int>(k + 1));
-            if (m.ease_a[k] > 0.0 || m.ease_b[k] > 0.0) m.eased = true;
-        }
-    }
+Q4 squad_at(const SquadSeg& g, double s) {
+    double c1, k1, c2, k2;
+    exp_coeffs(s * s * g.r2, c1, k1);
+    exp_coeffs(s * s * g.psi2, c2, k2);
+    return squad_from(g, s, c1, k1 * s, c2, k2 * s);
 }
 
-// Non-uniform Catmull–Rom (Barry–Goldman) velocity at each knot, the derivative of the parabola
-// through the neighbours: V_j = (h_j/h_{j−1}·g1 + h_{j−1}/h_j·g2)/(h_{j−1}+h_j) per frame; end knots
-// take their segment's slerp velocity. Bezier controls: b1 = q_i·exp(h·V_i/6), b2 = q_{i+1}·exp(−h·V_{i+1}/6),
-// so the curve leaves q_i with velocity V_i and reaches q_{i+1} with V_{i+1}: C1.
-void build_bezier(Curve::Impl& m) {
-    const std::size_t S = m.kr.size();
-    std::vector<Vec3> V(S + 1);
-    V[0] = m.kr[0] / (m.kt[1] - m.kt[0]);
-    V[S] = m.kr[S - 1] / (m.kt[S] - m.kt[S - 1]);
-    for (std::size_t j = 1; j < S; ++j) {
-        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
-        V[j] = (h1 / h0 * m.kr[j - 1] + h0 / h1 * m.kr[j]) / (h0 + h1);
-    }
-    m.bezier.resize(S);
-    for (std::size_t i = 0; i < S; ++i) {
-        const double h = m.kt[i + 1] - m.kt[i];
-        BezierSeg& g = m.bezier[i];
-        g.t0 = m.kt[i];
-        g.inv_h = 1.0 / h;
-        g.d01 = h / 3.0 * V[i];
-        g.d23 = h / 3.0 * V[i + 1];
-        g.b0 = m.kq[i];
-        g.b1 = qmul(m.kq[i], qexp(g.d01));
-        g.b2 = qmul(m.kq[i + 1], qexp(-g.d23));
-        g.d12 = rotvec_near(qmul(qconj(g.b1), g.b2), m.kr[i] - g.d01 - g.d23);
+// The quadrangle of knot segment i from its knot tangents (curve_tangents.cpp): control rotations
+// a = q_i·exp(α/2), α = (out − r)/2 and b = q_{i+1}·exp(β/2), β = (r − in)/2, which gives
+// q'(0) = out and q'(1) = in (per s). At uniform spacing with Kochanek–Bartels' t = c = b = 0 this
+// is Shoemake's a_i = q_i·exp(−(log(q_i⁻¹q_{i+1}) + log(q_i⁻¹q_{i−1}))/4).
+SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in) {
+    const Vec3& r = m.kr[i];
+    const Vec3 alpha = 0.5 * (out - r);
+    const Vec3 beta = 0.5 * (r - in);
+    // Every quaternion of the quadrangle is taken on the segment's own chain: the end is
+    // q_i·exp(r/2) (= ±q_{i+1}, whatever sign is stored) and the inner slerp a → b runs to b as
+    // it stands (plain slerp, as Shoemake's formula). Then X = A⁻¹B is exp(α/2) at s = 0 and
+    // exp(β/2) at s = 1, so the outer slerp needs no hemisphere choice and the curve is C1
+    // even when stored neighbours sit in opposite hemispheres.
+    const Quat a = qmul(m.kq[i], qexp(alpha));
+    const Quat b = qmul(qmul(m.kq[i], qexp(r)), qexp(beta));
+    const Vec3 psi = rotvec_unflipped(qmul(qconj(a), b));
+    SquadSeg g;
+    g.t0 = m.kt[i];
+    g.inv_h = 1.0 / (m.kt[i + 1] - m.kt[i]);
+    g.A = q4(m.kq[i]);
+    g.BA = mul(g.A, {0.0, r.x, r.y, r.z});
+    g.a = q4(a);
+    g.Ba = mul(g.a, {0.0, psi.x, psi.y, psi.z});
+    g.r2 = glm::dot(r, r);
+    g.psi2 = glm::dot(psi, psi);
+    g.r = r;
+    g.psi = psi;
+    return g;
+}
+
+// TCB's ease per key segment: ease_out of its first key, ease_in of its second key.
+void set_squad_ease(Curve::Impl& m, const CurveOptions& tcb, std::size_t keys) {
+    m.ease_a.resize(keys - 1);
+    m.ease_b.resize(keys - 1);
+    for (std::size_t k = 0; k + 1 < keys; ++k) {
+        m.ease_a[k] = per_key(tcb.ease_out, static_cast<int>(k));
+        m.ease_b[k] = per_key(tcb.ease_in, static_cast<int>(k + 1));
+        if (m.ease_a[k] > 0.0 || m.ease_b[k] > 0.0) m.eased = true;
     }
 }
 
@@ -298,30 +219,6 @@ void velocity_squad(const Curve::Impl& m, const std::vector<double>& key_times, 
         m, key_times, times, n,
         [&](std::size_t i, std::size_t j, double s, double sd) { store(squad_jet(m.squad[j], s, sd).w, out + 3 * i); },
         [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); }, t0.data(), ih.data());
-}
-
-// The output takes the hemisphere of the segment's slerp, Q·exp(s r/2), so it is sign-continuous.
-void sample_bezier(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
-    drive(
-        m.kt, times, n,
-        [&](std::size_t i, std::size_t j, double t) {
-            const BezierSeg& g = m.bezier[j];
-            const double s = (t - g.t0) * g.inv_h;
-            const Quat q = bezier_jet(g, s, 0.0).q;
-            const Quat anchor = qmul(m.kq[j], qexp(s * m.kr[j]));
-            store(qdot(q, anchor) < 0.0 ? -q : q, out + 4 * i);
-        },
-        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
-}
-
-void velocity_bezier(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
-    drive(
-        m.kt, times, n,
-        [&](std::size_t i, std::size_t j, double t) {
-            const BezierSeg& g = m.bezier[j];
-            store(bezier_jet(g, (t - g.t0) * g.inv_h, g.inv_h).w, out + 3 * i);
-        },
-        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
 }
 
 }  // namespace quatcurve::detail

@@ -230,7 +230,9 @@ TEST(Curve, SquadAtUniformSpacingIsShoemake) {
     s.back() = q.back();
     for (std::size_t i = 1; i + 1 < q.size(); ++i)
         s[i] = qmul(q[i], qexp_rv(-(rotvec(qmul(conjugate(q[i]), q[i + 1])) + rotvec(qmul(conjugate(q[i]), q[i - 1]))) / 4.0));
-    const Curve c = make(k, Method::SQUAD);
+    CurveOptions textbook;
+    textbook.clamped = false;  // random axes turn back at some keys, where the clamp would act
+    const Curve c = make(k, Method::SQUAD, textbook);
     for (std::size_t i = 0; i + 1 < q.size(); ++i)
         for (double h : {0.0, 0.13, 0.5, 0.71, 0.99}) {
             const Quat ref = slerp_ref(slerp_ref(q[i], q[i + 1], h), slerp_ref(s[i], s[i + 1], h), 2 * h * (1 - h));

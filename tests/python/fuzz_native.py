@@ -1032,7 +1032,8 @@ def build_reduce(fn, d, euler):
 
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
-CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "times"}
+CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "segment_paths", "times"}
+CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 
 
@@ -1045,6 +1046,10 @@ def draw_options(d: Draw, method, k):
         kwargs["shortest_path"], bad = d.pick([(True, False), (False, False), (2, True), ("yes", True),
                                                (np.bool_(False), False), (None, True)], "shortest_path")
         must_fail = "bad shortest_path" if bad else ""
+    if method in CLAMPED_METHODS and d.chance(0.3, "clamped"):
+        kwargs["clamped"], bad = d.pick([(True, False), (False, False), (np.bool_(True), False), (0.5, True),
+                                         ("no", True)], "clamped")
+        must_fail = must_fail or ("bad clamped" if bad else "")
     if method == "TCB":
         for name in TCB_OPTIONS:
             if not d.chance(0.5, name):
@@ -1178,6 +1183,7 @@ def build_curve(method, d: Draw) -> Case:
             except (ValueError, TypeError) as e:
                 results[name + "_error"] = e
         results["at_keys"] = c.sample(c.times)
+        results["paths"] = c.segment_paths()
         return results
 
     def check(r):
@@ -1193,6 +1199,15 @@ def build_curve(method, d: Draw) -> Case:
         err = np_angle(at, r["keys_quats"])
         if err.size:
             expect(err.max() < 1e-6, f"sample at key {int(err.argmax())} is {err.max()!r} rad off the key")
+        # the path rule: every key segment of a clamped tangent method (the default) turns at most
+        # PATH_RULE_FACTOR × its keyed arc + PATH_RULE_SLACK (the clamp keeps a 2% margin)
+        paths = r["paths"]
+        shape_is(paths, (max(kt.size - 1, 0), 2), "segment_paths")
+        finite(paths, "segment_paths")
+        expect(bool(np.all(paths >= 0)), "segment_paths: negative arc or length")
+        if method in CLAMPED_METHODS and kwargs.get("clamped", True) is not False and paths.size:
+            excess = paths[:, 1] - (qc.PATH_RULE_FACTOR * paths[:, 0] + qc.PATH_RULE_SLACK)
+            expect(excess.max() <= 1e-9, f"segment {int(excess.argmax())} breaks the path rule by {excess.max()!r} rad")
         for name, tail in (("sample", (4,)), ("angular_velocity", (3,))):
             e = r[name + "_error"]
             if sample_fail:

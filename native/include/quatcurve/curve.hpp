@@ -13,10 +13,21 @@
 //                    (then the keyed path: the arc from q[i] to q[i+1] as stored, up to 360°).
 //   SQUAD            Shoemake's spherical quadrangle; its inner control points are placed so that
 //                    the angular velocity is continuous also for non-uniform key spacing.
-//   CATMULL_ROM      spherical cubic Bezier by de Casteljau with slerp, tangents of the non-uniform
-//                    (Barry–Goldman) Catmull–Rom spline; C1.
+//   CATMULL_ROM      spherical cubic Bezier in the cumulative form of Kim, Kim & Shin (1995),
+//                    q(s) = b0·exp(β1(s)·d01)·exp(β2(s)·d12)·exp(β3(s)·d23): no logarithm at run
+//                    time, hence no branch choice and no jump, whatever the tangents; C1.
 //   TCB              Kochanek–Bartels on quaternions as in 3ds Max's TCB rotation: tension,
 //                    continuity, bias (one value or one per key) and ease_in / ease_out per key.
+//
+// Tangents of SQUAD, TCB and CATMULL_ROM (curve_tangents.cpp has the rule in full): by default
+// (clamped = true) time-scaled — the mean angular velocity over the two segments around a key —
+// then clamped on the sphere as Blender's Auto Clamped handles are for scalars: a key where the
+// motion holds or turns back gets a zero tangent, no tangent is longer than three times its
+// segment's arc (Fritsch–Carlson), and every key segment obeys the path rule: its path is at most
+// 1.5 × its keyed arc + 10° (kPathRuleFactor, kPathRuleSlack). So two equal keys hold still, and a
+// short segment next to a long one does not overshoot. clamped = false gives the textbook tangents
+// (Kochanek–Bartels' unequal-spacing adjustment; Barry–Goldman for CATMULL_ROM), unclamped.
+// SPLINE_C2 is never clamped (it is exact C2): Curve::segment_paths reports its overshoot.
 //   SPLINE_C2        cubic rotation vector per segment (local frame of its first key) with
 //                    continuous angular velocity and angular acceleration at every key, for any key
 //                    times; end velocities are the end segments' slerp velocities (as scipy's
@@ -63,6 +74,7 @@ const std::vector<std::string>& method_names();
 // Options of the methods. A per-key option holds one value (global) or one value per key.
 struct CurveOptions {
     bool shortest_path = true;                 // SLERP
+    bool clamped = true;                       // SQUAD, TCB, CATMULL_ROM (see "Tangents" above)
     std::vector<double> tension{0.0};          // TCB, each in [-1, 1]
     std::vector<double> continuity{0.0};       // TCB, each in [-1, 1]
     std::vector<double> bias{0.0};             // TCB, each in [-1, 1]
@@ -70,14 +82,29 @@ struct CurveOptions {
     std::vector<double> ease_out{0.0};         // TCB, each in [0, 1] (3ds Max "Ease From" / 50)
 };
 
-// Names of the options `method` takes ("shortest_path" for SLERP; "tension", "continuity", "bias",
-// "ease_in", "ease_out" for TCB; none for the others).
+// Names of the options `method` takes ("shortest_path" for SLERP; "clamped" for SQUAD, TCB and
+// CATMULL_ROM; "tension", "continuity", "bias", "ease_in", "ease_out" for TCB; none for the others).
 std::vector<std::string> option_names(Method method);
 // Sets option `name` of `options` from `values` (a bool is {0} or {1}). Throws InvalidArgument for
 // an unknown name, a name `method` does not take, an empty or non-finite value, or a bool that is
 // not 0/1. Ranges and per-key lengths are checked by the Curve constructor.
 void set_option(CurveOptions& options, Method method, const std::string& name,
                 const std::vector<double>& values);
+
+// The path rule: a key segment whose keys are `arc` radians apart should turn at most
+// kPathRuleFactor·arc + kPathRuleSlack radians along the way.
+constexpr double kPathRuleFactor = 1.5;
+constexpr double kPathRuleSlack = 10.0 * 3.141592653589793238462643383279502884 / 180.0;
+
+// One key segment's keyed arc (the angle between its keys along the curve's chosen path; for Euler
+// keys that turn a full turn or more, the turn of the chain of sub-keys on the Euler path, so spins
+// count in full) and the length of the sampled path, both in radians.
+struct SegmentPath {
+    double arc;
+    double length;
+    // length ≤ kPathRuleFactor·arc + kPathRuleSlack
+    bool obeys_path_rule() const { return length <= kPathRuleFactor * arc + kPathRuleSlack; }
+};
 
 class Curve {
 public:
@@ -108,6 +135,11 @@ public:
     // At a key the velocity of the segment that starts there (of the last segment at the last key).
     void angular_velocity(const double* times, std::size_t n, double* out_xyz) const;
     std::vector<Vec3> angular_velocity(const std::vector<double>& times) const;
+
+    // Per key segment (keys − 1 of them): keyed arc and path length, the path measured as the sum
+    // of the angles between `samples_per_segment` + 1 equally spaced samples of every knot segment
+    // (a lower bound of the true length that converges to it). samples_per_segment ≥ 1.
+    std::vector<SegmentPath> segment_paths(std::size_t samples_per_segment = 64) const;
 
     Method method() const { return method_; }
     const CurveOptions& options() const { return options_; }

@@ -1,0 +1,186 @@
+// Knot tangents of SQUAD, TCB and CATMULL_ROM, and the clamp that keeps them on their keys.
+//
+// A tangent is a rotation vector per unit segment parameter s in the local frame of its knot (see
+// curve_impl.hpp, KnotTangents). A knot's incoming rotation g1 = r[j−1] and outgoing g2 = r[j] are
+// the same vectors in the knot's frame (a rotation leaves its own axis fixed), so they combine
+// directly. h0, h1: the durations (frames) of the segments before and after knot j.
+//
+// 1. Base tangents.
+//    Kochanek–Bartels with KB's adjustment for unequal spacing (tension t, continuity c, bias b per
+//    key; all 0 for SQUAD, for CATMULL_ROM and at sub-keys):
+//      out_j = [(1−t)(1+c)(1+b)/2·g1 + (1−t)(1−c)(1−b)/2·g2] · 2h1/(h0+h1)
+//      in_j  = [(1−t)(1−c)(1+b)/2·g1 + (1−t)(1+c)(1−b)/2·g2] · 2h0/(h0+h1)
+//    With c = 0 both are the knot velocity V_j = (g1 + g2)/(h0 + h1)·(1−t)(…) per frame — time
+//    scaled: the mean angular velocity over the two segments, however unequal they are — so the
+//    curve is C1. End knots take (1−t)·(their segment's rotation).
+//    Unclamped CATMULL_ROM (the textbook non-uniform Catmull–Rom, Barry–Goldman) instead takes the
+//    derivative of the parabola through the neighbours, V_j = (h1/h0·g1 + h0/h1·g2)/(h0 + h1), whose
+//    weights carry a short segment's speed over a long one (keys at 1, 2, 102: the first frame's
+//    speed for 100 frames, several turns).
+//
+// 2. The clamp (clamped = true, the default): a factor λ_j ∈ [0, 1] per knot scales both of its
+//    tangents, so a knot that is C1 stays C1. For each segment k next to knot j, with arc r_k and
+//    the knot's tangent T into (or out of) it:
+//      - T·r_k ≤ 0 → λ_j = 0: the motion holds (r_k = 0) or turns back, and the key is an extreme,
+//        flattened as Blender's Auto Clamped handles flatten a scalar extreme. Two equal keys
+//        therefore hold still, and a key next to a hold starts and stops at rest.
+//      - |T| ≤ 3·|r_k| (λ_j ≤ 3|r_k|/|T|): Fritsch–Carlson's bound α ≤ 3 on the sphere — a Bezier
+//        handle (|T|/3) is no longer than its segment's arc.
+//    Then the path rule is enforced: each key segment's path (64 samples per knot segment) must
+//    stay within 0.98·(kPathRuleFactor·arc + kPathRuleSlack) (2% below the rule, for the
+//    difference between this sampling and a denser one). A segment beyond it scales the λ of all
+//    its knots by the largest factor μ ∈ [0, 1] that passes (bisection, 12 steps); neighbours are
+//    checked again, up to 20 rounds, then any segment still beyond gets λ = 0 at its knots. With
+//    zero tangents SQUAD and CATMULL_ROM run along the segment's own arc (smoothstep in angle), so
+//    the rule always holds in the end. With even spacing and arcs within a factor 5 of their
+//    neighbours' going the same way, no clamp acts and the curve is the textbook one.
+#include <cmath>
+
+#include "curve_impl.hpp"
+
+namespace quatcurve::detail {
+
+namespace {
+
+KnotTangents base_tangents(const Curve::Impl& m, Method method, const CurveOptions& o) {
+    const std::size_t S = m.kr.size();
+    KnotTangents T{std::vector<Vec3>(S + 1, Vec3(0.0)), std::vector<Vec3>(S + 1, Vec3(0.0))};
+    const bool tcb = method == Method::TCB;
+    for (std::size_t j = 0; j <= S; ++j) {
+        double t = 0.0, c = 0.0, b = 0.0;
+        if (tcb && m.kkey[j] >= 0) {
+            t = per_key(o.tension, m.kkey[j]);
+            c = per_key(o.continuity, m.kkey[j]);
+            b = per_key(o.bias, m.kkey[j]);
+        }
+        if (j == 0 || j == S) {
+            if (j == 0) T.out[0] = (1.0 - t) * m.kr[0];
+            if (j == S) T.in[S] = (1.0 - t) * m.kr[S - 1];
+            continue;
+        }
+        const Vec3& g1 = m.kr[j - 1];
+        const Vec3& g2 = m.kr[j];
+        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
+        if (method == Method::CATMULL_ROM && !o.clamped) {
+            const Vec3 V = (h1 / h0 * g1 + h0 / h1 * g2) / (h0 + h1);
+            T.out[j] = h1 * V;
+            T.in[j] = h0 * V;
+            continue;
+        }
+        const Vec3 td = 0.5 * (1.0 - t) * ((1.0 + c) * (1.0 + b) * g1 + (1.0 - c) * (1.0 - b) * g2);
+        const Vec3 ts = 0.5 * (1.0 - t) * ((1.0 - c) * (1.0 + b) * g1 + (1.0 + c) * (1.0 - b) * g2);
+        T.out[j] = td * (2.0 * h1 / (h0 + h1));
+        T.in[j] = ts * (2.0 * h0 / (h0 + h1));
+    }
+    return T;
+}
+
+// The Fritsch–Carlson / Auto Clamped factor of knot j (step 2, first part).
+double fc_factor(const Curve::Impl& m, const KnotTangents& T, std::size_t j) {
+    double lambda = 1.0;
+    auto limit = [&](const Vec3& tangent, const Vec3& r) {
+        const double along = glm::dot(tangent, r);
+        if (!(along > 0.0)) {
+            lambda = 0.0;
+            return;
+        }
+        const double n = glm::length(tangent), cap = 3.0 * glm::length(r);
+        if (n > cap) lambda = std::fmin(lambda, cap / n);
+    };
+    if (j < m.kr.size()) limit(T.out[j], m.kr[j]);
+    if (j > 0) limit(T.in[j], m.kr[j - 1]);
+    return lambda;
+}
+
+// Path length of knot segment i by `kSamples` chords, its tangents scaled by la (start), lb (end).
+constexpr int kSamples = 64;
+template <class Make, class At>
+double knot_path(const Curve::Impl& m, const KnotTangents& T, std::size_t i, double la, double lb, Make&& make,
+                 At&& at) {
+    const auto g = make(m, i, la * T.out[i], lb * T.in[i + 1]);
+    double prev[4], cur[4], len = 0.0;
+    store(at(g, 0.0), prev);
+    for (int k = 1; k <= kSamples; ++k) {
+        store(at(g, static_cast<double>(k) / kSamples), cur);
+        len += angle_between(prev, cur);
+        std::copy(cur, cur + 4, prev);
+    }
+    return len;
+}
+
+// Step 2: the λ of every knot.
+template <class Make, class At>
+std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
+                                  Make&& make, At&& at) {
+    const std::size_t S = m.kr.size();
+    std::vector<double> lambda(S + 1);
+    for (std::size_t j = 0; j <= S; ++j) lambda[j] = fc_factor(m, T, j);
+
+    // Knot segments [first[k], first[k+1]) belong to key segment k.
+    std::vector<std::size_t> first{0};
+    for (std::size_t j = 1; j < S; ++j)
+        if (m.kseg[j] != m.kseg[j - 1]) first.push_back(j);
+    first.push_back(S);
+    const std::size_t K = first.size() - 1;
+
+    std::vector<double> len(S);
+    auto measure = [&](std::size_t i) { len[i] = knot_path(m, T, i, lambda[i], lambda[i + 1], make, at); };
+    for (std::size_t i = 0; i < S; ++i) measure(i);
+    auto path = [&](std::size_t k) {
+        double L = 0.0;
+        for (std::size_t i = first[k]; i < first[k + 1]; ++i) L += len[i];
+        return L;
+    };
+    auto limit = [&](std::size_t k) { return 0.98 * (kPathRuleFactor * key_arcs[k] + kPathRuleSlack); };
+    // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch.
+    auto scale = [&](std::size_t k, double mu, const std::vector<double>& saved) {
+        for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j] * mu;
+        for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) measure(i);
+    };
+
+    for (int round = 0; round < 20; ++round) {
+        bool beyond = false;
+        for (std::size_t k = 0; k < K; ++k) {
+            if (path(k) <= limit(k)) continue;
+            beyond = true;
+            const std::vector<double> saved = lambda;
+            double lo = 0.0, hi = 1.0;
+            for (int it = 0; it < 12; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                scale(k, mid, saved);
+                (path(k) <= limit(k) ? lo : hi) = mid;
+            }
+            scale(k, lo, saved);
+        }
+        if (!beyond) return lambda;
+    }
+    for (std::size_t k = 0; k < K; ++k)
+        if (path(k) > limit(k))
+            for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
+    return lambda;
+}
+
+template <class Seg, class Make, class At>
+void build_segments(Curve::Impl& m, const KnotTangents& T, bool clamped, const std::vector<double>& key_arcs,
+                    std::vector<Seg>& segs, Make&& make, At&& at) {
+    const std::size_t S = m.kr.size();
+    const std::vector<double> lambda = clamped ? clamp_factors(m, T, key_arcs, make, at) : std::vector<double>(S + 1, 1.0);
+    segs.resize(S);
+    for (std::size_t i = 0; i < S; ++i) segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
+}
+
+}  // namespace
+
+void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& options) {
+    const KnotTangents T = base_tangents(m, method, options);
+    const std::vector<double> arcs = key_arcs(m);
+    if (method == Method::CATMULL_ROM) {
+        build_segments(m, T, options.clamped, arcs, m.bezier, make_bezier_seg, bezier_at);
+        chain_bezier_signs(m);
+        return;
+    }
+    build_segments(m, T, options.clamped, arcs, m.squad, make_squad_seg, squad_at);
+    if (method == Method::TCB) set_squad_ease(m, options, arcs.size() + 1);
+}
+
+}  // namespace quatcurve::detail
