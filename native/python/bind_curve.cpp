@@ -89,8 +89,9 @@ void bind_curve(py::module_& m) {
                       "Curve(times, quats, method='SLERP', **options); Curve.from_euler(times, angles, "
                       "order='XYZ', method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
                       "(SLERP, bool); clamped (SQUAD, TCB, CATMULL_ROM, bool, default True: overshoot-free "
-                      "tangents; False: the textbook ones); tension, continuity, bias in [-1, 1] and ease_in, ease_out in [0, 1] "
-                      "(TCB; a number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
+                      "tangents; False: the textbook ones); ease_in, ease_out in [0, 1] (every method, a number or one per "
+                      "key: slows into / out of keys, path unchanged); tension, continuity, bias in [-1, 1] (TCB; a "
+                      "number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
                       "(..., 3) in rad/frame, world frame; constant outside the keys.")
         .def(py::init([](py::handle times, py::handle quats, const std::string& method, const py::kwargs& kwargs) {
                  const Method meth = parse_method(method);

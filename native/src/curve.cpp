@@ -23,6 +23,7 @@ namespace {
 const std::vector<std::string> kMethodNames = {"EULER", "QUAT_COMPONENTS", "NLERP", "SLERP",
                                                "SQUAD", "CATMULL_ROM",     "TCB",   "SPLINE_C2"};
 const std::vector<std::string> kTcbOptions = {"tension", "continuity", "bias", "ease_in", "ease_out"};
+const std::vector<std::string> kEaseOptions = {"ease_in", "ease_out"};
 
 std::string join(const std::vector<std::string>& names) {
     std::string s;
@@ -215,22 +216,24 @@ const char* method_name(Method method) {
 const std::vector<std::string>& method_names() { return kMethodNames; }
 
 std::vector<std::string> option_names(Method method) {
-    if (method == Method::SLERP) return {"shortest_path"};
-    if (method == Method::SQUAD || method == Method::CATMULL_ROM) return {"clamped"};
     if (method == Method::TCB) {
         std::vector<std::string> names{"clamped"};
         names.insert(names.end(), kTcbOptions.begin(), kTcbOptions.end());
         return names;
     }
-    return {};
+    std::vector<std::string> names;
+    if (method == Method::SLERP) names.push_back("shortest_path");
+    if (method == Method::SQUAD || method == Method::CATMULL_ROM) names.push_back("clamped");
+    names.insert(names.end(), kEaseOptions.begin(), kEaseOptions.end());
+    return names;
 }
 
 void set_option(CurveOptions& options, Method method, const std::string& name,
                 const std::vector<double>& values) {
     const bool known = name == "shortest_path" || name == "clamped" || tcb_field(options, name) != nullptr;
     if (!known)
-        throw InvalidArgument(name + ": unknown option (options: shortest_path for SLERP; clamped for SQUAD, TCB "
-                              "and CATMULL_ROM; " + join(kTcbOptions) + " for TCB)");
+        throw InvalidArgument(name + ": unknown option (options: ease_in, ease_out for every method; shortest_path "
+                              "for SLERP; clamped for SQUAD, TCB and CATMULL_ROM; tension, continuity, bias for TCB)");
     const auto valid = option_names(method);
     if (std::find(valid.begin(), valid.end(), name) == valid.end())
         throw InvalidArgument(name + ": not an option of method " + method_name(method) +
@@ -323,17 +326,17 @@ void Curve::build() {
         throw InvalidArgument(std::string("shortest_path: not an option of method ") + method_name(method_));
     if (!options_.clamped && method_ != Method::SQUAD && method_ != Method::TCB && method_ != Method::CATMULL_ROM)
         throw InvalidArgument(std::string("clamped: not an option of method ") + method_name(method_));
+    check_per_key(options_.ease_in, "ease_in", 0.0, 1.0, K);
+    check_per_key(options_.ease_out, "ease_out", 0.0, 1.0, K);
     if (method_ == Method::TCB) {
         check_per_key(options_.tension, "tension", -1.0, 1.0, K);
         check_per_key(options_.continuity, "continuity", -1.0, 1.0, K);
         check_per_key(options_.bias, "bias", -1.0, 1.0, K);
-        check_per_key(options_.ease_in, "ease_in", 0.0, 1.0, K);
-        check_per_key(options_.ease_out, "ease_out", 0.0, 1.0, K);
     } else {
         CurveOptions& o = options_;
-        for (const auto& name : kTcbOptions)
+        for (const auto& name : {"tension", "continuity", "bias"})
             if (!is_default(*tcb_field(o, name)))
-                throw InvalidArgument(name + ": not an option of method " + method_name(method_));
+                throw InvalidArgument(std::string(name) + ": not an option of method " + method_name(method_));
     }
 
     impl_ = std::make_unique<Impl>();
@@ -450,6 +453,7 @@ void Curve::build() {
     m.first_q = m.kq.front();
     m.last_q = m.kq.back();
     if (K == 1) return;
+    detail::set_ease(m, options_, K);
 
     switch (method_) {
         case Method::EULER: detail::build_euler(m, times_, angles_, order_); break;
@@ -480,13 +484,19 @@ void Curve::sample(const double* times, std::size_t n, double* out) const {
         }
         return;
     }
+    std::vector<double> warped;
+    if (m.eased) {  // ease: the method's path at warped times (curve_ease.cpp)
+        warped.resize(n);
+        detail::ease_times(m, times_, times, n, warped.data(), nullptr);
+        times = warped.data();
+    }
     switch (method_) {
         case Method::EULER: detail::sample_euler(m, times, n, out); break;
         case Method::QUAT_COMPONENTS:
         case Method::NLERP: detail::sample_lerp(m, times, n, out); break;
         case Method::SLERP: detail::sample_slerp(m, times, n, out); break;
         case Method::SQUAD:
-        case Method::TCB: detail::sample_squad(m, times_, times, n, out); break;
+        case Method::TCB: detail::sample_squad(m, times, n, out); break;
         case Method::CATMULL_ROM: detail::sample_bezier(m, times, n, out); break;
         case Method::SPLINE_C2: detail::sample_spline(m, times, n, out); break;
     }
@@ -501,16 +511,25 @@ void Curve::angular_velocity(const double* times, std::size_t n, double* out) co
         }
         return;
     }
+    std::vector<double> warped, rate;
+    if (m.eased) {
+        warped.resize(n);
+        rate.resize(n);
+        detail::ease_times(m, times_, times, n, warped.data(), rate.data());
+        times = warped.data();
+    }
     switch (method_) {
         case Method::EULER: detail::velocity_euler(m, times, n, out); break;
         case Method::QUAT_COMPONENTS:
         case Method::NLERP: detail::velocity_lerp(m, times, n, out); break;
         case Method::SLERP: detail::velocity_slerp(m, times, n, out); break;
         case Method::SQUAD:
-        case Method::TCB: detail::velocity_squad(m, times_, times, n, out); break;
+        case Method::TCB: detail::velocity_squad(m, times, n, out); break;
         case Method::CATMULL_ROM: detail::velocity_bezier(m, times, n, out); break;
         case Method::SPLINE_C2: detail::velocity_spline(m, times, n, out); break;
     }
+    for (std::size_t i = 0; i < rate.size(); ++i)  // chain rule: dω/dt = ω(t')·dt'/dt
+        for (int c = 0; c < 3; ++c) out[3 * i + c] *= rate[i];
 }
 
 std::vector<SegmentPath> Curve::segment_paths(std::size_t samples_per_segment) const {

@@ -171,7 +171,8 @@ struct Curve::Impl {
     std::vector<detail::EulerSeg> euler;
     int euler_axes[3] = {0, 1, 2};  // first, middle, last axis of the Euler order
 
-    // TCB ease: per key segment (ease_out of its first key, ease_in of its second key).
+    // Ease (every method, curve_ease.cpp): per key segment, ease_out of its first key and ease_in
+    // of its second key; `eased` when any is non-zero.
     bool eased = false;
     std::vector<double> ease_a, ease_b;
 
@@ -186,6 +187,12 @@ void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::ve
                  EulerOrder order);                                                          // curve.cpp
 void build_spline(Curve::Impl& m);                                            // curve_spline.cpp
 
+// Ease (curve_ease.cpp): set_ease fills ease_a/ease_b from the options; ease_times writes the warped
+// time of every time into warped (and dt'/dt into rate when not null).
+void set_ease(Curve::Impl& m, const CurveOptions& options, std::size_t keys);
+void ease_times(const Curve::Impl& m, const std::vector<double>& key_times, const double* times, std::size_t n,
+                double* warped, double* rate);
+
 // SQUAD, TCB and CATMULL_ROM: knot tangents (curve_tangents.cpp), then the method's segments.
 // A tangent is a rotation vector per unit segment parameter s in its knot's local frame: out[j]
 // leaves knot j into knot segment j, in[j] arrives at knot j from knot segment j − 1.
@@ -197,7 +204,6 @@ void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& opti
 // keys, or for a spin from Euler keys the turn of the geodesic chain through its sub-keys.
 std::vector<double> key_arcs(const Curve::Impl& m);
 SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_squad.cpp
-void set_squad_ease(Curve::Impl& m, const CurveOptions& tcb, std::size_t keys);                // curve_squad.cpp
 Q4 squad_at(const SquadSeg& g, double s);                                                      // curve_squad.cpp
 BezierSeg make_bezier_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_catmull_rom.cpp
 Q4 bezier_at(const BezierSeg& g, double s);                                                       // curve_catmull_rom.cpp
@@ -209,10 +215,8 @@ void sample_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* 
 void velocity_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void sample_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void velocity_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* t,
-                  std::size_t n, double* out);
-void velocity_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* t,
-                    std::size_t n, double* out);
+void sample_squad(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+void velocity_squad(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void sample_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void velocity_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
 void sample_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);

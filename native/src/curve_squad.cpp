@@ -1,5 +1,5 @@
 // SQUAD and TCB: Shoemake's spherical quadrangle through the knots with the knot tangents of
-// curve_tangents.cpp, and TCB's ease (3ds Max's Ease To / Ease From) as a time warp per key segment.
+// curve_tangents.cpp (TCB's ease, like every method's, is the time warp of curve_ease.cpp).
 #include <cmath>
 
 #include "curve_impl.hpp"
@@ -7,34 +7,6 @@
 namespace quatcurve::detail {
 
 namespace {
-
-// 3ds Max's ease curve of a segment: u ↦ u' with zero slope at u = 0 when a > 0 (ease out of the
-// first key) and at u = 1 when b > 0 (ease in to the second key): parabola on [0, a], line, parabola
-// on [1 − b, 1]; a + b > 1 is scaled down to 1. Returns u' and du'/du.
-void ease(double u, double a, double b, double& e, double& de) {
-    const double sum = a + b;
-    if (sum <= 0.0) {
-        e = u;
-        de = 1.0;
-        return;
-    }
-    if (sum > 1.0) {
-        a /= sum;
-        b /= sum;
-    }
-    const double k = 1.0 / (2.0 - a - b);
-    if (u < a) {
-        e = k / a * u * u;
-        de = 2.0 * k / a * u;
-    } else if (u < 1.0 - b || b == 0.0) {
-        e = k * (2.0 * u - a);
-        de = 2.0 * k;
-    } else {
-        const double v = 1.0 - u;
-        e = 1.0 - k / b * v * v;
-        de = 2.0 * k / b * v;
-    }
-}
 
 // Shoemake's quadrangle at s from A = Q·exp(s r/2) = A·C1 + (Q·(0, r))·K1 and
 // B = a·exp(s ψ/2) = a·C2 + (a·(0, ψ))·K2: X = A⁻¹B, q = A·X^g, g = 2s(1−s); log and exp by
@@ -62,36 +34,6 @@ inline RJet squad_jet(const SquadSeg& g, double s, double sd) {
     const RJet B = jmul(jconst(to_quat(g.a)), jexp({s * g.psi, sd * g.psi}));
     const VJet chi = jlog_unflipped(jmul(jinv(A), B));
     return jmul(A, jexp(jscale(2.0 * s * (1.0 - s), (2.0 - 4.0 * s) * sd, chi)));
-}
-
-// Runs inside(i, segment, s, ds/dt) over the knot segments; for an eased TCB curve the time is first
-// warped per key segment by the ease curve (chain rule on ds/dt).
-template <class Inside, class Outside>
-void drive_eased(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
-                 std::size_t n, Inside&& inside, Outside&& outside, const double* seg_t0,
-                 const double* seg_inv_h) {
-    if (!m.eased) {
-        drive(
-            m.kt, times, n,
-            [&](std::size_t i, std::size_t j, double t) {
-                inside(i, j, (t - seg_t0[j]) * seg_inv_h[j], seg_inv_h[j]);
-            },
-            outside);
-        return;
-    }
-    const std::size_t S = m.kt.size() - 1;
-    std::size_t hint = 0;
-    drive(
-        key_times, times, n,
-        [&](std::size_t i, std::size_t k, double t) {
-            const double t0 = key_times[k], h = key_times[k + 1] - t0;
-            double e, de;
-            ease((t - t0) / h, m.ease_a[k], m.ease_b[k], e, de);
-            const double tw = std::fmin(t0 + e * h, key_times[k + 1]);
-            const std::size_t j = locate(m.kt.data(), S, tw, hint);
-            inside(i, j, (tw - seg_t0[j]) * seg_inv_h[j], seg_inv_h[j] * de);
-        },
-        outside);
 }
 
 }  // namespace
@@ -133,23 +75,11 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
     return g;
 }
 
-// TCB's ease per key segment: ease_out of its first key, ease_in of its second key.
-void set_squad_ease(Curve::Impl& m, const CurveOptions& tcb, std::size_t keys) {
-    m.ease_a.resize(keys - 1);
-    m.ease_b.resize(keys - 1);
-    for (std::size_t k = 0; k + 1 < keys; ++k) {
-        m.ease_a[k] = per_key(tcb.ease_out, static_cast<int>(k));
-        m.ease_b[k] = per_key(tcb.ease_in, static_cast<int>(k + 1));
-        if (m.ease_a[k] > 0.0 || m.ease_b[k] > 0.0) m.eased = true;
-    }
-}
-
-QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
-                  std::size_t n, double* out) {
+QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SquadSeg* seg = m.squad.data();
     auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
     double dt;
-    if (!m.eased && uniform_times(times, n, dt)) {  // the hot loop: A and B advance by rotor steps
+    if (uniform_times(times, n, dt)) {  // the hot loop: A and B advance by rotor steps
         const std::size_t S = m.squad.size();
         const double first = m.kt.front(), last = m.kt.back();
         std::size_t hint = 0, cur = S;
@@ -187,38 +117,23 @@ QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const std::vector<double>&
         }
         return;
     }
-    if (!m.eased) {
-        drive(
-            m.kt, times, n,
-            [&](std::size_t i, std::size_t j, double t) {
-                const SquadSeg& g = seg[j];
-                store(squad_at(g, (t - g.t0) * g.inv_h), out + 4 * i);
-            },
-            outside);
-        return;
-    }
-    std::vector<double> t0(m.squad.size()), ih(m.squad.size());
-    for (std::size_t j = 0; j < t0.size(); ++j) {
-        t0[j] = seg[j].t0;
-        ih[j] = seg[j].inv_h;
-    }
-    drive_eased(
-        m, key_times, times, n,
-        [&](std::size_t i, std::size_t j, double s, double) { store(squad_at(seg[j], s), out + 4 * i); }, outside,
-        t0.data(), ih.data());
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const SquadSeg& g = seg[j];
+            store(squad_at(g, (t - g.t0) * g.inv_h), out + 4 * i);
+        },
+        outside);
 }
 
-void velocity_squad(const Curve::Impl& m, const std::vector<double>& key_times, const double* times,
-                    std::size_t n, double* out) {
-    std::vector<double> t0(m.squad.size()), ih(m.squad.size());
-    for (std::size_t j = 0; j < t0.size(); ++j) {
-        t0[j] = m.squad[j].t0;
-        ih[j] = m.squad[j].inv_h;
-    }
-    drive_eased(
-        m, key_times, times, n,
-        [&](std::size_t i, std::size_t j, double s, double sd) { store(squad_jet(m.squad[j], s, sd).w, out + 3 * i); },
-        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); }, t0.data(), ih.data());
+void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const SquadSeg& g = m.squad[j];
+            store(squad_jet(g, (t - g.t0) * g.inv_h, g.inv_h).w, out + 3 * i);
+        },
+        [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
 }
 
 }  // namespace quatcurve::detail

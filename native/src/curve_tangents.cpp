@@ -180,7 +180,6 @@ void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& opti
         return;
     }
     build_segments(m, T, options.clamped, arcs, m.squad, make_squad_seg, squad_at);
-    if (method == Method::TCB) set_squad_ease(m, options, arcs.size() + 1);
 }
 
 }  // namespace quatcurve::detail

@@ -1035,6 +1035,7 @@ def build_reduce(fn, d, euler):
 CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "segment_paths", "times"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
+EASE_OPTIONS = ("ease_in", "ease_out")
 
 
 def draw_options(d: Draw, method, k):
@@ -1050,38 +1051,39 @@ def draw_options(d: Draw, method, k):
         kwargs["clamped"], bad = d.pick([(True, False), (False, False), (np.bool_(True), False), (0.5, True),
                                          ("no", True)], "clamped")
         must_fail = must_fail or ("bad clamped" if bad else "")
-    if method == "TCB":
-        for name in TCB_OPTIONS:
-            if not d.chance(0.5, name):
-                continue
-            lo = 0.0 if name.startswith("ease") else -1.0
-            form = d.pick(("scalar", "per_key", "edge", "out_of_range", "nan", "wrong_length", "bool", "junk"),
-                          name + "_form")
-            if form == "scalar":
-                kwargs[name] = float(rng.uniform(lo, 1))
-            elif form == "per_key":
-                kwargs[name] = rng.uniform(lo, 1, k)
-            elif form == "edge":
-                kwargs[name] = rng.choice([lo, 1.0, -0.0], k)
-            elif form == "out_of_range":
-                kwargs[name] = float(rng.choice([1 + 1e-12, lo - 1e-9, 1e300, -1e300]))
-                must_fail = must_fail or f"{name} out of range"
-            elif form == "nan":
-                kwargs[name] = rng.choice([NAN, INF])
-                must_fail = must_fail or f"{name} non-finite"
-            elif form == "wrong_length":
-                kwargs[name] = np.zeros(k + 1 if k != 0 else 2)
-                must_fail = must_fail or f"{name} wrong length"
-            elif form == "bool":
-                kwargs[name] = True
-            else:
-                kwargs[name], bad = d.pick(junk_values(()), name + "_junk")
-                must_fail = must_fail or (f"{name} junk" if bad else "")
+    # every method takes ease_in / ease_out; TCB also tension, continuity, bias
+    for name in TCB_OPTIONS if method == "TCB" else EASE_OPTIONS:
+        if not d.chance(0.5 if method == "TCB" else 0.2, name):
+            continue
+        lo = 0.0 if name.startswith("ease") else -1.0
+        form = d.pick(("scalar", "per_key", "edge", "out_of_range", "nan", "wrong_length", "bool", "junk"),
+                      name + "_form")
+        if form == "scalar":
+            kwargs[name] = float(rng.uniform(lo, 1))
+        elif form == "per_key":
+            kwargs[name] = rng.uniform(lo, 1, k)
+        elif form == "edge":
+            kwargs[name] = rng.choice([lo, 1.0, -0.0], k)
+        elif form == "out_of_range":
+            kwargs[name] = float(rng.choice([1 + 1e-12, lo - 1e-9, 1e300, -1e300]))
+            must_fail = must_fail or f"{name} out of range"
+        elif form == "nan":
+            kwargs[name] = rng.choice([NAN, INF])
+            must_fail = must_fail or f"{name} non-finite"
+        elif form == "wrong_length":
+            kwargs[name] = np.zeros(k + 1 if k != 0 else 2)
+            must_fail = must_fail or f"{name} wrong length"
+        elif form == "bool":
+            kwargs[name] = True
+        else:
+            kwargs[name], bad = d.pick(junk_values(()), name + "_junk")
+            must_fail = must_fail or (f"{name} junk" if bad else "")
     if d.chance(0.05, "foreign_option"):
         name = d.pick(("shortest_path", "tension", "frobnicate", "", "ease_in"), "foreign")
         if name not in kwargs:
             kwargs[name] = 0.0 if name != "shortest_path" else True
-            takes = (method == "SLERP" and name == "shortest_path") or (method == "TCB" and name in TCB_OPTIONS)
+            takes = ((method == "SLERP" and name == "shortest_path") or (method == "TCB" and name in TCB_OPTIONS)
+                     or name in EASE_OPTIONS)
             must_fail = must_fail or ("" if takes else f"option {name!r} for {method}")
     return kwargs, must_fail
 

@@ -17,7 +17,11 @@
 //                    q(s) = b0·exp(β1(s)·d01)·exp(β2(s)·d12)·exp(β3(s)·d23): no logarithm at run
 //                    time, hence no branch choice and no jump, whatever the tangents; C1.
 //   TCB              Kochanek–Bartels on quaternions as in 3ds Max's TCB rotation: tension,
-//                    continuity, bias (one value or one per key) and ease_in / ease_out per key.
+//                    continuity, bias (one value or one per key).
+//
+// Ease (every method): ease_in / ease_out per key in [0, 1], 3ds Max's Ease To / Ease From: a time
+// warp within each key segment (curve_ease.cpp) that slows the motion into and out of a key without
+// changing the path; at full ease (1) the angular velocity at the key is zero.
 //
 // Tangents of SQUAD, TCB and CATMULL_ROM (curve_tangents.cpp has the rule in full): by default
 // (clamped = true) time-scaled — the mean angular velocity over the two segments around a key —
@@ -78,12 +82,12 @@ struct CurveOptions {
     std::vector<double> tension{0.0};          // TCB, each in [-1, 1]
     std::vector<double> continuity{0.0};       // TCB, each in [-1, 1]
     std::vector<double> bias{0.0};             // TCB, each in [-1, 1]
-    std::vector<double> ease_in{0.0};          // TCB, each in [0, 1] (3ds Max "Ease To" / 50)
-    std::vector<double> ease_out{0.0};         // TCB, each in [0, 1] (3ds Max "Ease From" / 50)
+    std::vector<double> ease_in{0.0};          // every method, each in [0, 1] (3ds Max "Ease To" / 50)
+    std::vector<double> ease_out{0.0};         // every method, each in [0, 1] (3ds Max "Ease From" / 50)
 };
 
-// Names of the options `method` takes ("shortest_path" for SLERP; "clamped" for SQUAD, TCB and
-// CATMULL_ROM; "tension", "continuity", "bias", "ease_in", "ease_out" for TCB; none for the others).
+// Names of the options `method` takes: "ease_in", "ease_out" for every method; "shortest_path" for
+// SLERP; "clamped" for SQUAD, TCB and CATMULL_ROM; "tension", "continuity", "bias" for TCB.
 std::vector<std::string> option_names(Method method);
 // Sets option `name` of `options` from `values` (a bool is {0} or {1}). Throws InvalidArgument for
 // an unknown name, a name `method` does not take, an empty or non-finite value, or a bool that is
