@@ -26,8 +26,8 @@
 //        therefore hold still, and a key next to a hold starts and stops at rest.
 //      - |T| ≤ 3·|r_k| (λ_j ≤ 3|r_k|/|T|): Fritsch–Carlson's bound α ≤ 3 on the sphere — a Bezier
 //        handle (|T|/3) is no longer than its segment's arc.
-//    Then the path rule is enforced: each key segment's path (64 samples per knot segment) must
-//    stay within 0.98·(kPathRuleFactor·arc + kPathRuleSlack) (2% below the rule, for the
+//    Then the path rule is enforced: each key segment's path (an upper bound of it, or when that
+//    is too large, 64 samples per knot segment) must stay within 0.98·(kPathRuleFactor·arc + kPathRuleSlack) (2% below the rule, for the
 //    difference between this sampling and a denser one). A segment beyond it scales the λ of all
 //    its knots by the largest factor μ ∈ [0, 1] that passes (bisection, 12 steps); neighbours are
 //    checked again, up to 20 rounds, then any segment still beyond gets λ = 0 at its knots. With
@@ -92,12 +92,10 @@ double fc_factor(const Curve::Impl& m, const KnotTangents& T, std::size_t j) {
     return lambda;
 }
 
-// Path length of knot segment i by `kSamples` chords, its tangents scaled by la (start), lb (end).
+// Path length of segment g by `kSamples` chords.
 constexpr int kSamples = 64;
-template <class Make, class At>
-double knot_path(const Curve::Impl& m, const KnotTangents& T, std::size_t i, double la, double lb, Make&& make,
-                 At&& at) {
-    const auto g = make(m, i, la * T.out[i], lb * T.in[i + 1]);
+template <class Seg, class At>
+double sampled_path(const Seg& g, At&& at) {
     double prev[4], cur[4], len = 0.0;
     store(at(g, 0.0), prev);
     for (int k = 1; k <= kSamples; ++k) {
@@ -108,10 +106,12 @@ double knot_path(const Curve::Impl& m, const KnotTangents& T, std::size_t i, dou
     return len;
 }
 
-// Step 2: the λ of every knot.
-template <class Make, class At>
+// Step 2: the λ of every knot. A segment's path is first bounded from above cheaply (`bound`, see
+// path_bound below); only a key segment whose bounds exceed its limit is sampled, so dense keys
+// (motion capture: small arcs, similar neighbours) cost no sampling at all.
+template <class Make, class At, class Bound>
 std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
-                                  Make&& make, At&& at) {
+                                  Make&& make, At&& at, Bound&& bound) {
     const std::size_t S = m.kr.size();
     std::vector<double> lambda(S + 1);
     for (std::size_t j = 0; j <= S; ++j) lambda[j] = fc_factor(m, T, j);
@@ -124,47 +124,85 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
     const std::size_t K = first.size() - 1;
 
     std::vector<double> len(S);
-    auto measure = [&](std::size_t i) { len[i] = knot_path(m, T, i, lambda[i], lambda[i + 1], make, at); };
+    std::vector<char> sampled(S);
+    auto measure = [&](std::size_t i) {  // an upper bound, refined by sampling on demand
+        const Vec3 out = lambda[i] * T.out[i], in = lambda[i + 1] * T.in[i + 1];
+        len[i] = bound(m, i, out, in, make(m, i, out, in));
+        sampled[i] = 0;
+    };
     for (std::size_t i = 0; i < S; ++i) measure(i);
-    auto path = [&](std::size_t k) {
+    auto limit = [&](std::size_t k) { return 0.98 * (kPathRuleFactor * key_arcs[k] + kPathRuleSlack); };
+    auto passes = [&](std::size_t k) {
         double L = 0.0;
         for (std::size_t i = first[k]; i < first[k + 1]; ++i) L += len[i];
-        return L;
+        if (L <= limit(k)) return true;
+        L = 0.0;
+        for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
+            if (!sampled[i]) {
+                len[i] = sampled_path(make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]), at);
+                sampled[i] = 1;
+            }
+            L += len[i];
+        }
+        return L <= limit(k);
     };
-    auto limit = [&](std::size_t k) { return 0.98 * (kPathRuleFactor * key_arcs[k] + kPathRuleSlack); };
     // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch.
-    auto scale = [&](std::size_t k, double mu, const std::vector<double>& saved) {
-        for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j] * mu;
+    std::vector<double> saved;
+    auto scale = [&](std::size_t k, double mu) {
+        for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j - first[k]] * mu;
         for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) measure(i);
     };
 
     for (int round = 0; round < 20; ++round) {
         bool beyond = false;
         for (std::size_t k = 0; k < K; ++k) {
-            if (path(k) <= limit(k)) continue;
+            if (passes(k)) continue;
             beyond = true;
-            const std::vector<double> saved = lambda;
+            saved.assign(lambda.begin() + static_cast<std::ptrdiff_t>(first[k]),
+                         lambda.begin() + static_cast<std::ptrdiff_t>(first[k + 1]) + 1);
             double lo = 0.0, hi = 1.0;
             for (int it = 0; it < 12; ++it) {
                 const double mid = 0.5 * (lo + hi);
-                scale(k, mid, saved);
-                (path(k) <= limit(k) ? lo : hi) = mid;
+                scale(k, mid);
+                (passes(k) ? lo : hi) = mid;
             }
-            scale(k, lo, saved);
+            scale(k, lo);
         }
         if (!beyond) return lambda;
     }
     for (std::size_t k = 0; k < K; ++k)
-        if (path(k) > limit(k))
+        if (!passes(k))
             for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
     return lambda;
 }
 
-template <class Seg, class Make, class At>
+// Upper bounds of a segment's path length (angle integrated over s).
+// CATMULL_ROM (cumulative Bezier): each factor exp(β_k·d/2) turns monotonically, so the path is at
+// most |d01| + |d12| + |d23|.
+double bezier_bound(const Curve::Impl&, std::size_t, const Vec3&, const Vec3&, const BezierSeg& g) {
+    return glm::length(g.d01) + glm::length(g.d12) + glm::length(g.d23);
+}
+// SQUAD: q = A·exp(g(s)·χ(s)/2), A = q_i·exp(s·r/2), χ = log(A⁻¹B), g = 2s(1−s). Its speed is at most
+// |r| + |g'|·|χ| + g·|J_l⁻¹(χ)|·|d(A⁻¹B)/ds| with |d(A⁻¹B)/ds| ≤ |r| + |ψ| and |J_l⁻¹(χ)| ≤
+// (|χ|/2)/sin(|χ|/2); |χ| starts at |α| and ends at |β|, so it stays below
+// M = max(|α|, |β|) + (|r| + |ψ|)/2. With ∫|g'| = 1 and ∫g = 1/3 the path is at most
+// |r| + M + (|r| + |ψ|)·κ(M)/3, κ(M) = (M/2)/sin(M/2) (no bound, +∞, once M reaches 2π).
+double squad_bound(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in, const SquadSeg& g) {
+    const Vec3& r = m.kr[i];
+    const double a = 0.5 * glm::length(out - r), b = 0.5 * glm::length(r - in);
+    const double rr = glm::length(r), pp = std::sqrt(g.psi2);
+    const double M = std::fmax(a, b) + 0.5 * (rr + pp);
+    if (M >= 0.99 * kTwoPi) return HUGE_VAL;
+    const double kappa = M > 1e-8 ? 0.5 * M / std::sin(0.5 * M) : 1.0;
+    return rr + M + (rr + pp) * kappa / 3.0;
+}
+
+template <class Seg, class Make, class At, class Bound>
 void build_segments(Curve::Impl& m, const KnotTangents& T, bool clamped, const std::vector<double>& key_arcs,
-                    std::vector<Seg>& segs, Make&& make, At&& at) {
+                    std::vector<Seg>& segs, Make&& make, At&& at, Bound&& bound) {
     const std::size_t S = m.kr.size();
-    const std::vector<double> lambda = clamped ? clamp_factors(m, T, key_arcs, make, at) : std::vector<double>(S + 1, 1.0);
+    const std::vector<double> lambda =
+        clamped ? clamp_factors(m, T, key_arcs, make, at, bound) : std::vector<double>(S + 1, 1.0);
     segs.resize(S);
     for (std::size_t i = 0; i < S; ++i) segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
 }
@@ -175,11 +213,11 @@ void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& opti
     const KnotTangents T = base_tangents(m, method, options);
     const std::vector<double> arcs = key_arcs(m);
     if (method == Method::CATMULL_ROM) {
-        build_segments(m, T, options.clamped, arcs, m.bezier, make_bezier_seg, bezier_at);
+        build_segments(m, T, options.clamped, arcs, m.bezier, make_bezier_seg, bezier_at, bezier_bound);
         chain_bezier_signs(m);
         return;
     }
-    build_segments(m, T, options.clamped, arcs, m.squad, make_squad_seg, squad_at);
+    build_segments(m, T, options.clamped, arcs, m.squad, make_squad_seg, squad_at, squad_bound);
 }
 
 }  // namespace quatcurve::detail

@@ -161,10 +161,14 @@ int main() {
     const double t_glm_squad = seconds_per_call([&] { glm_squad_loop(kt, chain, times, glm_out); });
 
     // ---- ours ------------------------------------------------------------------------------------------
-    auto bench_method = [&](const char* name) {
-        const Curve c(kt, keys, parse_method(name));
+    // glm::squad is the textbook formula: our SQUAD against it takes the textbook tangents too
+    // (clamped = false); the default clamped tangents are timed on their own line.
+    CurveOptions textbook;
+    textbook.clamped = false;
+    auto bench_method = [&](const char* name, const CurveOptions& o = {}) {
+        const Curve c(kt, keys, parse_method(name), o);
         const double sec = seconds_per_call([&] { c.sample(times.data(), N, out.data()); });
-        const double build = seconds_per_call([&] { Curve tmp(kt, keys, parse_method(name)); });
+        const double build = seconds_per_call([&] { Curve tmp(kt, keys, parse_method(name), o); });
         return std::make_pair(sec, build);
     };
 
@@ -184,12 +188,15 @@ int main() {
     };
 
     const auto slerp = bench_method("SLERP");
-    const auto squad = bench_method("SQUAD");
+    const auto squad = bench_method("SQUAD", textbook);
+    const auto squad_clamped = bench_method("SQUAD");
     const auto spline = bench_method("SPLINE_C2");
     line("glm::slerp loop", t_glm_slerp, "", -1);
     line("SLERP (ours)", slerp.first, ratio(t_glm_slerp, slerp.first), slerp.second * 1e3);
     line("glm::intermediate+squad", t_glm_squad, "", -1);
-    line("SQUAD (ours)", squad.first, ratio(t_glm_squad, squad.first), squad.second * 1e3);
+    line("SQUAD (ours, textbook)", squad.first, ratio(t_glm_squad, squad.first), squad.second * 1e3);
+    line("SQUAD (ours, clamped)", squad_clamped.first, ratio(t_glm_squad, squad_clamped.first),
+         squad_clamped.second * 1e3);
     line("SPLINE_C2 (ours)", spline.first, "", spline.second * 1e3);
     for (const char* name : {"QUAT_COMPONENTS", "NLERP", "TCB", "CATMULL_ROM"}) {
         const auto r = bench_method(name);
@@ -223,7 +230,7 @@ int main() {
         std::printf("  SLERP      %.2e   (glm::slerp %.2e)\n", err, glm_err);
     }
     {
-        const Curve c(kt, keys, Method::SQUAD);
+        const Curve c(kt, keys, Method::SQUAD, textbook);
         c.sample(times.data(), N, out.data());
         std::vector<LQ> q(K), s(K);
         q[0] = lq(keys[0]);
