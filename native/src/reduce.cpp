@@ -7,7 +7,7 @@
 // reweighting toward the minimax fit) and tests the exact rotation error at every sample inside.
 // select_keys picks keys greedily (farthest feasible end by exponential + binary search) and then
 // removes keys whose neighbours join. Finally verify_and_repair evaluates every sample exactly as
-// Blender does (reduce_blender_eval.cpp) and refits or splits failing segments.
+// Blender does (blender_eval.hpp) and refits or splits failing segments.
 #include "quatcurve/reduce.hpp"
 
 #include <algorithm>
@@ -21,17 +21,6 @@
 #include "quatcurve/quat.hpp"
 
 namespace quatcurve {
-
-KeyInterpolation parse_key_interpolation(const std::string& name) {
-    if (name == "LINEAR") return KeyInterpolation::LINEAR;
-    if (name == "BEZIER") return KeyInterpolation::BEZIER;
-    throw InvalidArgument("interpolation: unknown interpolation '" + name +
-                          "' (expected LINEAR or BEZIER)");
-}
-
-const char* key_interpolation_name(KeyInterpolation interpolation) {
-    return interpolation == KeyInterpolation::LINEAR ? "LINEAR" : "BEZIER";
-}
 
 std::size_t ReducedKeys::key_count() const {
     std::size_t total = 0;
