@@ -1,5 +1,5 @@
 // Bindings of key reduction (reduce.hpp). Bindings only bind: arrays in, the native reducer, arrays
-// out; every check and formula lives in native/src/reduce*.cpp.
+// out; every check and formula lives in native/src/reduce*.cpp (and blender_eval.cpp).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>

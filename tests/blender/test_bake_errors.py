@@ -98,10 +98,17 @@ def test_step_below_one(keyed, step):
     refused("step %d: must be at least 1 frame" % step, step=step)
 
 
-def test_tolerance_above_zero_says_reduction_is_not_available_yet(keyed):
-    if bake.reduce_keys is not None:
-        pytest.skip("key reduction is available")
-    refused("key reduction is not available yet", tolerance=0.1)
+def test_tolerance_above_zero_is_refused_when_reduction_is_not_installed(keyed, monkeypatch):
+    # bake.reduce_keys is the hook key reduction installs; without it (a build where reduction is
+    # missing) a tolerance above 0 must be refused with nothing changed, not silently ignored.
+    assert bake.reduce_keys is not None  # installed in this build...
+    monkeypatch.setattr(bake, "reduce_keys", None)  # ...removed for this case only
+    refused(r"tolerance 0\.1°: key reduction is not available yet", tolerance=0.1)
+
+
+def test_tolerance_above_zero_is_accepted_with_reduction_installed(keyed):
+    # The same request with the hook in place bakes (reduced keys), no error.
+    assert bpy.ops.quatcurve.bake(tolerance=0.1) == {"FINISHED"}
 
 
 def test_negative_tolerance(keyed):

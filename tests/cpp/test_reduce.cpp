@@ -1,5 +1,5 @@
-// Key reduction (reduce.hpp): Blender's F-curve evaluation emulation against closed forms, and the
-// reducer's bound, key choice, edge cases and bad input. The Python suite (test_reduce.py) checks the
+// Key reduction (reduce.hpp): the reducer's bound (under Blender's evaluation, emulated by
+// blender_eval.hpp and tested in test_blender_eval.cpp), key choice, edge cases and bad input. The Python suite (test_reduce.py) checks the
 // bound again with an independent numpy re-implementation of Blender's evaluation.
 #include <gtest/gtest.h>
 
@@ -18,14 +18,6 @@ using namespace quatcurve;
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-ReducedChannel make_keys(std::vector<double> frames, std::vector<double> values) {
-    ReducedChannel ch;
-    ch.frames = std::move(frames);
-    ch.values = std::move(values);
-    for (std::size_t a = 0; a < ch.frames.size(); ++a) ch.indices.push_back(a);
-    return ch;
-}
 
 // Random smooth quaternion motion: rotation vectors on a Catmull-Rom spline through a random walk.
 std::vector<Quat> smooth_quats(unsigned seed, std::size_t n, std::size_t every = 10,
@@ -109,87 +101,7 @@ void expect_invalid(F f, const std::string& fragment) {
 
 }  // namespace
 
-// ---- Blender's evaluation, emulated ----------------------------------------------------------------
-
-TEST(ReduceBlenderEval, LinearSegmentsAndConstantExtrapolation) {
-    const ReducedChannel ch = make_keys({0.0, 10.0, 20.0}, {0.0, 1.0, -1.0});
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 2.5f), 0.25f);
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 15.0f), 0.0f);
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, -5.0f), 0.0f);
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 25.0f), -1.0f);
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 10.0f), 1.0f);
-    // Within Blender's 1e-4-frame threshold of a key: the key's value.
-    EXPECT_FLOAT_EQ(blender_evaluate(ch, KeyInterpolation::LINEAR, 10.00005f), 1.0f);
-    const ReducedChannel one = make_keys({3.0}, {0.7});
-    EXPECT_FLOAT_EQ(blender_evaluate(one, KeyInterpolation::BEZIER, 100.0f), 0.7f);
-    EXPECT_FLOAT_EQ(blender_evaluate(ReducedChannel{}, KeyInterpolation::LINEAR, 1.0f), 0.0f);
-}
-
-TEST(ReduceBlenderEval, BezierWithThirdHandlesIsTheCubicInTheParameter) {
-    // Handle frames at exactly 1/3 and 2/3 (representable): frame is linear in u, the value is the
-    // Bernstein cubic.
-    ReducedChannel ch = make_keys({0.0, 3.0}, {0.2, -0.5});
-    ch.handle_left = {-1.0, 0.2, 2.0, 0.9};
-    ch.handle_right = {1.0, -0.7, 4.0, -0.5};
-    for (double u : {0.1, 0.25, 0.5, 0.8, 0.95}) {
-        const double v = 1 - u;
-        const double expected = v * v * v * 0.2 + 3 * v * v * u * -0.7 + 3 * v * u * u * 0.9 +
-                                u * u * u * -0.5;
-        // float32 power-basis evaluation (berekeny) rounds to ~1e-6 here.
-        EXPECT_NEAR(blender_evaluate(ch, KeyInterpolation::BEZIER, float(3.0 * u)), expected, 1.5e-6)
-            << "u = " << u;
-        EXPECT_NEAR(blender_bezier_parameter(float(3.0 * u), 0.0f, 1.0f, 2.0f, 3.0f), u, 1e-7);
-    }
-    // A flat segment takes Blender's shortcut (the key's value).
-    ReducedChannel flat = make_keys({0.0, 3.0}, {0.5, 0.5});
-    flat.handle_left = {-1.0, 0.5, 2.0, 0.5};
-    flat.handle_right = {1.0, 0.5, 4.0, 0.5};
-    EXPECT_EQ(blender_evaluate(flat, KeyInterpolation::BEZIER, 1.3f), 0.5f);
-}
-
-TEST(ReduceBlenderEval, SortedSweepEqualsPointwiseEvaluation) {
-    std::mt19937_64 rng(3);
-    std::uniform_real_distribution<double> val(-1.0, 1.0), gap(0.3, 4.0);
-    ReducedChannel ch;
-    double f = 10.0;
-    for (int a = 0; a < 40; ++a) {
-        ch.indices.push_back(a);
-        ch.frames.push_back(double(float(f)));
-        ch.values.push_back(double(float(val(rng))));
-        f += gap(rng);
-    }
-    for (std::size_t a = 0; a < ch.frames.size(); ++a) {
-        const double dl = a > 0 ? ch.frames[a] - ch.frames[a - 1] : 1.0;
-        const double dr = a + 1 < ch.frames.size() ? ch.frames[a + 1] - ch.frames[a] : 1.0;
-        ch.handle_left.push_back(double(float(ch.frames[a] - dl / 3)));
-        ch.handle_left.push_back(double(float(val(rng))));
-        ch.handle_right.push_back(double(float(ch.frames[a] + dr / 3)));
-        ch.handle_right.push_back(double(float(val(rng))));
-    }
-    std::vector<double> at;
-    for (double x = 5.0; x < f + 5.0; x += 0.173) at.push_back(x);
-    for (double key : ch.frames) {  // on, and within the threshold of, every key
-        at.push_back(key);
-        at.push_back(key + 0.00005);
-        at.push_back(key - 0.00015);
-    }
-    std::sort(at.begin(), at.end());
-    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
-        std::vector<double> swept;
-        blender_evaluate_sorted(ch, ipo, at, swept);
-        for (std::size_t k = 0; k < at.size(); ++k)
-            ASSERT_EQ(swept[k], double(blender_evaluate(ch, ipo, float(at[k])))) << "frame " << at[k];
-    }
-}
-
 // ---- the reducer --------------------------------------------------------------------------------------
-
-TEST(Reduce, ParseInterpolation) {
-    EXPECT_EQ(parse_key_interpolation("LINEAR"), KeyInterpolation::LINEAR);
-    EXPECT_EQ(parse_key_interpolation("BEZIER"), KeyInterpolation::BEZIER);
-    EXPECT_STREQ(key_interpolation_name(KeyInterpolation::BEZIER), "BEZIER");
-    expect_invalid([] { parse_key_interpolation("CUBIC"); }, "interpolation: unknown");
-}
 
 TEST(Reduce, QuaternionBoundHoldsForEveryVariant) {
     const std::vector<Quat> q = smooth_quats(1, 500);

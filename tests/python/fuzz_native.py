@@ -1030,6 +1030,55 @@ def build_reduce(fn, d, euler):
     return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
 
 
+# ---- Blender's F-curve evaluation, emulated --------------------------------------------------------
+
+def build_blender_evaluate(fn, d):
+    """Random F-curves (extreme key times and values, handles of any length and direction) at random
+    frames: the result must be finite and of eval_frames' shape, or a ValueError."""
+    rng = d.rng
+    level = d.level()
+    k = d.count(small=40, huge=5_000, label="keys")
+    # Most modes of increasing_times collapse in float32 (refused); Blender-like spacing is drawn more.
+    frames = increasing_times(rng, k, d.pick(("unit", "random", "negative") * 3 + TIME_MODES, "time_mode"))
+    values = fill(rng, (k,), "extreme" if level in ("extreme", "wild") else "calm")
+    span = np.abs(fill(rng, (k, 2), level)) + 1e-3
+    handle_left = np.stack([frames - span[:, 0], values + fill(rng, (k,), level)], axis=-1) if k else np.zeros((0, 2))
+    handle_right = np.stack([frames + span[:, 1], values + fill(rng, (k,), level)], axis=-1) if k else np.zeros((0, 2))
+    if d.chance(0.5, "float32_range"):  # extreme, yet storable: the evaluation itself is exercised
+        with np.errstate(invalid="ignore"):
+            values, handle_left, handle_right = (np.clip(a, -1e30, 1e30) for a in (values, handle_left, handle_right))
+    m = d.count(small=200, huge=100_000, label="eval_count")
+    lo, hi = (float(frames[0]), float(frames[-1])) if k and np.all(np.isfinite(frames[[0, -1]])) else (0.0, 1.0)
+    at = rng.uniform(lo - 1.0, hi + 1.0, m) if np.isfinite(hi - lo) else fill(rng, (m,), "extreme")
+    if k and d.chance(0.3, "on_keys"):
+        at = np.concatenate([at, frames, frames + 5e-5, frames - 2e-4])
+    interpolation = d.pick(("LINEAR", "BEZIER"), "interpolation")
+    used = (frames, values, at) + ((handle_left, handle_right) if interpolation == "BEZIER" else ())
+    with np.errstate(all="ignore"):
+        f32_ok = all(np.all(np.isfinite(np.asarray(a, dtype=np.float64).astype(np.float32))) for a in used)
+        increasing = k < 2 or bool(np.all(np.diff(np.asarray(frames, dtype=np.float32)) > 0))
+    must_fail = needs(f32_ok, "a number beyond float32") or needs(increasing, "frames not increasing as float32")
+    args = [frames, values, at, interpolation, handle_left, handle_right]
+    if d.chance(0.05, "handle_shape") and k:
+        args[4 + int(d.chance(0.5))] = handle_left[:-1]
+        must_fail = must_fail or ("handle shape" if interpolation == "BEZIER" else "")
+    if d.chance(0.04, "no_handles"):
+        args[4] = None
+        must_fail = must_fail or ("no handles" if interpolation == "BEZIER" else "")
+    if d.chance(0.05, "junk_string"):
+        args[3], bad = d.pick(junk_strings(), "junk_string")
+        must_fail = must_fail or (f"junk string {args[3]!r}" if bad else "")
+    must_fail = maybe_junk(d, args, [(), (), ()], ["frames", "values", "eval_frames"], must_fail)
+    shape = np.shape(args[2]) if isinstance(args[2], np.ndarray) else None
+
+    def check(out):
+        finite(out, "values")
+        if shape is not None:
+            shape_is(out, shape)
+
+    return Case(lambda: fn(*args), max(m, 1), check, must_fail, 8 * m, args)
+
+
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
 CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "segment_paths", "times"}
@@ -1255,6 +1304,7 @@ REGISTRY.update({
     "path_metrics": build_path_metrics,
     "reduce_keys": lambda fn, d: build_reduce(fn, d, euler=False),
     "reduce_keys_euler": lambda fn, d: build_reduce(fn, d, euler=True),
+    "blender_evaluate": build_blender_evaluate,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).

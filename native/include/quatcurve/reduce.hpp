@@ -19,7 +19,7 @@
 //           Blender recomputes the handles). Key values are input samples (float32).
 //
 // The bound is verified, not hoped for: after fitting, every input sample is evaluated exactly as
-// Blender's fcurve_eval_keyframes does (float32 key frames, values and handles; float32 arithmetic;
+// Blender's fcurve_eval_keyframes does (blender_eval.hpp: float32 key frames, values and handles; float32 arithmetic;
 // Blender's cubic root finder for the Bezier frame→parameter step; binary-search threshold 1e-4
 // frames), and segments that exceed the bound are refitted or split (a key inserted) until every
 // sample passes. The verification threshold keeps a margin of 2e-6 rad below `tolerance` (half the
@@ -45,31 +45,23 @@
 #pragma once
 
 #include <cstddef>
-#include <string>
 #include <vector>
 
+#include "quatcurve/blender_eval.hpp"
 #include "quatcurve/euler.hpp"
 #include "quatcurve/types.hpp"
 
 namespace quatcurve {
 
-enum class KeyInterpolation { LINEAR, BEZIER };
-
-// "LINEAR" or "BEZIER" (Blender's keyframe interpolation names); anything else throws InvalidArgument.
-KeyInterpolation parse_key_interpolation(const std::string& name);
-const char* key_interpolation_name(KeyInterpolation interpolation);
-
-// The keys of one F-curve, as Blender stores them. Every frame and value is float32-representable
-// (Blender stores floats), so writing them with foreach_set from float32 arrays is exact.
-struct ReducedChannel {
+// The keys of one F-curve, as Blender stores them (blender_eval.hpp evaluates them as Blender does).
+// Every frame and value is float32-representable (Blender stores floats), so writing them with
+// foreach_set from float32 arrays is exact:
+//   frames = float32(times[indices]), values = float32(channel value at indices);
+//   BEZIER: handle_left/handle_right absolute (frame, value) per key. The first key's left handle
+//   and the last key's right handle only shape extrapolation, which is constant (Blender's
+//   default): they mirror the inner handle. LINEAR: empty.
+struct ReducedChannel : FCurveKeys {
     std::vector<std::size_t> indices;  // kept input samples, increasing; first and last included
-    std::vector<double> frames;        // float32(times[indices])
-    std::vector<double> values;        // float32(channel value at indices)
-    // BEZIER: absolute (frame, value) per key, interleaved [f0, v0, f1, v1, ...] (K×2). The first
-    // key's left handle and the last key's right handle only shape extrapolation, which is constant
-    // (Blender's default): they mirror the inner handle. LINEAR: empty.
-    std::vector<double> handle_left;
-    std::vector<double> handle_right;
 };
 
 struct ReducedKeys {
@@ -96,28 +88,5 @@ ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vecto
                               EulerOrder order, double tolerance,
                               KeyInterpolation interpolation = KeyInterpolation::LINEAR,
                               bool synchronized = true);
-
-// ---- Blender's F-curve evaluation, emulated (float32, as in Blender's fcurve.cc) ----------------
-// Value of the F-curve `channel` (keys with LINEAR or BEZIER interpolation, constant extrapolation)
-// at `frame`: at or before the first key its value, at or after the last key its value; within 1e-4
-// frames of a key that key's value; otherwise the segment's linear ease or Bezier (Blender's
-// correct_bezpart, findzero/solve_cubic in double from float coefficients, berekeny in float; 0 when
-// the root finder fails, as Blender). An empty channel gives 0.
-float blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolation, float frame);
-
-// blender_evaluate at every frame of `frames` into out (same length).
-void blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolation,
-                      const std::vector<double>& frames, std::vector<double>& out);
-
-// The same for increasing `frames`, in one walk over the keys. param_cache (optional) holds the
-// Bezier curve parameter per frame: filled when reuse is false, read when reuse is true — valid
-// only for a channel with the same key frames (hence handle frames) as the one that filled it.
-void blender_evaluate_sorted(const ReducedChannel& channel, KeyInterpolation interpolation,
-                             const std::vector<double>& frames, std::vector<double>& out,
-                             std::vector<float>* param_cache = nullptr, bool reuse = false);
-
-// The curve parameter Blender's root finder returns for `frame` in a Bezier segment whose key and
-// handle frames are q0, q1, q2, q3 (findzero's first root in [0, 1]); -1 when it finds none.
-float blender_bezier_parameter(float frame, float q0, float q1, float q2, float q3);
 
 }  // namespace quatcurve

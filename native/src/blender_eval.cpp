@@ -1,12 +1,14 @@
 // Blender's F-curve evaluation of LINEAR and BEZIER keys, emulated operation for operation in float32
-// (blenkernel/intern/fcurve.cc: fcurve_eval_keyframes, BKE_fcurve_bezt_binarysearch_index_ex,
-// BKE_fcurve_correct_bezpart, findzero, solve_cubic, berekeny; BLI_easing_linear_ease). The key
-// reducer verifies its bound with this, so every float cast below is deliberate: Blender computes
-// the cubic's coefficients in float and solves it in double.
+// (see blender_eval.hpp for what is emulated and the sources). The key reducer verifies its bound
+// with this, so every float cast below is deliberate: Blender computes the cubic's coefficients in
+// float and solves it in double.
+#include "quatcurve/blender_eval.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <string>
 
-#include "quatcurve/reduce.hpp"
+#include "quatcurve/errors.hpp"
 
 namespace quatcurve {
 namespace {
@@ -110,7 +112,7 @@ float berekeny(float f1, float f2, float f3, float f4, float t) {
 }
 
 // Handles longer than the segment are scaled back to its length (Blender 2.9x+ form: each handle
-// separately). Our 1/3-spaced handles never trigger it; kept for exactness on foreign keys.
+// separately). The reducer's 1/3-spaced handles never trigger it; keys edited in Blender often do.
 void correct_bezpart(const float v1[2], float v2[2], float v3[2], const float v4[2]) {
     float h1[2], h2[2];
     h1[0] = v1[0] - v2[0];
@@ -171,7 +173,54 @@ int binary_search(const std::vector<double>& frames, float frame, bool& exact) {
 
 }  // namespace
 
-float blender_evaluate(const ReducedChannel& ch, KeyInterpolation interpolation, float evaltime) {
+KeyInterpolation parse_key_interpolation(const std::string& name) {
+    if (name == "LINEAR") return KeyInterpolation::LINEAR;
+    if (name == "BEZIER") return KeyInterpolation::BEZIER;
+    throw InvalidArgument("interpolation: unknown interpolation '" + name +
+                          "' (expected LINEAR or BEZIER)");
+}
+
+const char* key_interpolation_name(KeyInterpolation interpolation) {
+    return interpolation == KeyInterpolation::LINEAR ? "LINEAR" : "BEZIER";
+}
+
+void check_fcurve_keys(const FCurveKeys& keys, KeyInterpolation interpolation) {
+    const std::size_t n = keys.frames.size();
+    if (keys.values.size() != n)
+        throw InvalidArgument("values: " + std::to_string(keys.values.size()) + " values for " +
+                              std::to_string(n) + " frames");
+    // Blender stores float32: a number beyond its range would become inf there.
+    auto check = [](const std::vector<double>& v, const char* name, std::size_t stride) {
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            const std::string where = std::string(name) + "[" + std::to_string(i / stride) +
+                                      (stride == 2 ? (i % 2 ? ", 1]" : ", 0]") : "]");
+            if (!std::isfinite(v[i])) throw InvalidArgument(where + ": non-finite value");
+            if (!std::isfinite(float(v[i])))
+                throw InvalidArgument(where + ": beyond float32 range (Blender stores float32)");
+        }
+    };
+    check(keys.frames, "frames", 1);
+    check(keys.values, "values", 1);
+    // Strictly increasing as float32: Blender keeps its keys sorted, and two keys on one frame make
+    // its binary search ambiguous.
+    for (std::size_t k = 1; k < n; ++k) {
+        if (!(float(keys.frames[k]) > float(keys.frames[k - 1])))
+            throw InvalidArgument("frames[" + std::to_string(k) +
+                                  "]: not increasing (as float32, Blender's storage)");
+    }
+    if (interpolation == KeyInterpolation::BEZIER) {
+        if (keys.handle_left.size() != 2 * n)
+            throw InvalidArgument("handle_left: " + std::to_string(keys.handle_left.size() / 2) +
+                                  " handles for " + std::to_string(n) + " keys");
+        if (keys.handle_right.size() != 2 * n)
+            throw InvalidArgument("handle_right: " + std::to_string(keys.handle_right.size() / 2) +
+                                  " handles for " + std::to_string(n) + " keys");
+        check(keys.handle_left, "handle_left", 2);
+        check(keys.handle_right, "handle_right", 2);
+    }
+}
+
+float blender_evaluate(const FCurveKeys& ch, KeyInterpolation interpolation, float evaltime) {
     const std::size_t n = ch.frames.size();
     if (n == 0) return 0.0f;
     // fcurve_eval_keyframes: constant extrapolation at and beyond the end keys.
@@ -210,7 +259,7 @@ float blender_evaluate(const ReducedChannel& ch, KeyInterpolation interpolation,
     return berekeny(v1[1], v2[1], v3[1], v4[1], opl[0]);
 }
 
-void blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolation,
+void blender_evaluate(const FCurveKeys& channel, KeyInterpolation interpolation,
                       const std::vector<double>& frames, std::vector<double>& out) {
     if (std::is_sorted(frames.begin(), frames.end())) {
         blender_evaluate_sorted(channel, interpolation, frames, out);
@@ -221,11 +270,11 @@ void blender_evaluate(const ReducedChannel& channel, KeyInterpolation interpolat
         out[k] = blender_evaluate(channel, interpolation, float(frames[k]));
 }
 
-// One walk over the keys instead of a binary search per frame. A frame farther than 2e-4 from both
+// One walk over the keys instead of a binary search per frame (frames strictly increasing). A frame farther than 2e-4 from both
 // keys around it cannot be within Blender's 1e-4 threshold of any key, so Blender's search lands on
 // that segment; frames nearer a key go through blender_evaluate itself. The Bezier parameter
 // depends only on frames, so channels with the same key frames can share it (param_cache, reuse).
-void blender_evaluate_sorted(const ReducedChannel& ch, KeyInterpolation interpolation,
+void blender_evaluate_sorted(const FCurveKeys& ch, KeyInterpolation interpolation,
                              const std::vector<double>& frames, std::vector<double>& out,
                              std::vector<float>* param_cache, bool reuse) {
     const std::size_t m = frames.size(), n = ch.frames.size();
@@ -292,9 +341,8 @@ void blender_evaluate_sorted(const ReducedChannel& ch, KeyInterpolation interpol
     }
 }
 
-// The parameter Blender's findzero returns for `frame` in the Bezier segment with control frames
-// q0..q3 (first root), or -1 when it finds none. Used by the reducer to refit with Blender's own
-// frame→parameter map when float32 handle frames make it slightly non-linear.
+// Used by the reducer to refit with Blender's own frame→parameter map when float32 handle frames
+// make it slightly non-linear.
 float blender_bezier_parameter(float frame, float q0, float q1, float q2, float q3) {
     float opl[32];
     if (!findzero(frame, q0, q1, q2, q3, opl)) return -1.0f;

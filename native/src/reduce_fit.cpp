@@ -1,0 +1,376 @@
+// Key reduction, stage 2: fitting one segment of some channels (reduce_impl.hpp: Fitter). LINEAR
+// takes the chord; BEZIER fits the two inner control values per channel by weighted least squares in
+// the rotation metric, then reweights toward the minimax fit; either way the exact rotation error is
+// tested at every sample inside (and, for Bezier and Euler fits, midway between samples).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "quatcurve/blender_eval.hpp"
+#include "reduce_impl.hpp"
+
+namespace quatcurve::reduce_impl {
+
+namespace {
+
+// Solves H·x = g (H symmetric positive definite, dim ≤ 8) by Cholesky; H and g are overwritten.
+// A non-positive pivot (degenerate data) is lifted to a tiny positive value, so a solution always
+// comes back; the fit's quality is judged by the error test anyway.
+void solve_spd(double* H, double* g, int dim) {
+    for (int j = 0; j < dim; ++j) {
+        double d = H[j * dim + j];
+        for (int k = 0; k < j; ++k) d -= H[j * dim + k] * H[j * dim + k];
+        if (!(d > 1e-300)) d = 1e-300;
+        const double L = std::sqrt(d);
+        H[j * dim + j] = L;
+        for (int i = j + 1; i < dim; ++i) {
+            double s = H[i * dim + j];
+            for (int k = 0; k < j; ++k) s -= H[i * dim + k] * H[j * dim + k];
+            H[i * dim + j] = s / L;
+        }
+    }
+    for (int i = 0; i < dim; ++i) {
+        double s = g[i];
+        for (int k = 0; k < i; ++k) s -= H[i * dim + k] * g[k];
+        g[i] = s / H[i * dim + i];
+    }
+    for (int i = dim - 1; i >= 0; --i) {
+        double s = g[i];
+        for (int k = i + 1; k < dim; ++k) s -= H[k * dim + i] * g[k];
+        g[i] = s / H[i * dim + i];
+    }
+}
+
+// Basis of the cubic Bezier at u.
+void bernstein(double u, double b[4]) {
+    const double v = 1.0 - u;
+    b[0] = v * v * v;
+    b[1] = 3.0 * v * v * u;
+    b[2] = 3.0 * v * u * u;
+    b[3] = u * u * u;
+}
+
+// |f|² ≥ (kMinNormRatio)²·norm2.
+bool norm_ok(const double* f, double norm2) {
+    const double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
+    return f2 >= kMinNormRatio * kMinNormRatio * norm2;
+}
+
+}  // namespace
+
+State empty_state(const Problem& p) {
+    State s;
+    s.F = p.y;
+    s.keys.assign(p.C, {});
+    s.h1.assign(p.n * p.C, 0.0);
+    s.h2.assign(p.n * p.C, 0.0);
+    s.exact_param.assign(p.n * p.C, 0);
+    return s;
+}
+
+Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s) : p_(p), ipo_(ipo), s_(s) {
+    buf_.resize(p.n * p.C);
+    u_.resize(p.n);
+    w_.resize(p.n);
+    err_.resize(p.n);
+}
+
+bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
+                 bool exact_param) {
+    const int C = p_.C;
+    if (!force && j - i >= 2 && p_.breaks[j] != p_.breaks[i]) return false;
+    const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
+    // Parameters of the interior samples.
+    for (std::size_t k = i + 1; k < j; ++k) u_[k] = (p_.t[k] - ti) / d;
+    if (exact_param && ipo_ == KeyInterpolation::BEZIER) {
+        float hx[2];
+        handle_frames(i, j, hx);
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const float r = blender_bezier_parameter(float(p_.t[k]), float(ti), hx[0], hx[1],
+                                                     float(tj));
+            if (r >= 0.0f) u_[k] = r;
+        }
+    }
+    double p1[kMaxChannels] = {}, p2[kMaxChannels] = {};
+    bool ok;
+    if (ipo_ == KeyInterpolation::LINEAR || j - i < 2) {
+        for (int a = 0; a < nc; ++a) {
+            const int c = chans[a];
+            const double yi = p_.y[i * C + c], yj = p_.y[j * C + c];
+            p1[a] = yi + (yj - yi) / 3.0;
+            p2[a] = yj - (yj - yi) / 3.0;
+            if (ipo_ == KeyInterpolation::BEZIER && j - i < 2 && p_.breaks[j] == p_.breaks[i]) {
+                // No sample inside: the default (finite-difference) tangents; across a
+                // discontinuity the straight line (handles at thirds of the chord).
+                p1[a] = yi + p_.slope[i * C + c] * d / 3.0;
+                p2[a] = yj - p_.slope[j * C + c] * d / 3.0;
+            }
+        }
+        ok = evaluate(i, j, chans, nc, p1, p2, limit,
+                      force ? std::numeric_limits<double>::infinity() : limit) <= limit;
+    } else {
+        ok = false;
+        double kappa = 4.0;  // quaternion metric: radial direction free
+        for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
+            if (attempt == 1) {
+                // The norm dipped: refit with radial errors weighted.
+                if (p_.kind != Kind::QUAT || !between_failed_) break;
+                kappa = 4.0 - kRadialWeight;
+            }
+            for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
+            const int iterations = nc == 1 ? kReweightIterationsSingle : kReweightIterations;
+            for (int it = 0; it <= iterations; ++it) {
+                solve_handles(i, j, chans, nc, kappa, p1, p2);
+                const double worst = evaluate(
+                    i, j, chans, nc, p1, p2, limit,
+                    force ? std::numeric_limits<double>::infinity() : kHopeless * limit);
+                if (worst <= limit) {
+                    ok = true;
+                    break;
+                }
+                // Reweighting cannot fix the norm, nor hopeless segments (far over the limit).
+                if (between_failed_ || (!force && worst > kHopeless * limit)) break;
+                if (it == iterations) break;
+                // Lawson-style reweighting toward the minimax fit: w ← w·err, normalized.
+                double total = 0.0;
+                for (std::size_t k = i + 1; k < j; ++k) {
+                    w_[k] *= std::sqrt(err_[k]) + 1e-300;  // ≈ θ/2
+                    total += w_[k];
+                }
+                const double scale = static_cast<double>(j - i - 1) / total;
+                for (std::size_t k = i + 1; k < j; ++k) w_[k] = std::max(w_[k] * scale, 1e-6);
+            }
+        }
+    }
+    if (ok || force) commit(i, j, chans, nc, p1, p2, exact_param);
+    return ok;
+}
+
+void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
+    const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
+    hx[0] = float(ti + d / 3.0);
+    hx[1] = float(tj - d / 3.0);
+}
+
+// Weighted least squares for the inner control values: minimize
+//   Σ_k w_k·e_kᵀ M_k e_k + λ·|p − p_default|²,  e_k = fitted − data at sample k
+// over p = (p1, p2) of the fitted channels (others fixed at F). λ is tiny: it only settles the
+// directions the data leave free (few samples; the radial direction of quaternions).
+void Fitter::solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
+                           double* p1, double* p2) {
+    if (p_.C == 4 && nc == 4) return solve_handles_t<4, 4>(i, j, chans, kappa, p1, p2);
+    if (p_.C == 4 && nc == 1) return solve_handles_t<4, 1>(i, j, chans, kappa, p1, p2);
+    if (p_.C == 3 && nc == 3) return solve_handles_t<3, 3>(i, j, chans, kappa, p1, p2);
+    return solve_handles_t<3, 1>(i, j, chans, kappa, p1, p2);
+}
+
+// Euler metric M_k (see Problem): row `row` times e, and the entry M_k[row][col].
+double Fitter::euler_metric_times(std::size_t k, int row, const double* e) const {
+    if (row == p_.axis_first) return e[row] + p_.gimbal[k] * e[p_.axis_last];
+    if (row == p_.axis_last) return e[row] + p_.gimbal[k] * e[p_.axis_first];
+    return e[row];
+}
+double Fitter::euler_metric_entry(std::size_t k, int row, int col) const {
+    if (row == col) return 1.0;
+    if ((row == p_.axis_first && col == p_.axis_last) ||
+        (row == p_.axis_last && col == p_.axis_first))
+        return p_.gimbal[k];
+    return 0.0;
+}
+
+// solve_handles for C channels of which NC are fitted (NC == C: all, in order).
+template <int C, int NC>
+void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, double kappa,
+                             double* p1, double* p2) {
+    int ch[NC];
+    double yi[NC], yj[NC];
+    for (int a = 0; a < NC; ++a) {
+        ch[a] = NC == C ? a : chans[a];
+        yi[a] = p_.y[i * C + ch[a]];
+        yj[a] = p_.y[j * C + ch[a]];
+    }
+    // Blocks of the normal matrix: Σ w·b1²·M_SS, Σ w·b1·b2·M_SS, Σ w·b2²·M_SS (lower triangles).
+    double A[3][NC][NC] = {};
+    double g[2][NC] = {};
+    for (std::size_t k = i + 1; k < j; ++k) {
+        double b[4];
+        bernstein(u_[k], b);
+        const double* yk = &p_.y[k * C];
+        double e0[C];
+        if (NC == C) {
+            for (int c = 0; c < C; ++c) e0[c] = b[0] * yi[c] + b[3] * yj[c] - yk[c];
+        } else {
+            for (int c = 0; c < C; ++c) e0[c] = s_.F[k * C + c] - yk[c];
+            for (int a = 0; a < NC; ++a) e0[ch[a]] = b[0] * yi[a] + b[3] * yj[a] - yk[ch[a]];
+        }
+        const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
+        const double s11 = w1 * b[1], s12 = w1 * b[2], s22 = w2 * b[2];
+        if constexpr (C == 4) {
+            // M = (4·I − κ·ûûᵀ)/|q|², with û·e and 1/|q|² computed once per sample.
+            const double* u = &p_.unit[k * 4];
+            const double inv = 1.0 / p_.norm2[k];
+            const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+            for (int a = 0; a < NC; ++a) {
+                const double ua = u[ch[a]];
+                const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
+                g[0][a] -= w1 * Me;
+                g[1][a] -= w2 * Me;
+                for (int bb = 0; bb <= a; ++bb) {
+                    const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
+                    A[0][a][bb] += s11 * m;
+                    A[1][a][bb] += s12 * m;
+                    A[2][a][bb] += s22 * m;
+                }
+            }
+        } else {
+            for (int a = 0; a < NC; ++a) {
+                const double Me = euler_metric_times(k, ch[a], e0);
+                g[0][a] -= w1 * Me;
+                g[1][a] -= w2 * Me;
+                for (int bb = 0; bb <= a; ++bb) {
+                    const double m = euler_metric_entry(k, ch[a], ch[bb]);
+                    A[0][a][bb] += s11 * m;
+                    A[1][a][bb] += s12 * m;
+                    A[2][a][bb] += s22 * m;
+                }
+            }
+        }
+    }
+    constexpr int dim = 2 * NC;
+    double H[dim * dim], rhs[dim];
+    for (int a = 0; a < NC; ++a) {
+        for (int bb = 0; bb < NC; ++bb) {
+            const int hi = a > bb ? a : bb, lo = a > bb ? bb : a;
+            H[a * dim + bb] = A[0][hi][lo];
+            H[(NC + a) * dim + (NC + bb)] = A[2][hi][lo];
+            H[(NC + a) * dim + bb] = A[1][hi][lo];
+            H[a * dim + (NC + bb)] = A[1][hi][lo];
+        }
+        rhs[a] = g[0][a];
+        rhs[NC + a] = g[1][a];
+    }
+    const double d = p_.t[j] - p_.t[i];
+    const double lambda = 1e-7;
+    for (int a = 0; a < NC; ++a) {
+        const double d1 = yi[a] + p_.slope[i * C + ch[a]] * d / 3.0;
+        const double d2 = yj[a] - p_.slope[j * C + ch[a]] * d / 3.0;
+        H[a * dim + a] += lambda;
+        H[(NC + a) * dim + (NC + a)] += lambda;
+        rhs[a] += lambda * d1;
+        rhs[NC + a] += lambda * d2;
+    }
+    solve_spd(H, rhs, dim);
+    for (int a = 0; a < NC; ++a) {
+        p1[a] = rhs[a];
+        p2[a] = rhs[NC + a];
+    }
+}
+
+// Fitted values of the channels at the interior samples (into buf_), their tan²(θ/2) errors (into
+// err_) and the largest.
+// Between samples the fit is guarded too (quaternion BEZIER and every Euler fit): midway
+// between consecutive samples (keys included) the fitted rotation must lie within
+// kBetweenFactor × the fit's angle + kBetweenStep × the step between the two samples of what
+// the dense input shows there (its own LINEAR evaluation: the normalized mean of the
+// quaternions, the rotation of the mean angles; a smooth curve rightly departs from that chord
+// where the motion is fast, hence the step term), and a
+// quaternion's norm must stay above kMinNormRatio of the samples' (also checked at the samples).
+// Without it a fit may pass every sample yet swing between them — a quaternion curve through
+// near zero, or Euler channels keyed at different frames near gimbal lock, where two angles must
+// cancel. Midpoints are checked only when the samples pass (or the fit is forced). Channels not
+// fitted here take the mean of their neighbouring fitted values midway.
+double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
+                        const double* p2, double limit, double give_up) {
+    const int C = p_.C;
+    const bool quat_bezier = p_.kind == Kind::QUAT && ipo_ == KeyInterpolation::BEZIER;
+    const bool guard = quat_bezier || p_.kind == Kind::EULER;
+    between_failed_ = false;
+    double worst = 0.0;
+    for (std::size_t k = i + 1; k < j; ++k) {
+        double* f = &buf_[k * C];
+        for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
+        if (ipo_ == KeyInterpolation::LINEAR) {
+            const double u = u_[k];
+            for (int a = 0; a < nc; ++a) {
+                const int c = chans[a];
+                f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
+            }
+        } else {
+            bezier_values(i, j, chans, nc, p1, p2, u_[k], f);
+        }
+        const double e = error_tan2(p_, k, f);
+        err_[k] = e;
+        worst = std::max(worst, e);
+        if (worst > give_up) return worst;  // the caller rejects the fit without looking further
+        if (quat_bezier && !norm_ok(f, p_.norm2[k])) {
+            between_failed_ = true;
+            return std::numeric_limits<double>::infinity();
+        }
+    }
+    if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
+        // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
+        const double tan_fit = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+        double prev_u = 0.0;
+        for (std::size_t k = i; k < j; ++k) {
+            const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
+            const double u = 0.5 * (prev_u + next_u);
+            prev_u = next_u;
+            double f[kMaxChannels], mean[kMaxChannels];
+            for (int c = 0; c < C; ++c) {
+                f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
+                mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
+            }
+            if (ipo_ == KeyInterpolation::LINEAR) {
+                for (int a = 0; a < nc; ++a) {
+                    const int c = chans[a];
+                    f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
+                }
+            } else {
+                bezier_values(i, j, chans, nc, p1, p2, u, f);
+            }
+            if (quat_bezier && !norm_ok(f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
+                between_failed_ = true;
+                return std::numeric_limits<double>::infinity();
+            }
+            const Quat ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
+                                                   : euler_rotation(p_, mean);
+            const double denom = 1.0 - tan_fit * p_.step_tan[k];
+            const double t = (tan_fit + p_.step_tan[k]) / denom;
+            const double between_limit =
+                denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
+            if (!(error_tan2(p_, ref, f) <= between_limit)) {
+                between_failed_ = true;
+                return std::numeric_limits<double>::infinity();
+            }
+        }
+    }
+    return worst;
+}
+
+// The fitted channels' Bezier values at parameter u, written into f.
+void Fitter::bezier_values(std::size_t i, std::size_t j, const int* chans, int nc,
+                           const double* p1, const double* p2, double u, double* f) const {
+    const int C = p_.C;
+    double b[4];
+    bernstein(u, b);
+    for (int a = 0; a < nc; ++a) {
+        const int c = chans[a];
+        f[c] = b[0] * p_.y[i * C + c] + b[1] * p1[a] + b[2] * p2[a] + b[3] * p_.y[j * C + c];
+    }
+}
+
+void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
+                    const double* p2, bool exact_param) {
+    const int C = p_.C;
+    for (int a = 0; a < nc; ++a) {
+        const int c = chans[a];
+        for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
+        s_.F[i * C + c] = p_.y[i * C + c];
+        s_.F[j * C + c] = p_.y[j * C + c];
+        s_.h1[i * C + c] = p1[a];
+        s_.h2[i * C + c] = p2[a];
+        s_.exact_param[i * C + c] = exact_param ? 1 : 0;
+    }
+}
+
+}  // namespace quatcurve::reduce_impl

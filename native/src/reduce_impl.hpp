@@ -1,0 +1,239 @@
+// Private to the key reducer: the problem in channel space, the tuning constants, and the
+// interfaces between its stages. Nothing here is public API; from outside include
+// quatcurve/reduce.hpp (the contract is stated there).
+//
+// The stages, in the order reduce.cpp runs them:
+//   reduce_problem.cpp  admit the input (argument checks, float32 storage) and build the Problem:
+//                       channel values, reference rotations, error metric, discontinuities, slopes;
+//   reduce_fit.cpp      the Fitter: one segment of some channels — the LINEAR chord, or the Bezier
+//                       inner control values by weighted least squares and reweighting — and the
+//                       exact error test at the samples (and between them);
+//   reduce_select.cpp   key choice: greedy farthest feasible end, then key removal;
+//   reduce_verify.cpp   the F-curves of the result, evaluated as Blender does (blender_eval.hpp),
+//                       refitted or split until every sample passes.
+// The small functions used in inner loops (error_tan2, euler_rotation) are inline here, so every
+// stage computes them identically.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include "quatcurve/euler.hpp"
+#include "quatcurve/quat.hpp"
+#include "quatcurve/reduce.hpp"
+
+namespace quatcurve::reduce_impl {
+
+// ---- tuning constants ------------------------------------------------------------------------------
+
+constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+constexpr int kMaxChannels = 4;
+// Margin between the verified error and the tolerance: Blender's own float32 arithmetic may differ
+// from our emulation (operation order, fused multiply-adds on some builds: its Bezier value is a
+// float power-basis cubic whose rounding reaches ~6e-7 per channel), and its normalization and
+// matrix building add ~1e-7 rad.
+constexpr double kVerifyMargin = 2e-6;
+// Fitting aims this far below the verification threshold (float32 rounding of handle values and
+// of handle frames), so that repairs are rare.
+constexpr double kFitMarginRel = 2e-3;
+constexpr double kFitMarginAbs = 5e-6;
+// Reweighting rounds for fits of all channels together, and for one channel among fitted others
+// (per-channel mode fits four times as many segments; two rounds keep it within the speed target
+// at a cost of ~1 % more keys).
+constexpr int kReweightIterations = 4;
+constexpr int kReweightIterationsSingle = 2;
+// A fit whose worst sample is above this multiple of the limit (in tan²(θ/2), i.e. twice the angle)
+// is rejected without reweighting.
+constexpr double kHopeless = 4.0;
+constexpr double kPi = 3.14159265358979323846;
+// The rotation ignores a quaternion's scale, so the fit may let the 4-vector's norm drift — a cubic
+// with varying norm bends the normalized path more freely, which saves many keys. It is kept free
+// unless the norm would fall below kMinNormRatio of the sample's (checked at the samples and
+// midway between them: near zero the direction swings between frames); such fits are redone with
+// radial errors weighted kRadialWeight (tangential errors weigh 4).
+constexpr double kRadialWeight = 0.25;
+constexpr double kMinNormRatio = 0.5;
+// The between-samples guard (Fitter::evaluate): midway between two samples the fit may depart from
+// the dense input's own LINEAR evaluation by kBetweenFactor × the fit's angle + kBetweenStep × the
+// rotation step between the two samples.
+constexpr double kBetweenFactor = 2.0;
+constexpr double kBetweenStep = 0.25;
+
+// x rounded to float32, as Blender stores it.
+inline double f32(double x) { return static_cast<double>(static_cast<float>(x)); }
+
+inline double tan2_half(double angle) {
+    const double t = std::tan(0.5 * angle);
+    return t * t;
+}
+
+// ---- the problem -----------------------------------------------------------------------------------
+
+enum class Kind { QUAT, EULER };
+
+struct Problem {
+    Kind kind = Kind::QUAT;
+    int C = 4;                    // channels
+    EulerOrder order = EulerOrder::XYZ;
+    std::size_t n = 0;
+    std::vector<double> t;        // float32 frames (as Blender keys and evaluates them)
+    std::vector<double> y;        // n·C channel values as given
+    std::vector<Quat> ref;        // reference rotation of each sample (unit)
+    // The error metric M_k (angle² ≈ eᵀ·M_k·e for a small channel error e), computed on the fly:
+    //   quaternions: M = (4·I − κ·ûûᵀ)/|q|² with û = q/|q|; κ = 4 projects out the radial direction
+    //                (the rotation ignores scale), κ = 4 − kRadialWeight keeps a little of it;
+    //   Euler:       M = Gram matrix of the three rotation axes = I except M[first][last] =
+    //                M[last][first] = gimbal[k] = ±sin(middle angle).
+    std::vector<double> unit;     // quaternions: n·4, û
+    std::vector<double> norm2;    // quaternions: |q|² per sample
+    std::vector<double> gimbal;   // Euler: the off-diagonal term per sample
+    std::vector<double> slope;    // n·C: finite-difference slope (default Bezier tangents)
+    // breaks[k]: number of discontinuities between samples 0..k (a quaternion sign flip, an Euler
+    // angle jump above π). A segment may not span one: between the two samples Blender would pass
+    // through a near-zero quaternion or spin, and a Bezier fit could hide that at the samples.
+    std::vector<std::size_t> breaks;
+    // step_tan[k] = tan(kBetweenStep/2 × the rotation angle between samples k and k+1), for the
+    // between-samples guard.
+    std::vector<double> step_tan;
+    // Euler: the order's axes (first applied, middle, last) as indices into (X, Y, Z).
+    int axis_first = 0, axis_mid = 1, axis_last = 2;
+
+    const double* row(std::size_t k) const { return &y[k * C]; }
+};
+
+// Rotation of Euler angles a (about X, Y, Z) for the problem's order: q_last·q_mid·q_first — the
+// same product as euler_to_quat (euler.hpp), without its argument checks, for the inner loops.
+inline Quat euler_rotation(const Problem& p, const double* a) {
+    auto axis_quat = [](int axis, double angle) {
+        const double s = std::sin(0.5 * angle), c = std::cos(0.5 * angle);
+        Quat q(c, 0.0, 0.0, 0.0);
+        (axis == 0 ? q.x : axis == 1 ? q.y : q.z) = s;
+        return q;
+    };
+    return multiply(multiply(axis_quat(p.axis_last, a[p.axis_last]),
+                             axis_quat(p.axis_mid, a[p.axis_mid])),
+                    axis_quat(p.axis_first, a[p.axis_first]));
+}
+
+// tan²(θ/2) of the rotation angle θ between the rotation r (any nonzero scale) and the channel
+// values f (quaternion: f unnormalized, sign-invariant; Euler: the rotation of angles f). +inf when
+// f is a zero quaternion or the rotations are 180° apart.
+inline double error_tan2(const Problem& p, const Quat& r, const double* f) {
+    Quat q;
+    if (p.kind == Kind::QUAT) {
+        q = Quat(f[0], f[1], f[2], f[3]);
+    } else {
+        q = euler_rotation(p, f);
+    }
+    // d = conj(r)·q: tan(θ/2) = |vec d| / |w d|.
+    const double dw = r.w * q.w + r.x * q.x + r.y * q.y + r.z * q.z;
+    const double dx = r.w * q.x - r.x * q.w - r.y * q.z + r.z * q.y;
+    const double dy = r.w * q.y + r.x * q.z - r.y * q.w - r.z * q.x;
+    const double dz = r.w * q.z - r.x * q.y + r.y * q.x - r.z * q.w;
+    const double v2 = dx * dx + dy * dy + dz * dz;
+    const double w2 = dw * dw;
+    if (w2 == 0.0) return std::numeric_limits<double>::infinity();
+    return v2 / w2;
+}
+
+// The same against the reference rotation of sample k.
+inline double error_tan2(const Problem& p, std::size_t k, const double* f) {
+    return error_tan2(p, p.ref[k], f);
+}
+
+// The rotation angle (radians, [0, π]) for an error_tan2 value.
+inline double angle_of_tan2(double tan2) {
+    if (!(tan2 < std::numeric_limits<double>::infinity())) return kPi;
+    return 2.0 * std::atan(std::sqrt(tan2));
+}
+
+// ---- stage 1: admission and setup (reduce_problem.cpp) ---------------------------------------------
+
+// "tolerance: must be finite and >= 0 radians" unless it is.
+void check_tolerance(double tolerance);
+
+// The Problem of quaternion samples; throws InvalidArgument naming times[k] / quats[k]. guard: the
+// between-samples guard will run (BEZIER), so compute what it needs.
+Problem make_quat_problem(const std::vector<double>& times, const std::vector<Quat>& quats,
+                          bool guard);
+
+// The Problem of Euler samples (always guarded); throws InvalidArgument naming times[k] / angles[k].
+Problem make_euler_problem(const std::vector<double>& times, const std::vector<Vec3>& angles,
+                           EulerOrder order);
+
+// Refuses samples whose float32 form (as Blender stores keys) is another rotation.
+void check_float32_storage(const Problem& p, double tolerance);
+
+// ---- stage 2: fitting one segment (reduce_fit.cpp) -------------------------------------------------
+
+// The state of a reduction in progress: per channel its keys, the fitted values at every sample
+// (F, used as the "other channels" when channels are fitted one by one) and, per segment start, the
+// two inner Bezier control values.
+struct State {
+    std::vector<double> F;                           // n·C fitted values
+    std::vector<std::vector<std::size_t>> keys;      // per channel
+    std::vector<double> h1, h2;                      // n·C: control values of the segment starting at i
+    std::vector<unsigned char> exact_param;          // n·C: segment refitted with Blender's parameter
+};
+
+// A State with no keys, F at the samples.
+State empty_state(const Problem& p);
+
+class Fitter {
+public:
+    Fitter(const Problem& p, KeyInterpolation ipo, State& s);
+
+    // Fits channels `chans` (count nc) on [i, j] with the other channels at their current F and tests
+    // every sample strictly inside against tan²(θ/2) ≤ limit. On success (or when `force`) the fit is
+    // committed: F, h1/h2 of segment i. exact_param: use Blender's frame→parameter map for the
+    // float32 handle frames instead of the ideal linear one. Returns whether the test passed.
+    bool fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
+             bool exact_param = false);
+
+    // Handle frames of segment [i, j] as Blender stores them (float32), at 1/3 and 2/3.
+    void handle_frames(std::size_t i, std::size_t j, float hx[2]) const;
+
+private:
+    void solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
+                       double* p1, double* p2);
+    template <int C, int NC>
+    void solve_handles_t(std::size_t i, std::size_t j, const int* chans, double kappa, double* p1,
+                         double* p2);
+    double euler_metric_times(std::size_t k, int row, const double* e) const;
+    double euler_metric_entry(std::size_t k, int row, int col) const;
+    double evaluate(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
+                    const double* p2, double limit,
+                    double give_up = std::numeric_limits<double>::infinity());
+    void bezier_values(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
+                       const double* p2, double u, double* f) const;
+    void commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
+                const double* p2, bool exact_param);
+
+    const Problem& p_;
+    KeyInterpolation ipo_;
+    State& s_;
+    std::vector<double> buf_, u_, w_, err_;
+    bool between_failed_ = false;  // the last evaluate() failed a between-samples guard
+};
+
+// ---- stage 3: key selection (reduce_select.cpp) ----------------------------------------------------
+
+// Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit; the chosen
+// segments' fits are committed in the Fitter's State.
+std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
+                                     double limit);
+
+// ---- stage 4: verification and repair (reduce_verify.cpp) ------------------------------------------
+
+// The F-curves of the State's keys, every sample evaluated as Blender does, failing segments refitted
+// or split until all pass (or sit on keys: the float32 floor). `groups`: the channel sets that share
+// keys. max_error: the largest emulated error (radians).
+std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter& fitter,
+                                              KeyInterpolation ipo, double verify_tan2,
+                                              double fit_limit,
+                                              const std::vector<std::vector<int>>& groups,
+                                              double& max_error);
+
+}  // namespace quatcurve::reduce_impl

@@ -1,0 +1,179 @@
+// Key reduction, stage 1: admission of the input and the Problem it becomes (reduce_impl.hpp).
+// Every argument check of reduce_keys / reduce_keys_euler lives here, each message naming the
+// argument and element.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "quatcurve/errors.hpp"
+#include "quatcurve/euler.hpp"
+#include "quatcurve/quat.hpp"
+#include "reduce_impl.hpp"
+
+namespace quatcurve::reduce_impl {
+
+namespace {
+
+void check_times(const std::vector<double>& times) {
+    if (times.empty()) throw InvalidArgument("times: at least one sample is required");
+    for (std::size_t k = 0; k < times.size(); ++k) {
+        if (!std::isfinite(times[k]))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: non-finite value");
+        if (k > 0 && !(times[k] > times[k - 1]))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: not increasing");
+        // Blender stores frames as float32: two samples on one float32 frame cannot both be keys.
+        if (k > 0 && !(f32(times[k]) > f32(times[k - 1])))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: same float32 frame as times[" +
+                                  std::to_string(k - 1) + "] (Blender stores frames as float32)");
+        if (!std::isfinite(f32(times[k])))
+            throw InvalidArgument("times[" + std::to_string(k) + "]: beyond float32 range");
+    }
+}
+
+// Discontinuities between consecutive samples (see Problem::breaks) and, when the between-samples
+// guard will run (`guard`), the step tangents.
+void compute_breaks(Problem& p, bool guard) {
+    p.breaks.assign(p.n, 0);
+    for (std::size_t k = 1; k < p.n; ++k) {
+        const double* a = p.row(k - 1);
+        const double* b = p.row(k);
+        bool jump = false;
+        if (p.kind == Kind::QUAT) {
+            jump = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0;
+        } else {
+            for (int c = 0; c < 3; ++c) jump = jump || std::fabs(b[c] - a[c]) > kPi;
+        }
+        p.breaks[k] = p.breaks[k - 1] + (jump ? 1 : 0);
+    }
+    p.step_tan.assign(p.n, 0.0);
+    for (std::size_t k = 0; guard && k + 1 < p.n; ++k)
+        p.step_tan[k] = std::tan(0.5 * kBetweenStep * angle_between(p.ref[k], p.ref[k + 1]));
+}
+
+// Slopes for default tangents: central differences inside, one-sided at the ends and next to a
+// discontinuity (which no tangent should see).
+void compute_slopes(Problem& p) {
+    p.slope.assign(p.n * p.C, 0.0);
+    if (p.n < 2) return;
+    for (std::size_t k = 0; k < p.n; ++k) {
+        std::size_t a = k > 0 && p.breaks[k] == p.breaks[k - 1] ? k - 1 : k;
+        std::size_t b = k + 1 < p.n && p.breaks[k + 1] == p.breaks[k] ? k + 1 : k;
+        const double dt = p.t[b] - p.t[a];
+        for (int c = 0; c < p.C; ++c)
+            p.slope[k * p.C + c] = dt > 0.0 ? (p.y[b * p.C + c] - p.y[a * p.C + c]) / dt : 0.0;
+    }
+}
+
+}  // namespace
+
+void check_tolerance(double tolerance) {
+    if (!std::isfinite(tolerance) || tolerance < 0.0)
+        throw InvalidArgument("tolerance: must be finite and >= 0 radians, got " +
+                              std::to_string(tolerance));
+}
+
+Problem make_quat_problem(const std::vector<double>& times, const std::vector<Quat>& quats,
+                          bool guard) {
+    check_times(times);
+    if (quats.size() != times.size())
+        throw InvalidArgument("quats: " + std::to_string(quats.size()) +
+                              " quaternions for " + std::to_string(times.size()) + " times");
+    Problem p;
+    p.kind = Kind::QUAT;
+    p.C = 4;
+    p.n = times.size();
+    p.t.resize(p.n);
+    p.y.resize(p.n * 4);
+    p.ref.resize(p.n);
+    p.unit.assign(p.n * 4, 0.0);
+    p.norm2.assign(p.n, 0.0);
+    for (std::size_t k = 0; k < p.n; ++k) {
+        const std::string problem = nonzero_problem(quats[k]);
+        if (!problem.empty())
+            throw InvalidArgument("quats[" + std::to_string(k) + "]: " + problem);
+        p.t[k] = f32(times[k]);
+        const Quat& q = quats[k];
+        const double v[4] = {q.w, q.x, q.y, q.z};
+        const double len = norm(q);
+        p.ref[k] = Quat(q.w / len, q.x / len, q.y / len, q.z / len);
+        const double u[4] = {v[0] / len, v[1] / len, v[2] / len, v[3] / len};
+        p.norm2[k] = len * len;
+        for (int a = 0; a < 4; ++a) {
+            p.y[k * 4 + a] = v[a];
+            p.unit[k * 4 + a] = u[a];
+        }
+    }
+    compute_breaks(p, guard);
+    compute_slopes(p);
+    return p;
+}
+
+Problem make_euler_problem(const std::vector<double>& times, const std::vector<Vec3>& angles,
+                           EulerOrder order) {  // Euler fits are always guarded
+    check_times(times);
+    if (angles.size() != times.size())
+        throw InvalidArgument("angles: " + std::to_string(angles.size()) + " triples for " +
+                              std::to_string(times.size()) + " times");
+    Problem p;
+    p.kind = Kind::EULER;
+    p.C = 3;
+    p.order = order;
+    const std::string name = euler_order_name(order);  // "XYZ": X applied first
+    p.axis_first = name[0] - 'X';
+    p.axis_mid = name[1] - 'X';
+    p.axis_last = name[2] - 'X';
+    // Sign of the triple product e_last · (e_mid × e_first): +1 for cyclic (last, mid, first).
+    const int perm = (p.axis_mid - p.axis_last + 3) % 3 == 1 ? 1 : -1;
+    p.n = times.size();
+    p.t.resize(p.n);
+    p.y.resize(p.n * 3);
+    p.ref.resize(p.n);
+    p.gimbal.assign(p.n, 0.0);
+    for (std::size_t k = 0; k < p.n; ++k) {
+        const std::string problem = finite_problem(angles[k]);
+        if (!problem.empty())
+            throw InvalidArgument("angles[" + std::to_string(k) + "]: " + problem);
+        p.t[k] = f32(times[k]);
+        for (int a = 0; a < 3; ++a) p.y[k * 3 + a] = angles[k][a];
+        p.ref[k] = euler_to_quat(angles[k], order);
+        // The rotation error of small angle errors δ is Σ δ_a·u_a with unit world axes u_a; their
+        // Gram matrix is the identity except u_first·u_last = ±sin(middle angle).
+        p.gimbal[k] = perm * std::sin(angles[k][p.axis_mid]);
+    }
+    compute_breaks(p, true);
+    compute_slopes(p);
+    return p;
+}
+// Blender keeps key values as float32: a sample whose float32 form is a different rotation (a
+// component beyond ±3.4e38, a quaternion whose components all underflow, an angle too large for
+// float32 to resolve) cannot be kept within any bound, so it is refused up front. Allowed: the
+// tolerance, and never less than 1e-6 rad (float32 rounding of ordinary values is ~1e-7 rad).
+void check_float32_storage(const Problem& p, double tolerance) {
+    const double allowed = std::max(tolerance, 1e-6);
+    const char* name = p.kind == Kind::QUAT ? "quats[" : "angles[";
+    for (std::size_t k = 0; k < p.n; ++k) {
+        const double* y = p.row(k);
+        double v[4] = {0.0, 0.0, 0.0, 0.0};
+        for (int c = 0; c < p.C; ++c) {
+            v[c] = f32(y[c]);
+            if (!std::isfinite(v[c]))
+                throw InvalidArgument(name + std::to_string(k) + "]: " + std::to_string(y[c]) +
+                                      " is beyond float32 range (Blender stores keys as float32)");
+        }
+        Quat stored;
+        if (p.kind == Kind::QUAT) {
+            stored = Quat(v[0], v[1], v[2], v[3]);
+            if (!nonzero_problem(stored).empty())
+                throw InvalidArgument(name + std::to_string(k) +
+                                      "]: every component underflows float32 (Blender stores keys as float32)");
+        } else {
+            stored = euler_to_quat(Vec3(v[0], v[1], v[2]), p.order);
+        }
+        const double moved = angle_between(p.ref[k], stored);
+        if (moved > allowed)
+            throw InvalidArgument(name + std::to_string(k) + "]: storing it as float32 (as Blender does) turns it by " +
+                                  std::to_string(moved) + " rad, more than the tolerance allows");
+    }
+}
+
+}  // namespace quatcurve::reduce_impl

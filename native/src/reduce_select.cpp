@@ -1,0 +1,78 @@
+// Key reduction, stage 3: which samples become keys (reduce_impl.hpp: select_keys).
+#include <algorithm>
+
+#include "reduce_impl.hpp"
+
+namespace quatcurve::reduce_impl {
+
+// Keys for the channels `chans` (shared), fitted against the other channels' current F, every sample
+// within tan²(θ/2) ≤ limit. Greedy: from key i the farthest feasible end, bracketed around the
+// previous segment's length (growing or shrinking by doubling steps) and then pinned down by binary
+// search; then one pass that drops a key wherever the segment joining its neighbours passes. A probe
+// that passes commits its fit, and the ends only grow, so the chosen segment's fit is the one held.
+std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
+                                     double limit) {
+    const std::size_t n = p.n;
+    std::vector<std::size_t> keys{0};
+    if (n == 1) return keys;
+    auto probe = [&](std::size_t i, std::size_t j) {
+        return fitter.fit(i, j, chans, nc, limit, false);
+    };
+    std::size_t i = 0, last_len = 2;
+    while (i < n - 1) {
+        std::size_t good = i + 1, bad = kNone;  // good: feasible (committed unless i + 1)
+        const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), n - 1 - i);
+        std::size_t step = std::max<std::size_t>(1, last_len / 4);
+        if (guess > i + 1) {
+            if (probe(i, guess)) {
+                good = guess;
+                while (good < n - 1) {
+                    const std::size_t j = std::min(good + step, n - 1);
+                    if (!probe(i, j)) {
+                        bad = j;
+                        break;
+                    }
+                    good = j;
+                    step *= 2;
+                }
+            } else {
+                bad = guess;
+                while (bad > i + 2) {
+                    const std::size_t j = bad > i + 1 + step ? bad - step : i + 1;
+                    if (j == i + 1) break;
+                    if (probe(i, j)) {
+                        good = j;
+                        break;
+                    }
+                    bad = j;
+                    step *= 2;
+                }
+            }
+            if (bad != kNone) {
+                while (bad - good > 1) {
+                    const std::size_t mid = good + (bad - good) / 2;
+                    if (probe(i, mid)) {
+                        good = mid;
+                    } else {
+                        bad = mid;
+                    }
+                }
+            }
+        }
+        if (good == i + 1) fitter.fit(i, good, chans, nc, limit, true);
+        keys.push_back(good);
+        last_len = good - i;
+        i = good;
+    }
+    // Removal pass: join neighbours where one segment suffices. A failed probe changes nothing, so
+    // the fits already committed stay valid.
+    std::vector<std::size_t> kept{keys[0]};
+    for (std::size_t a = 1; a + 1 < keys.size(); ++a) {
+        if (probe(kept.back(), keys[a + 1])) continue;
+        kept.push_back(keys[a]);
+    }
+    kept.push_back(keys.back());
+    return kept;
+}
+
+}  // namespace quatcurve::reduce_impl

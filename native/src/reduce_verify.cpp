@@ -1,0 +1,178 @@
+// Key reduction, stage 4: the result's F-curves, every sample evaluated exactly as Blender does
+// (blender_eval.hpp), and the repairs — refit with Blender's own frame→parameter map, then split —
+// until every sample passes (reduce_impl.hpp: verify_and_repair).
+#include <algorithm>
+
+#include "quatcurve/blender_eval.hpp"
+#include "reduce_impl.hpp"
+
+namespace quatcurve::reduce_impl {
+
+namespace {
+
+ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpolation ipo) {
+    ReducedChannel ch;
+    const std::vector<std::size_t>& keys = s.keys[c];
+    const std::size_t K = keys.size();
+    ch.indices = keys;
+    ch.frames.resize(K);
+    ch.values.resize(K);
+    for (std::size_t a = 0; a < K; ++a) {
+        ch.frames[a] = p.t[keys[a]];
+        ch.values[a] = f32(p.y[keys[a] * p.C + c]);
+    }
+    if (ipo == KeyInterpolation::BEZIER) {
+        ch.handle_left.assign(2 * K, 0.0);
+        ch.handle_right.assign(2 * K, 0.0);
+        for (std::size_t a = 0; a + 1 < K; ++a) {
+            const std::size_t i = keys[a], j = keys[a + 1];
+            const double d = p.t[j] - p.t[i];
+            ch.handle_right[2 * a] = f32(p.t[i] + d / 3.0);
+            ch.handle_right[2 * a + 1] = f32(s.h1[i * p.C + c]);
+            ch.handle_left[2 * (a + 1)] = f32(p.t[j] - d / 3.0);
+            ch.handle_left[2 * (a + 1) + 1] = f32(s.h2[i * p.C + c]);
+        }
+        // Outer handles mirror the inner ones (they only shape extrapolation, which is constant).
+        if (K == 1) {
+            ch.handle_left[0] = f32(ch.frames[0] - 1.0);
+            ch.handle_left[1] = ch.values[0];
+            ch.handle_right[0] = f32(ch.frames[0] + 1.0);
+            ch.handle_right[1] = ch.values[0];
+        } else {
+            ch.handle_left[0] = f32(2.0 * ch.frames[0] - ch.handle_right[0]);
+            ch.handle_left[1] = f32(2.0 * ch.values[0] - ch.handle_right[1]);
+            const std::size_t L = K - 1;
+            ch.handle_right[2 * L] = f32(2.0 * ch.frames[L] - ch.handle_left[2 * L]);
+            ch.handle_right[2 * L + 1] = f32(2.0 * ch.values[L] - ch.handle_left[2 * L + 1]);
+        }
+    }
+    return ch;
+}
+
+// Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Channels with
+// the same keys as the previous one share its Bezier parameters.
+void emulate_errors(const Problem& p, const std::vector<ReducedChannel>& chans,
+                    KeyInterpolation ipo, std::vector<double>& err) {
+    const int C = p.C;
+    std::vector<double> vals(p.n * C), col;
+    std::vector<float> params;
+    for (int c = 0; c < C; ++c) {
+        const bool reuse = c > 0 && chans[c].indices == chans[c - 1].indices;
+        blender_evaluate_sorted(chans[c], ipo, p.t, col, &params, reuse);
+        for (std::size_t k = 0; k < p.n; ++k) vals[k * C + c] = col[k];
+    }
+    err.resize(p.n);
+    for (std::size_t k = 0; k < p.n; ++k) {
+        double* f = &vals[k * C];
+        // Blender's normalize_qt turns an exactly zero quaternion into (0, 1, 0, 0).
+        if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0)
+            f[1] = 1.0;
+        err[k] = error_tan2(p, k, f);
+    }
+}
+
+// Index a with keys[a] < k < keys[a+1], or kNone when k is a key.
+std::size_t segment_of(const std::vector<std::size_t>& keys, std::size_t k) {
+    const auto it = std::upper_bound(keys.begin(), keys.end(), k);
+    const std::size_t b = static_cast<std::size_t>(it - keys.begin());
+    if (b == 0 || b == keys.size()) return kNone;
+    if (keys[b - 1] == k) return kNone;
+    return b - 1;
+}
+
+// Single-channel contribution at sample k: the error if only channel c took its evaluated value.
+double channel_contribution(const Problem& p, std::size_t k, int c, double value) {
+    double f[kMaxChannels];
+    for (int a = 0; a < p.C; ++a) f[a] = p.y[k * p.C + a];
+    f[c] = value;
+    return error_tan2(p, k, f);
+}
+
+}  // namespace
+
+// Evaluates every sample as Blender would; each segment holding a failing sample is first refitted
+// with Blender's exact frame→parameter map (BEZIER), then split at its worst failing sample, until
+// every sample passes or every failing sample sits on a key of every channel (float32 floor).
+// `groups` lists the channel sets that share keys (one group of all channels when synchronized).
+std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter& fitter,
+                                              KeyInterpolation ipo, double verify_tan2,
+                                              double fit_limit,
+                                              const std::vector<std::vector<int>>& groups,
+                                              double& max_error) {
+    const int C = p.C;
+    std::vector<ReducedChannel> chans(C);
+    std::vector<double> err;
+    for (;;) {
+        for (int c = 0; c < C; ++c) chans[c] = make_channel(p, s, c, ipo);
+        emulate_errors(p, chans, ipo, err);
+        // Worst failing sample per (group, segment).
+        struct Fix {
+            std::size_t group, seg, sample;
+            double err;
+        };
+        std::vector<Fix> fixes;
+        for (std::size_t k = 0; k < p.n; ++k) {
+            if (!(err[k] > verify_tan2)) continue;
+            // The group to repair: the one whose evaluated channels contribute most at k.
+            std::size_t best_group = kNone, best_seg = kNone;
+            double best = -1.0;
+            for (std::size_t g = 0; g < groups.size(); ++g) {
+                const int c0 = groups[g][0];
+                const std::size_t seg = segment_of(s.keys[c0], k);
+                if (seg == kNone) continue;
+                double contrib;
+                if (groups[g].size() == static_cast<std::size_t>(C)) {
+                    contrib = err[k];
+                } else {
+                    contrib = channel_contribution(
+                        p, k, c0, blender_evaluate(chans[c0], ipo, float(p.t[k])));
+                }
+                if (contrib > best) {
+                    best = contrib;
+                    best_group = g;
+                    best_seg = seg;
+                }
+            }
+            if (best_group == kNone) continue;  // on a key everywhere: nothing left to do
+            bool merged = false;
+            for (Fix& f : fixes) {
+                if (f.group == best_group && f.seg == best_seg) {
+                    if (err[k] > f.err) {
+                        f.err = err[k];
+                        f.sample = k;
+                    }
+                    merged = true;
+                    break;
+                }
+            }
+            if (!merged) fixes.push_back({best_group, best_seg, k, err[k]});
+        }
+        if (fixes.empty()) break;
+        // Splits change key lists: apply per group from the last segment backwards.
+        std::sort(fixes.begin(), fixes.end(), [](const Fix& a, const Fix& b) {
+            return a.group != b.group ? a.group < b.group : a.seg > b.seg;
+        });
+        for (const Fix& f : fixes) {
+            const std::vector<int>& grp = groups[f.group];
+            std::vector<std::size_t>& keys = s.keys[grp[0]];
+            const std::size_t i = keys[f.seg], j = keys[f.seg + 1];
+            const int nc = static_cast<int>(grp.size());
+            if (ipo == KeyInterpolation::BEZIER && !s.exact_param[i * C + grp[0]]) {
+                fitter.fit(i, j, grp.data(), nc, fit_limit, true, true);
+                continue;
+            }
+            const std::size_t m = f.sample;
+            fitter.fit(i, m, grp.data(), nc, fit_limit, true);
+            fitter.fit(m, j, grp.data(), nc, fit_limit, true);
+            for (int c : grp) {
+                std::vector<std::size_t>& kc = s.keys[c];
+                kc.insert(std::upper_bound(kc.begin(), kc.end(), i), m);
+            }
+        }
+    }
+    max_error = 0.0;
+    for (std::size_t k = 0; k < p.n; ++k) max_error = std::max(max_error, angle_of_tan2(err[k]));
+    return chans;
+}
+
+}  // namespace quatcurve::reduce_impl
