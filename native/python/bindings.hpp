@@ -9,4 +9,5 @@ void bind_core(pybind11::module_& m);     // bind_core.cpp: quaternion algebra, 
 void bind_curve(pybind11::module_& m);    // bind_curve.cpp: the orientation curve engine
 void bind_reduce(pybind11::module_& m);   // bind_reduce.cpp: key reduction
 void bind_metrics(pybind11::module_& m);  // bind_metrics.cpp: comparison metrics
+void bind_channels(pybind11::module_& m); // bind_channels.cpp: rotation channels, sampling policies
 }  // namespace quatcurve::bindings

@@ -19,4 +19,5 @@ PYBIND11_MODULE(quatcurve, m) {
     quatcurve::bindings::bind_curve(m);
     quatcurve::bindings::bind_reduce(m);
     quatcurve::bindings::bind_metrics(m);
+    quatcurve::bindings::bind_channels(m);
 }
