@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import native, operators_compare, operators_reduce
+from . import compare_ops, native, reduce_ops
 
 
 def draw_status(layout):
@@ -86,7 +86,7 @@ def _table_row(layout, cells):
 def draw_compare_table(layout, settings, max_targets=4):
     """The last comparison: per target a table (source, max deviation, speed ratio, path length) and
     the recommendation, wrapped by hand (labels do not wrap)."""
-    table = operators_compare.last_table(settings)
+    table = compare_ops.last_table(settings)
     if not table:
         return
     box = layout.box()
@@ -140,7 +140,7 @@ class _SidebarPanel:
         if reduce_settings is not None:
             box = layout.box()
             box.label(text="Reduce Keys", icon="IPO_BEZIER")
-            operators_reduce.draw_settings(box, reduce_settings)
+            reduce_ops.draw_settings(box, reduce_settings)
 
 
 class QUATCURVE_PT_view3d(_SidebarPanel, bpy.types.Panel):

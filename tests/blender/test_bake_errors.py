@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bake_helpers import add_empty, add_rig, file_state, key, select_bones, select_objects
-from quatcurve_blender import bake, fcurves
+from quatcurve_blender import bake, bake_ops, fcurves, targets
 
 
 def refused(match, **kwargs):
@@ -142,8 +142,8 @@ class _FakeOperator:
     """Stands in for an operator instance: attributes, is_property_set, report."""
 
     def __init__(self, **given):
-        from quatcurve_blender import props
-        defaults = {name: getattr(bpy.context.scene.quatcurve, name) for name in props.bake_properties()}
+        from quatcurve_blender import bake_ops
+        defaults = {name: getattr(bpy.context.scene.quatcurve, name) for name in bake_ops.bake_properties()}
         self.__dict__.update(defaults)
         self.__dict__.update(given)
         self._given = set(given)
@@ -169,7 +169,7 @@ class _FakeOperator:
 def test_errors_from_the_plain_functions_name_the_target(scene):
     obj = add_empty("Still")
     with pytest.raises(bake.BakeError, match="Still"):
-        bake.bake([bake.Target(obj)], bake.BakeSettings())
+        bake.bake([targets.Target(obj)], bake.BakeSettings())
     with pytest.raises(bake.BakeError, match="method 'LERP': unknown"):
         bake.check_settings(bake.BakeSettings(method="LERP"))
     assert math.isclose(bake.bake_frames(1, 2, 1.0)[-1], 2)
