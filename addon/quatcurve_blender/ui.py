@@ -12,16 +12,20 @@ def draw_status(layout):
     box = layout.box()
     box.alert = True
     box.label(text="Native module unavailable", icon="ERROR")
-    # Long reasons are wrapped by hand: labels do not wrap.
-    words, line = native.UNAVAILABLE_REASON.split(), ""
-    for word in words:
-        if len(line) + len(word) > 48:
-            box.label(text=line)
+    wrapped_labels(box, native.UNAVAILABLE_REASON, 48)
+    return False
+
+
+def wrapped_labels(layout, text, width):
+    """`text` as labels of at most about `width` characters (Blender's labels do not wrap)."""
+    line = ""
+    for word in text.split():
+        if len(line) + len(word) > width:
+            layout.label(text=line)
             line = ""
         line = (line + " " + word).strip()
     if line:
-        box.label(text=line)
-    return False
+        layout.label(text=line)
 
 
 def draw_bake_settings(layout, settings):
@@ -97,14 +101,7 @@ def draw_compare_table(layout, settings, max_targets=4):
         _table_row(col, ("Source", "Max dev", "Ratio", "Length"))
         for row in target["rows"]:
             _table_row(col, row)
-        words, line = target["recommendation"].split(), ""
-        for word in words:
-            if len(line) + len(word) > 52:
-                col.label(text=line)
-                line = ""
-            line = (line + " " + word).strip()
-        if line:
-            col.label(text=line)
+        wrapped_labels(col, target["recommendation"], 52)
         if target.get("image"):
             col.label(text="Plot: image '%s'" % target["image"], icon="IMAGE_DATA")
     if len(table) > max_targets:
