@@ -17,18 +17,19 @@ bl_info = {
 if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
     import importlib
 
-    for _name in ("native", "fcurves", "bake", "props", "operators", "plot", "compare", "operators_compare", "reduce", "operators_reduce", "ui"):
+    # Lowest layer first, so each module reloads against already-reloaded modules below it.
+    for _name in ("native", "fcurves", "targets", "write", "plot", "reduce", "bake", "compare",
+                  "bake_ops", "compare_ops", "reduce_ops", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
-from . import native, ui  # noqa: E402
-from . import bake, fcurves, operators, props  # noqa: E402, F401
-from . import compare, operators_compare, plot  # noqa: E402, F401
-from . import operators_reduce, reduce  # noqa: E402, F401
+from . import native, fcurves, targets, write  # noqa: E402, F401  (reading and writing layers)
+from . import bake, compare, plot, reduce  # noqa: E402, F401        (tasks)
+from . import bake_ops, compare_ops, reduce_ops, ui  # noqa: E402    (operators, settings, panels)
 
-_modules = (props, operators, operators_compare, operators_reduce, ui)
+_modules = (bake_ops, compare_ops, reduce_ops, ui)
 
 
 def register():

@@ -31,7 +31,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, compare, native, operators, operators_compare, props
+    from . import bake, bake_ops, compare, compare_ops, native, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -40,7 +40,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, compare, native, operators, operators_compare, props
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, native, targets
 
 import bpy
 
@@ -148,7 +148,7 @@ def split_patterns(values):
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
     frame_range = tuple(args.frame_range) if args.frame_range else (None, None)
-    settings = operators.settings_from(args, frame_range)
+    settings = bake_ops.settings_from(args, frame_range)
     try:
         bake.check_settings(settings)
         if args.frame_range:
@@ -250,8 +250,8 @@ def matches(name, pattern):
 def no_animation_reason(target):
     """bake's own explanation of why `target` has nothing to bake."""
     try:
-        bake.read_rotation_keys(target)
-    except bake.BakeError as error:
+        targets.read_rotation_keys(target)
+    except targets.TargetError as error:
         return str(error)
     return "%s: no rotation animation" % target.name
 
@@ -270,12 +270,12 @@ def select_targets(objects, object_patterns, bone_patterns):
             if not found:
                 raise UsageError("--objects %r: no object matches (objects: %s)"
                                  % (pattern, _names([o.name for o in objects])))
-            if not bake.animated_targets(found):
-                raise UsageError("--objects %r: %s" % (pattern, no_animation_reason(bake.Target(found[0]))))
+            if not targets.animated_targets(found):
+                raise UsageError("--objects %r: %s" % (pattern, no_animation_reason(targets.Target(found[0]))))
             chosen += [o for o in found if o not in chosen]
-    targets = bake.animated_targets(chosen)
+    found_targets = targets.animated_targets(chosen)
     if bone_patterns:
-        bones = [bake.Target(o, pb.name) for o in chosen if o.type == "ARMATURE" and o.pose is not None
+        bones = [targets.Target(o, pb.name) for o in chosen if o.type == "ARMATURE" and o.pose is not None
                  for pb in o.pose.bones]
         keep = set()
         for pattern in bone_patterns:
@@ -285,14 +285,14 @@ def select_targets(objects, object_patterns, bone_patterns):
                 raise UsageError("--bones %r: no pose bone matches (%s)" % (
                     pattern, "armatures: " + _names(sorted({t.object.name for t in bones})) if bones
                     else "no armature among the objects"))
-            animated = [t for t in found if bake.has_rotation_animation(t)]
+            animated = [t for t in found if targets.has_rotation_animation(t)]
             if not animated:
                 raise UsageError("--bones %r: %s" % (pattern, no_animation_reason(found[0])))
             keep.update(t.name for t in animated)
-        targets = [t for t in targets if t.bone is None or t.name in keep]
-    if not targets:
+        found_targets = [t for t in found_targets if t.bone is None or t.name in keep]
+    if not found_targets:
         raise UsageError("no object or pose bone with rotation animation in the scene")
-    return sorted(targets, key=lambda t: (t.object.name, t.bone or ""))
+    return sorted(found_targets, key=lambda t: (t.object.name, t.bone or ""))
 
 
 def _names(names, limit=12):
@@ -357,18 +357,18 @@ def run(args):
 
 def bake_and_save(args, settings, comparing, source, output, report_file):
     scene = bpy.context.scene
-    targets = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
+    chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
 
     report = None
     if comparing is not None:
-        report = compare.compare(targets, comparing)
+        report = compare.compare(chosen, comparing)
         compare.make_images(report)
-    result = bake.bake(targets, settings)
+    result = bake.bake(chosen, settings)
     scene.frame_set(scene.frame_current)  # re-evaluate with the baked curves, as the operator does
     if hasattr(scene, "quatcurve"):
-        props.store_result(scene.quatcurve, result)
+        bake_ops.store_result(scene.quatcurve, result)
     if report is not None and hasattr(scene, "quatcurve_compare"):
-        operators_compare.store_result(scene.quatcurve_compare, report)
+        compare_ops.store_result(scene.quatcurve_compare, report)
 
     print("quatcurve %s (Blender %s): %s, frames %g..%g step %g, %s → %s" % (
         native.require().__version__, bpy.app.version_string, settings.method, result.frame_start, result.frame_end, settings.step,
@@ -400,7 +400,7 @@ def main(argv=None):
         code = run(args)
     except UsageError as error:
         return fail(EXIT_USAGE, str(error))
-    except (bake.BakeError, compare.CompareError, RuntimeError, OSError) as error:
+    except (targets.TargetError, RuntimeError, OSError) as error:
         return fail(EXIT_FAILURE, str(error))
     except Exception as error:  # a bug: still one line, the traceback on request
         if os.environ.get("QUATCURVE_DEBUG"):

@@ -3,8 +3,8 @@ does with the same keys — in numbers (native metrics), a plot, and a JSON repo
 
 Plain functions, no operator state: the `quatcurve.compare` operator, the CLI and scripts call them.
 
-    targets = compare.gather_targets(bpy.context)     # or [bake.Target(obj), bake.Target(rig, "Bone")]
-    report = compare.compare(targets, compare.CompareSettings(subframes=4))
+    found = compare.gather_targets(bpy.context)       # or [targets.Target(obj), targets.Target(rig, "Bone")]
+    report = compare.compare(found, compare.CompareSettings(subframes=4))
     compare.write_report(report, "/tmp/report.json")  # the JSON and one PNG per target beside it
     compare.make_images(report)                       # the plots as image datablocks
     print("\\n".join(report.table_lines()))
@@ -15,7 +15,8 @@ included):
   interpolation, handles and F-curve modifiers as they are).
 - BLENDER_EULER_<ORDER>: Blender's Euler mode with the same keys — the target's order, or all six
   on request: the key orientations as Euler keys (the target's own values when it is keyed in that
-  order; otherwise converted, compatible and filtered), written with Blender's default key type
+  order; otherwise converted as Blender's Quaternion.to_euler converts them, each compatible with
+  the previous key), written with Blender's default key type
   (auto-clamped Bezier) into a scratch action and evaluated by Blender.
 - BLENDER_QUATERNION: Blender's quaternion mode with the same keys, likewise (w, x, y, z keys; the
   target's own values when it is keyed in quaternion mode, flips included; otherwise converted and
@@ -42,7 +43,8 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import bake, fcurves, native, plot
+from . import fcurves, native, plot, targets
+from .targets import TargetError
 
 ENGINE_METHODS = ("SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2", "NLERP")
 REFERENCE_METHOD = "SLERP"
@@ -63,7 +65,7 @@ def euler_source(order):
     return "BLENDER_EULER_" + order
 
 
-class CompareError(Exception):
+class CompareError(TargetError):
     """A comparison that cannot be done; the message names the target. Nothing has been changed."""
 
 
@@ -112,26 +114,22 @@ def check_settings(settings):
 def gather_targets(context):
     """The selection (selected pose bones in Pose mode, selected objects otherwise), as bake does."""
     try:
-        return bake.gather_targets(context)
-    except bake.BakeError as error:
-        raise CompareError(str(error).replace("Nothing to bake", "Nothing to compare")) from None
+        return targets.gather_targets(context, verb="compare")
+    except TargetError as error:
+        raise CompareError(str(error)) from None
 
 
 def sample_frames(key_frames, subframes):
     """Frames from the first to the last key every 1/subframes frame, plus every key frame; grid
-    points within 1e-4 frames of a key give way to the key (so no sampling interval is tiny)."""
+    points within 1e-4 frames of a key give way to the key (so no sampling interval is tiny).
+    Native quatcurve.sample_frames, after refusing more than MAX_SAMPLES samples."""
     key_frames = np.asarray(key_frames, dtype=np.float64)
     first, last = float(key_frames[0]), float(key_frames[-1])
     count = int(math.floor((last - first) * subframes + 1e-9)) + 1
     if count + len(key_frames) > MAX_SAMPLES:
         raise CompareError("%s frames at %d samples per frame: more than %s samples"
                            % ("%g..%g" % (first, last), subframes, f"{MAX_SAMPLES:,}"))
-    grid = first + np.arange(count, dtype=np.float64) / subframes
-    # Distance of each grid point to its nearest key: the keys on either side of it.
-    after = np.clip(np.searchsorted(key_frames, grid), 0, len(key_frames) - 1)
-    before = np.maximum(after - 1, 0)
-    near = np.minimum(np.abs(grid - key_frames[before]), np.abs(grid - key_frames[after])) < 1e-4
-    return np.union1d(grid[~near], key_frames)
+    return native.require().sample_frames(key_frames, subframes)
 
 
 # ---- results ------------------------------------------------------------------------------------------
@@ -301,12 +299,11 @@ def evaluate_in_scratch(prop, key_frames, key_values, frames, interpolation="BEZ
 
 def euler_keys(keys, key_quats, order):
     """Euler key values (K, 3) in `order` for the keys: the target's own values when it is keyed in
-    that order (so turns beyond 180° survive), else the key orientations converted, each compatible
-    with the previous one (no flips or 2π jumps)."""
+    that order (so turns beyond 180° survive), else the key orientations converted as Blender
+    converts them — the first Quaternion.to_euler(order), each next to_euler(order, previous)."""
     if keys.mode == order:
         return np.asarray(keys.values, dtype=np.float64)
-    qc = native.require()
-    return np.asarray(qc.euler_filter(qc.quat_to_euler(key_quats, order), order), dtype=np.float64)
+    return native.require().quats_to_channels(key_quats, order, euler="blender")
 
 
 def quaternion_keys(keys, key_quats):
@@ -314,7 +311,7 @@ def quaternion_keys(keys, key_quats):
     flips included, which Blender interpolates through), else hemisphere-continuous conversions."""
     if keys.mode == "QUATERNION":
         return np.asarray(keys.values, dtype=np.float64)
-    return bake.hemisphere_continuous(key_quats)
+    return native.require().quats_to_channels(key_quats, "QUATERNION")
 
 
 # ---- one target --------------------------------------------------------------------------------------
@@ -323,8 +320,8 @@ def compare_target(target, settings):
     """TargetComparison of one target (see the module doc). Raises CompareError."""
     qc = native.require()
     try:
-        keys = bake.read_rotation_keys(target)
-    except bake.BakeError as error:
+        keys = targets.read_rotation_keys(target)
+    except TargetError as error:
         raise CompareError(str(error)) from None
     if len(keys.frames) < 2:
         raise CompareError("%s: one rotation key (frame %g): nothing to compare" % (target.name, keys.frames[0]))
@@ -332,7 +329,7 @@ def compare_target(target, settings):
     try:
         key_quats = keys.quats()
         current = keys.quats(frames)
-    except bake.BakeError as error:
+    except TargetError as error:
         raise CompareError(str(error)) from None
     paths = {}  # name → (kind, quats, euler order, euler angles)
     paths[SOURCE_BLENDER] = ("blender", current, keys.mode if keys.is_euler else None,
@@ -342,12 +339,13 @@ def compare_target(target, settings):
     for order in orders:
         values = euler_keys(keys, key_quats, order)
         angles = evaluate_in_scratch("rotation_euler", keys.frames, values, frames, settings.key_interpolation)
-        paths[euler_source(order)] = ("blender_euler", np.asarray(qc.euler_to_quat(angles, order)), order, angles)
+        paths[euler_source(order)] = ("blender_euler", qc.channels_to_quats(angles, order), order, angles)
     values = evaluate_in_scratch("rotation_quaternion", keys.frames, quaternion_keys(keys, key_quats), frames,
                                  settings.key_interpolation)
     try:
-        quats = bake.channels_to_quats("QUATERNION", values, "%s (Blender quaternion mode)" % target.name, frames)
-    except bake.BakeError as error:
+        quats = targets.channels_to_quats("QUATERNION", values, "%s (Blender quaternion mode)" % target.name,
+                                          frames)
+    except TargetError as error:
         raise CompareError(str(error)) from None
     paths[SOURCE_BLENDER_QUATERNION] = ("blender_quaternion", quats, None, None)
 
@@ -430,17 +428,17 @@ def recommend(comparison):
 
 # ---- all targets --------------------------------------------------------------------------------------------
 
-def compare(targets, settings=None):
-    """CompareReport for `targets` (bake.Target). Reads the targets' curves and evaluates scratch
+def compare(found, settings=None):
+    """CompareReport for `found` (targets.Target). Reads the targets' curves and evaluates scratch
     actions; changes no animation data. Raises CompareError naming the target at fault."""
     settings = settings or CompareSettings()
     check_settings(settings)
     native.require()
-    if not targets:
+    if not found:
         raise CompareError("Nothing to compare: no targets")
     begin = time.perf_counter()
     report = CompareReport(settings)
-    for target in targets:
+    for target in found:
         report.targets.append(compare_target(target, settings))
     report.seconds = time.perf_counter() - begin
     return report

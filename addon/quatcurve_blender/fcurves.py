@@ -20,6 +20,8 @@ import hashlib
 import bpy
 import numpy as np
 
+from . import native
+
 # Slotted actions are the only action API from 4.4 on (4.3's were experimental).
 SLOTTED = bpy.app.version >= (4, 4, 0)
 
@@ -392,26 +394,13 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     if handle_left is not None:
         _set_free_handles(points, n)
     elif with_handles:
-        handle_left, handle_right = _segment_handles(co)
+        handle_left, handle_right = native.require().segment_handles(frames, values)
     if handle_left is not None:
         points.foreach_set("handle_left", np.asarray(handle_left, dtype=np.float32).reshape(n, 2).ravel())
         points.foreach_set("handle_right", np.asarray(handle_right, dtype=np.float32).reshape(n, 2).ravel())
     if n > 1 and not (frames[1:] > frames[:-1]).all():
         fcurve.update()
     return fcurve
-
-
-def _segment_handles(co):
-    """Handles on the straight segments between keys, a third of the way to each neighbour (the
-    first and last keys mirror their only segment; a lone key gets flat handles one frame wide)."""
-    n = len(co)
-    if n == 1:
-        return co - (1.0, 0.0), co + (1.0, 0.0)
-    third = np.diff(co, axis=0) / 3.0            # (n-1, 2)
-    left, right = np.empty_like(co), np.empty_like(co)
-    left[1:], left[0] = co[1:] - third, co[0] - third[0]
-    right[:-1], right[-1] = co[:-1] + third, co[-1] + third[-1]
-    return left, right
 
 
 def _set_free_handles(points, n):

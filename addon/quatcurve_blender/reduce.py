@@ -4,10 +4,10 @@ Plain functions, no operator state: the `quatcurve.reduce` operator, the bake (t
 scripts call the same code. The math is native (`quatcurve.reduce_keys`, `reduce_keys_euler`): it
 chooses the keys and Bezier handles and verifies, by emulating Blender's F-curve evaluation in
 float32, that every sample stays within the tolerance. This module only moves arrays between
-F-curves (through fcurves.py) and the native reducer.
+targets (targets.py: reading), the native reducer, and write.py (writing).
 
-    targets = bake.gather_targets(bpy.context)
-    result = reduce.reduce(targets, reduce.ReduceSettings(tolerance=0.1))
+    found = targets.gather_targets(bpy.context, verb="reduce")
+    result = reduce.reduce(found, reduce.ReduceSettings(tolerance=0.1))
     print(result.summary())
 
 Samples: a target's rotation channels as Blender evaluates them at every whole frame of its keyed
@@ -18,7 +18,7 @@ Rotation modes: quaternion and the six Euler orders (the bound is on the rotatio
 axis-angle is refused. F-curves with modifiers are refused (the bound is for the keys alone).
 Everything is read and computed before anything is written, so an error leaves the file untouched.
 
-Importing this module installs `reduce_values` as the bake's reduction hook (`bake.reduce_keys`), so
+The bake calls `reduce_values` (imported by bake.py) when its tolerance is above 0, so
 `quatcurve.bake` with tolerance > 0 writes BEZIER keys, per channel where that saves keys.
 """
 
@@ -28,14 +28,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import bake, fcurves, native
+from . import fcurves, native, targets, write
+from .targets import TargetError
 
 INTERPOLATIONS = ("LINEAR", "BEZIER")
 
 
-class ReduceError(ValueError):
+class ReduceError(TargetError, ValueError):
     """A reduction that cannot be done; the message names the target and what is wrong. Raised
-    before anything is written. A ValueError, as the bake's reduction hook expects."""
+    before anything is written. A ValueError too, as the bake expects of its reduction."""
 
 
 @dataclass
@@ -83,7 +84,7 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
     values = np.asarray(values, dtype=np.float64)
     try:
         if mode == "QUATERNION":
-            values = bake.hemisphere_continuous(values)
+            values = qc.quats_to_channels(values, "QUATERNION")
             result = qc.reduce_keys(frames, values, tolerance_rad, interpolation, synchronized,
                                     detailed=True)
         elif mode in fcurves.EULER_ORDERS:
@@ -100,24 +101,11 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
     return ReducedChannels(interpolation, keys, result.max_error)
 
 
-def write_channels(channels, data_path, reduced, group=None):
-    """Writes ReducedChannels as new F-curves on (data_path, 0..C-1) of `channels` (after removing
-    the old ones there). Returns the key count."""
-    channels.remove({data_path}, count=len(reduced.keys))
-    for index, (frames, values, left, right) in enumerate(reduced.keys):
-        if reduced.interpolation == "BEZIER":
-            channels.write(data_path, index, frames, values, group=group, interpolation="BEZIER",
-                           handle_left=left, handle_right=right)
-        else:
-            channels.write(data_path, index, frames, values, group=group, interpolation="LINEAR")
-    return reduced.key_count
-
-
 # ---- reducing existing keys (the operator) ----------------------------------------------------------
 
 @dataclass(eq=False)
 class TargetReduce:
-    target: bake.Target
+    target: targets.Target
     mode: str
     prop: str
     frames: np.ndarray          # sample frames
@@ -158,18 +146,11 @@ class ReduceResult:
                 for t in self.targets]
 
 
-def sample_frames(key_frames):
-    """Every whole frame from the first key to the last, plus every key frame (sorted, unique)."""
-    first, last = float(key_frames[0]), float(key_frames[-1])
-    whole = np.arange(math.ceil(first), math.floor(last) + 1, dtype=np.float64)
-    return np.unique(np.concatenate([np.asarray(key_frames, dtype=np.float64), whole]))
-
-
 def read_target(target):
     """TargetReduce of `target` in its current rotation mode (sampled, not yet reduced)."""
     try:
-        source = bake.read_rotation_keys(target)
-    except bake.BakeError as error:
+        source = targets.read_rotation_keys(target)
+    except TargetError as error:
         raise ReduceError(str(error)) from error
     if source.mode not in ("QUATERNION",) + fcurves.EULER_ORDERS:
         raise ReduceError("%s: rotation mode %s: key reduction handles quaternion and Euler rotations"
@@ -178,7 +159,7 @@ def read_target(target):
         if fcurve is not None and len(fcurve.modifiers):
             raise ReduceError("%s: %s[%d] has F-curve modifiers; the bound holds for keys alone "
                               "(apply or remove the modifiers first)" % (target.name, source.prop, index))
-    frames = sample_frames(source.frames)
+    frames = native.require().whole_frame_samples(source.frames)  # every whole frame and key
     values = source.evaluate(frames)
     if not np.isfinite(values).all():
         raise ReduceError("%s: %s evaluates to non-finite values" % (target.name, source.prop))
@@ -186,19 +167,19 @@ def read_target(target):
     return TargetReduce(target, source.mode, source.prop, frames, values, before)
 
 
-def reduce(targets, settings):
-    """Reduces the rotation keys of `targets`; returns a ReduceResult. Raises ReduceError (nothing
-    written) when a setting or a target is unusable."""
+def reduce(found, settings):
+    """Reduces the rotation keys of `found` (targets.Target); returns a ReduceResult. Raises
+    ReduceError (nothing written) when a setting or a target is unusable."""
     begin = time.perf_counter()
     check_settings(settings)
-    if not targets:
+    if not found:
         raise ReduceError("Nothing to reduce: no targets")
-    for target in targets:
+    for target in found:
         try:
-            bake.check_editable(target, settings.new_action)
-        except bake.BakeError as error:
+            targets.check_editable(target, settings.new_action)
+        except TargetError as error:
             raise ReduceError(str(error)) from error
-    items = [read_target(t) for t in targets]
+    items = [read_target(t) for t in found]
     tol = math.radians(settings.tolerance)
     for item in items:
         try:
@@ -207,38 +188,17 @@ def reduce(targets, settings):
         except ReduceError as error:
             raise ReduceError("%s: %s" % (item.target.name, error)) from error
 
+    writes = [write.RotationWrite(item.target, item.mode, item.reduced.keys, item.reduced.interpolation,
+                                  replace=(item.prop,)) for item in items]
+    actions = write.write_rotations(writes, settings.new_action, "reduced")
     result = ReduceResult(settings.tolerance, settings.interpolation)
-    copies = {}
-    for item in items:
-        id_data = item.target.id_data
-        original = fcurves.active_action(id_data)
-        action = original
-        if settings.new_action:
-            if original not in copies:
-                copies[original] = fcurves.copy_action(original, "%s_reduced" % original.name)
-            action = copies[original]
-        channels = fcurves.Channels.of(id_data, action, create=True)
-        path = item.target.data_path(item.prop)
-        after = write_channels(channels, path, item.reduced, group=channels.group_of(path))
+    for item, action in zip(items, actions):
+        after = item.reduced.key_count
         error_deg = math.degrees(item.reduced.max_error)
         result.targets.append(TargetResult(item.target.name, item.mode, item.keys_before, after,
                                            error_deg, action.name))
         result.keys_before += item.keys_before
         result.keys_after += after
         result.max_error_deg = max(result.max_error_deg, error_deg)
-    assigned = set()
-    for item in items:
-        id_data = item.target.id_data
-        original = fcurves.active_action(id_data)
-        if id_data.name_full not in assigned and original in copies:
-            fcurves.assign_action(id_data, copies[original])
-            assigned.add(id_data.name_full)
-        id_data.update_tag(refresh={"TIME"})
-    for original in copies:
-        original.use_fake_user = True
     result.seconds = time.perf_counter() - begin
     return result
-
-
-# The bake writes reduced keys (BEZIER, per-channel) through this hook when its tolerance is above 0.
-bake.reduce_keys = reduce_values

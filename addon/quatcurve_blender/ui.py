@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import native, operators_compare, operators_reduce
+from . import compare_ops, native, reduce_ops
 
 
 def draw_status(layout):
@@ -12,16 +12,20 @@ def draw_status(layout):
     box = layout.box()
     box.alert = True
     box.label(text="Native module unavailable", icon="ERROR")
-    # Long reasons are wrapped by hand: labels do not wrap.
-    words, line = native.UNAVAILABLE_REASON.split(), ""
-    for word in words:
-        if len(line) + len(word) > 48:
-            box.label(text=line)
+    wrapped_labels(box, native.UNAVAILABLE_REASON, 48)
+    return False
+
+
+def wrapped_labels(layout, text, width):
+    """`text` as labels of at most about `width` characters (Blender's labels do not wrap)."""
+    line = ""
+    for word in text.split():
+        if len(line) + len(word) > width:
+            layout.label(text=line)
             line = ""
         line = (line + " " + word).strip()
     if line:
-        box.label(text=line)
-    return False
+        layout.label(text=line)
 
 
 def draw_bake_settings(layout, settings):
@@ -86,7 +90,7 @@ def _table_row(layout, cells):
 def draw_compare_table(layout, settings, max_targets=4):
     """The last comparison: per target a table (source, max deviation, speed ratio, path length) and
     the recommendation, wrapped by hand (labels do not wrap)."""
-    table = operators_compare.last_table(settings)
+    table = compare_ops.last_table(settings)
     if not table:
         return
     box = layout.box()
@@ -97,14 +101,7 @@ def draw_compare_table(layout, settings, max_targets=4):
         _table_row(col, ("Source", "Max dev", "Ratio", "Length"))
         for row in target["rows"]:
             _table_row(col, row)
-        words, line = target["recommendation"].split(), ""
-        for word in words:
-            if len(line) + len(word) > 52:
-                col.label(text=line)
-                line = ""
-            line = (line + " " + word).strip()
-        if line:
-            col.label(text=line)
+        wrapped_labels(col, target["recommendation"], 52)
         if target.get("image"):
             col.label(text="Plot: image '%s'" % target["image"], icon="IMAGE_DATA")
     if len(table) > max_targets:
@@ -140,7 +137,7 @@ class _SidebarPanel:
         if reduce_settings is not None:
             box = layout.box()
             box.label(text="Reduce Keys", icon="IPO_BEZIER")
-            operators_reduce.draw_settings(box, reduce_settings)
+            reduce_ops.draw_settings(box, reduce_settings)
 
 
 class QUATCURVE_PT_view3d(_SidebarPanel, bpy.types.Panel):

@@ -10,4 +10,5 @@ void bind_curve(pybind11::module_& m);    // bind_curve.cpp: the orientation cur
 void bind_reduce(pybind11::module_& m);   // bind_reduce.cpp: key reduction
 void bind_metrics(pybind11::module_& m);  // bind_metrics.cpp: comparison metrics
 void bind_blender_eval(pybind11::module_& m);  // bind_blender_eval.cpp: Blender's F-curve evaluation
+void bind_channels(pybind11::module_& m); // bind_channels.cpp: rotation channels, sampling policies
 }  // namespace quatcurve::bindings

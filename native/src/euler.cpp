@@ -7,12 +7,14 @@
 #include <cfloat>
 #include <cmath>
 
+#include "numbers.hpp"
+
 namespace quatcurve {
 
 namespace {
 
-constexpr double kPi = 3.141592653589793238462643383279502884;
-constexpr double kTwoPi = 2.0 * kPi;
+using numbers::kPi;
+using numbers::kTwoPi;
 // cos(middle angle) at or below this is gimbal lock: the first and last axes coincide to the last
 // bit (cos(π/2) in double is 6.1e-17).
 constexpr double kLockCos = 16.0 * DBL_EPSILON;
@@ -78,14 +80,17 @@ double l1(const Vec3& a, const Vec3& b) {
 }
 
 // The solution of a rotation matrix (orthonormal to rounding) described in euler.hpp.
-Vec3 rotation_to_euler(const Mat3& m, EulerOrder order) {
+// lock_cos: cos of the middle angle at or below which the rotation counts as locked (`locked` says
+// whether it did).
+Vec3 rotation_to_euler(const Mat3& m, EulerOrder order, double lock_cos = kLockCos, bool* locked = nullptr) {
     const Axes ax = axes_of(order);
     const int i = ax.i, j = ax.j, k = ax.k;
     auto r = [&m](int row, int col) { return m[col][row]; };
     // For R = Rk(c)·Rj(b)·Ri(a) (even case), column i is (cos c cos b, sin c cos b, −sin b) on (i, j, k).
     const double cy = std::hypot(r(i, i), r(j, i));
+    if (locked != nullptr) *locked = !(cy > lock_cos);
     double b, c;
-    if (cy > kLockCos) {
+    if (cy > lock_cos) {
         b = std::atan2(-r(k, i), cy);
         c = std::atan2(r(j, i), r(i, i));
     } else {
@@ -186,6 +191,61 @@ Vec3 euler_compat(const Vec3& given, EulerOrder order, const Vec3& ref) {
 
 Vec3 quat_to_euler_compat(const Quat& q, EulerOrder order, const Vec3& ref) {
     return euler_compat(quat_to_euler(q, order), order, ref);
+}
+
+namespace {
+
+// Blender's compatible_eul (BLI_math_rotation.c, Blender 3.5 on): each angle moved by the whole
+// turns that bring it within π of ref, then an angle still more than π away while the other two
+// are within π/2 is moved by one more turn.
+Vec3 blender_compatible(Vec3 e, const Vec3& ref) {
+    Vec3 d;
+    for (int n = 0; n < 3; ++n) {
+        d[n] = e[n] - ref[n];
+        if (d[n] > kPi) {
+            e[n] -= std::floor(d[n] / kTwoPi + 0.5) * kTwoPi;
+            d[n] = e[n] - ref[n];
+        } else if (d[n] < -kPi) {
+            e[n] += std::floor(-d[n] / kTwoPi + 0.5) * kTwoPi;
+            d[n] = e[n] - ref[n];
+        }
+    }
+    for (int n = 0, p = 1, q = 2; n < 3; p = q, q = n++)
+        if (std::fabs(d[n]) > kPi && std::fabs(d[p]) < kPi / 2 && std::fabs(d[q]) < kPi / 2)
+            e[n] += d[n] > 0.0 ? -kTwoPi : kTwoPi;
+    return e;
+}
+
+// Blender's two solutions of q (mat3_normalized_to_eulo2): the one with the middle angle in
+// [−π/2, π/2] and (a+π, π−b, c+π), each angle in [−π, π]; within 16·FLT_EPSILON of gimbal lock
+// both are the locked solution (last angle 0).
+void blender_solutions(const Quat& q, EulerOrder order, Vec3& first, Vec3& second) {
+    bool locked = false;
+    first = rotation_to_euler(quat_to_matrix(q), order, kCompatLockCos, &locked);
+    second = first;
+    if (locked) return;
+    const Axes ax = axes_of(order);
+    second[ax.i] = std::remainder(first[ax.i] + kPi, kTwoPi);
+    second[ax.j] = std::remainder(kPi - first[ax.j], kTwoPi);
+    second[ax.k] = std::remainder(first[ax.k] + kPi, kTwoPi);
+}
+
+}  // namespace
+
+Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order) {
+    Vec3 first, second;
+    blender_solutions(q, order, first, second);
+    const Vec3 zero(0.0);
+    return l1(first, zero) > l1(second, zero) ? second : first;
+}
+
+Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order, const Vec3& compat) {
+    check_finite(compat, "compat");
+    Vec3 first, second;
+    blender_solutions(q, order, first, second);
+    first = blender_compatible(first, compat);
+    second = blender_compatible(second, compat);
+    return l1(first, compat) > l1(second, compat) ? second : first;
 }
 
 void euler_filter(Vec3* angles, std::size_t n, EulerOrder order) {

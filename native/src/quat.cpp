@@ -6,11 +6,13 @@
 #include <cmath>
 #include <string>
 
+#include "numbers.hpp"
+
 namespace quatcurve {
 
 namespace {
 
-constexpr double kPi = 3.141592653589793238462643383279502884;
+using numbers::kPi;
 
 const char* const kQuatComponents[4] = {"w", "x", "y", "z"};
 const char* const kVecComponents[3] = {"x", "y", "z"};

@@ -8,7 +8,7 @@ import pytest
 from mathutils import Quaternion
 
 from bake_helpers import add_empty, add_rig, angles_between, evaluated, key, select_bones, select_objects
-from quatcurve_blender import bake, fcurves
+from quatcurve_blender import bake, fcurves, targets
 
 TOL = 2e-5  # rad: float32 key storage, far below any interpolation difference
 
@@ -228,7 +228,7 @@ def test_default_frame_range_is_the_keyed_range_of_the_selection(scene):
     key(a, "rotation_euler", [(3, (0, 0, 0)), (11, (0, 0, 90))], degrees=True)
     key(b, "rotation_quaternion", [(7, (1, 0, 0, 0)), (24, (0, 0, 0, 1))])
     select_objects(a, b)
-    assert bake.default_frame_range(bake.gather_targets(bpy.context)) == (3, 24)
+    assert targets.default_frame_range(targets.gather_targets(bpy.context)) == (3, 24)
     run_bake(method="SLERP")
     for obj, prop in ((a, "rotation_euler"), (b, "rotation_quaternion")):
         frames, _ = fcurves.read_keys(fcurves.Channels.of(obj).find(prop, 0))
@@ -238,7 +238,7 @@ def test_default_frame_range_is_the_keyed_range_of_the_selection(scene):
 def test_the_plain_functions_bake_without_the_operator(scene):
     obj = add_empty("Cube", "XYZ")
     key(obj, "rotation_euler", [(1, (0, 0, 0)), (11, (0, 0, 90))], degrees=True)
-    result = bake.bake([bake.Target(obj)], bake.BakeSettings(method="TCB", tension=0.5,
+    result = bake.bake([targets.Target(obj)], bake.BakeSettings(method="TCB", tension=0.5,
                                                              rotation_mode="QUATERNION"))
     assert result.keys_written == 44 and result.seconds >= 0
     assert result.targets[0].name == "Cube" and result.targets[0].source_keys == 2

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bake_helpers import add_empty, add_rig, file_state, key, select_bones, select_objects
-from quatcurve_blender import bake, fcurves
+from quatcurve_blender import bake, bake_ops, fcurves, targets
 
 
 def refused(match, **kwargs):
@@ -98,16 +98,8 @@ def test_step_below_one(keyed, step):
     refused("step %d: must be at least 1 frame" % step, step=step)
 
 
-def test_tolerance_above_zero_is_refused_when_reduction_is_not_installed(keyed, monkeypatch):
-    # bake.reduce_keys is the hook key reduction installs; without it (a build where reduction is
-    # missing) a tolerance above 0 must be refused with nothing changed, not silently ignored.
-    assert bake.reduce_keys is not None  # installed in this build...
-    monkeypatch.setattr(bake, "reduce_keys", None)  # ...removed for this case only
-    refused(r"tolerance 0\.1°: key reduction is not available yet", tolerance=0.1)
-
-
-def test_tolerance_above_zero_is_accepted_with_reduction_installed(keyed):
-    # The same request with the hook in place bakes (reduced keys), no error.
+def test_tolerance_above_zero_bakes_reduced_keys(keyed):
+    # Key reduction is part of every build (bake imports reduce): a tolerance above 0 bakes.
     assert bpy.ops.quatcurve.bake(tolerance=0.1) == {"FINISHED"}
 
 
@@ -149,8 +141,8 @@ class _FakeOperator:
     """Stands in for an operator instance: attributes, is_property_set, report."""
 
     def __init__(self, **given):
-        from quatcurve_blender import props
-        defaults = {name: getattr(bpy.context.scene.quatcurve, name) for name in props.bake_properties()}
+        from quatcurve_blender import bake_ops
+        defaults = {name: getattr(bpy.context.scene.quatcurve, name) for name in bake_ops.bake_properties()}
         self.__dict__.update(defaults)
         self.__dict__.update(given)
         self._given = set(given)
@@ -176,7 +168,7 @@ class _FakeOperator:
 def test_errors_from_the_plain_functions_name_the_target(scene):
     obj = add_empty("Still")
     with pytest.raises(bake.BakeError, match="Still"):
-        bake.bake([bake.Target(obj)], bake.BakeSettings())
+        bake.bake([targets.Target(obj)], bake.BakeSettings())
     with pytest.raises(bake.BakeError, match="method 'LERP': unknown"):
         bake.check_settings(bake.BakeSettings(method="LERP"))
     assert math.isclose(bake.bake_frames(1, 2, 1.0)[-1], 2)

@@ -14,7 +14,7 @@ import pytest
 from mathutils import Euler, Quaternion
 
 from conftest import ROOT
-from quatcurve_blender import bake, compare, fcurves, plot
+from quatcurve_blender import compare, fcurves, plot, targets
 
 README = os.path.join(ROOT, "README.md")
 
@@ -64,7 +64,7 @@ def frame_index(comparison, frame):
 
 def test_fixed_angle_euler_mode_lies_17_13_degrees_from_slerp(linear_keys):
     obj = fixed_angle(linear_keys)
-    report = compare.compare([bake.Target(obj)])
+    report = compare.compare([targets.Target(obj)])
     t = report.targets[0]
     mid = frame_index(t, 11)
     # The target's own LINEAR Euler keys, and Blender's Euler mode with auto-clamped Bezier keys (the
@@ -91,7 +91,7 @@ def test_blender_modes_use_blenders_default_bezier_keys(scene):
 def test_slerp_speed_ratio_is_one_inside_every_segment(linear_keys):
     obj = keyed_object(linear_keys, "Wander", "XYZ",
                        {1: (0, 0, 0), 8: (40, 10, -30), 30: (80, 60, 20), 35: (50, 10, 80)})
-    t = compare.compare([bake.Target(obj)], compare.CompareSettings(subframes=3)).targets[0]
+    t = compare.compare([targets.Target(obj)], compare.CompareSettings(subframes=3)).targets[0]
     ratios = t.sources["SLERP"].metrics["segment_speed_ratios"]
     assert len(ratios) == 3
     np.testing.assert_allclose(ratios, 1.0, atol=1e-6)
@@ -107,7 +107,7 @@ def test_linear_quaternion_segment_has_the_speed_ratio_of_nlerp(linear_keys, deg
     end = Quaternion((0.6, 0.0, 0.8), theta)
     obj = keyed_object(linear_keys, "Quat", "QUATERNION", {1: (1, 0, 0, 0), 25: tuple(end)})
     settings = compare.CompareSettings(subframes=8, key_interpolation="LINEAR")
-    t = compare.compare([bake.Target(obj)], settings).targets[0]
+    t = compare.compare([targets.Target(obj)], settings).targets[0]
     expected = 2 / (1 + math.cos(theta / 2))  # ≈ 1.589 at 150°
     assert t.sources["BLENDER"].metrics["speed_ratio"] == pytest.approx(expected, rel=1e-3)
     assert t.sources["BLENDER_QUATERNION"].metrics["speed_ratio"] == pytest.approx(expected, rel=1e-3)
@@ -122,7 +122,7 @@ def test_report_png_and_json(linear_keys, tmp_path):
     quat = keyed_object(linear_keys, "Quat", "QUATERNION",
                         {1: (1, 0, 0, 0), 11: tuple(Quaternion((0, 0, 1), 2.0)), 31: tuple(Quaternion((1, 1, 0), 2.5))})
     before = digests()
-    report = compare.compare([bake.Target(fixed), bake.Target(quat)], compare.CompareSettings(all_euler_orders=True))
+    report = compare.compare([targets.Target(fixed), targets.Target(quat)], compare.CompareSettings(all_euler_orders=True))
     path, pngs = compare.write_report(report, str(tmp_path / "report.json"))
     assert digests() == before  # scratch actions removed, the user's keys untouched
 
@@ -195,7 +195,7 @@ def test_operator_refuses_without_selection_or_animation(linear_keys):
     with pytest.raises(RuntimeError, match="Still: no rotation animation"):
         bpy.ops.quatcurve.compare()
     with pytest.raises(compare.CompareError, match="Still: no rotation animation"):
-        compare.compare([bake.Target(still)])
+        compare.compare([targets.Target(still)])
 
 
 def test_pose_bone_and_spin(linear_keys):
@@ -214,7 +214,7 @@ def test_pose_bone_and_spin(linear_keys):
         pb.rotation_euler = (0, 0, math.radians(z))
         pb.keyframe_insert("rotation_euler", frame=frame)
     before = digests()
-    t = compare.compare([bake.Target(rig, "Tip")]).targets[0]
+    t = compare.compare([targets.Target(rig, "Tip")]).targets[0]
     assert digests() == before
     assert t.name == "Rig/Tip"
     # Every method keeps the full 400° turn of the Euler keys; key-to-key geodesics sum to the same.

@@ -19,7 +19,7 @@ from conftest import ROOT, SHARED
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 import bvh  # noqa: E402
 
-from quatcurve_blender import fcurves, reduce  # noqa: E402
+from quatcurve_blender import fcurves, reduce, targets  # noqa: E402
 
 MOCAP = os.path.join(SHARED, "data", "mocap", "mocapbank.bvh")
 CLIPS = ("mocapbank.bvh", "freebvh.bvh")  # both shared clips, ../shared/data/mocap/
@@ -212,7 +212,7 @@ def test_pose_bones_only_the_selected_bones_change(reducer):
 def test_result_reports_keys_and_the_measured_error(reducer):
     name, frames, q, _, _ = motion(1)[0]
     obj = keyed_object(name, frames, q, "QUATERNION")
-    result = reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings(tolerance=0.1))
+    result = reduce.reduce([targets.Target(obj)], reduce.ReduceSettings(tolerance=0.1))
     assert result.keys_before == 4 * len(frames)
     curves = rotation_curves(obj, "rotation_quaternion", 4)
     assert result.keys_after == key_total(curves) < result.keys_before
@@ -257,7 +257,7 @@ def test_axis_angle_is_refused(reducer):
     refused("aa: rotation mode AXIS_ANGLE")
     assert fcurves.active_action(obj) == action and fcurves.action_digest(action) == digest
     with pytest.raises(reduce.ReduceError, match="AXIS_ANGLE"):
-        reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings())
+        reduce.reduce([targets.Target(obj)], reduce.ReduceSettings())
 
 
 def test_fcurve_modifiers_are_refused(reducer):
@@ -269,7 +269,7 @@ def test_fcurve_modifiers_are_refused(reducer):
     refused(r"rotation_quaternion\[2\] has F-curve modifiers")
     assert fcurves.active_action(obj) == action
     with pytest.raises(reduce.ReduceError, match="modifiers"):
-        reduce.reduce([reduce.bake.Target(obj)], reduce.ReduceSettings())
+        reduce.reduce([targets.Target(obj)], reduce.ReduceSettings())
 
 
 def test_no_rotation_animation_and_bad_settings(reducer):
@@ -279,7 +279,7 @@ def test_no_rotation_animation_and_bad_settings(reducer):
     refused("static: no rotation animation")
     name, frames, q, _, _ = motion(1)[0]
     keyed = keyed_object(name, frames, q, "QUATERNION")
-    target = reduce.bake.Target(keyed)
+    target = targets.Target(keyed)
     for bad in (reduce.ReduceSettings(tolerance=-1.0), reduce.ReduceSettings(tolerance=math.nan),
                 reduce.ReduceSettings(interpolation="CUBIC")):
         with pytest.raises(reduce.ReduceError):

@@ -21,7 +21,7 @@ import bpy
 import pytest
 
 from bake_helpers import add_rig, file_state, key, select_bones
-from quatcurve_blender import operators, props
+from quatcurve_blender import bake_ops
 
 SESSIONS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sessions")
 MEMORY_LIMIT_MIB = 1024
@@ -99,7 +99,7 @@ class _Operator:
     report."""
 
     def __init__(self, **given):
-        for name in props.bake_properties():
+        for name in bake_ops.bake_properties():
             setattr(self, name, getattr(bpy.context.scene.quatcurve, name))
         self.__dict__.update(given)
         self._given, self.reports, self.properties = set(given), [], self
@@ -111,7 +111,7 @@ class _Operator:
         self.reports.append((sorted(kind), message))
 
     def __getattr__(self, name):  # the operator's own methods, bound to this stand-in
-        return getattr(operators.QUATCURVE_OT_bake, name).__get__(self)
+        return getattr(bake_ops.QUATCURVE_OT_bake, name).__get__(self)
 
 
 def test_escape_half_way_through_the_modal_path_changes_nothing(scene):

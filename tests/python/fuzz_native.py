@@ -1274,6 +1274,103 @@ def build_curve(method, d: Draw) -> Case:
     return Case(call, max(k, 1) + m, check, must_fail, m * 32, inputs)
 
 
+# ==== channels (channels.hpp) ====================================================================
+
+MODES = ("QUATERNION",) + ORDERS + ("AXIS_ANGLE",)
+
+
+def _channel_count(mode):
+    return 3 if mode in ORDERS else 4
+
+
+def build_quats_to_channels(fn, d: Draw) -> Case:
+    """quats_to_channels(quats (N, 4), mode, reference=None|(C,)|(N, C), euler): the channel
+    values give back the orientations."""
+    rng, level = d.rng, d.level()
+    n = d.count(small=200, huge=50_000)
+    mode = d.pick(MODES, "mode")
+    c = _channel_count(mode)
+    q = quats(rng, (n,), "extreme" if level == "poison" else level)
+    must_fail = "non-finite or zero" if level == "wild" and n and not np.all(np.isfinite(q)) else ""
+    if level == "poison" and n:
+        poison(rng, q, "quat", False)
+        must_fail = "poisoned"
+    ref = d.pick((None, "row", "rows"), "reference")
+    reference = None
+    if ref == "row":
+        reference = fill(rng, (c,), "calm")
+    elif ref == "rows" and mode in ORDERS:
+        reference = fill(rng, (n, c), "calm")
+    args = [q, mode, reference, d.pick(("continuous", "blender"), "euler")]
+    generated = q
+    if d.chance(0.05, "junk_mode"):
+        args[1], bad = d.pick(junk_strings(), "mode")
+        must_fail = must_fail or ("junk mode" if bad else "")
+    must_fail = maybe_junk(d, args, [(4,)], ["quats"], must_fail)
+
+    def check(out):
+        if args[0] is not generated or args[1] != mode:
+            return
+        shape_is(out, (n, c))
+        finite(out)
+        if n and np.all(np.abs(q) < 1e150) and np.all(np.linalg.norm(q, axis=1) > 1e-150):
+            err = np_angle(qc.channels_to_quats(out, mode), q).max()
+            expect(err < 1e-6, f"quats_to_channels changed an orientation by {err!r} rad")
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 32, args)
+
+
+def build_channels_to_quats(fn, d: Draw) -> Case:
+    rng, level = d.rng, d.level()
+    n = d.count(small=200, huge=50_000)
+    mode = d.pick(MODES, "mode")
+    v = fill(rng, (n, _channel_count(mode)), level)
+    must_fail = "non-finite" if n and not np.all(np.isfinite(v)) else ""
+    args = [v, mode]
+    generated = v
+    must_fail = maybe_junk(d, args, [(_channel_count(mode),)], ["values"], must_fail)
+
+    def check(out):
+        if args[0] is generated:
+            shape_is(out, (n, 4))
+        unit(out)
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 32, args)
+
+
+def build_quat_to_euler_blender(fn, d: Draw) -> Case:
+    if d.chance(0.5, "with_compat"):
+        spec = Elementwise((("q", "quat", True), ("compat", "angles", False)), "angles", order=True,
+                           optional=("compat",))
+        return spec.build(lambda q, c, **kw: fn(q, compat=c, **kw), d)
+    return Elementwise((("q", "quat", True),), "angles", order=True).build(fn, d)
+
+
+def build_frames_policy(fn, d: Draw, kind) -> Case:
+    """step_frames / sample_frames / whole_frame_samples / segment_handles on ordinary and extreme
+    ranges: sorted finite frames out, or ValueError (non-finite, unsorted, too many frames)."""
+    rng = d.rng
+    n = d.count(small=50, huge=10_000)
+    t = increasing_times(rng, n, d.pick(("unit", "random", "tiny", "huge", "offset", "subnormal",
+                                         "span_overflow", "negative"), "times"))
+    if d.chance(0.1, "unsorted") and n > 1:
+        t = t[::-1].copy()
+    if kind == "step":
+        args = [float(t[0]) if n else 0.0, float(t[-1]) if n else d.pick((-1.0, 1.0, np.nan)),
+                d.pick((1.0, 1.5, 4.0, 0.5, 0.0, np.inf, np.nan, 1e300), "step")]
+    elif kind == "sample":
+        args = [t, d.pick((1, 2, 7, 1000, 0, -1), "per_frame")]
+    elif kind == "whole":
+        args = [t]
+    else:
+        args = [t, fill(rng, (n,), d.level())]
+
+    def check(out):
+        for arr in (out if isinstance(out, tuple) else (out,)):
+            finite(arr)
+        if kind != "handles":
+            expect(np.all(np.diff(out) > 0), "frames not increasing")
+    return Case(lambda: fn(*args), max(n, 1), check, "", 8 * 10 ** 8, args)
+
+
 # ==== the registry ===============================================================================
 
 def _elementwise(name):
@@ -1301,6 +1398,13 @@ REGISTRY.update({
     "gimbal_distances": build_gimbal_distances,
     "gimbal_distances_from_quats": build_gimbal_distances_from_quats,
     "closest_gimbal_approach": build_closest_gimbal_approach,
+    "quats_to_channels": build_quats_to_channels,
+    "channels_to_quats": build_channels_to_quats,
+    "quat_to_euler_blender": build_quat_to_euler_blender,
+    "step_frames": lambda fn, d: build_frames_policy(fn, d, "step"),
+    "sample_frames": lambda fn, d: build_frames_policy(fn, d, "sample"),
+    "whole_frame_samples": lambda fn, d: build_frames_policy(fn, d, "whole"),
+    "segment_handles": lambda fn, d: build_frames_policy(fn, d, "handles"),
     "path_metrics": build_path_metrics,
     "reduce_keys": lambda fn, d: build_reduce(fn, d, euler=False),
     "reduce_keys_euler": lambda fn, d: build_reduce(fn, d, euler=True),

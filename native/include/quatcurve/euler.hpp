@@ -45,6 +45,19 @@ Vec3 quat_to_euler(const Quat& q, EulerOrder order);
 Vec3 euler_compat(const Vec3& angles, EulerOrder order, const Vec3& ref);
 // euler_compat(quat_to_euler(q, order), order, ref). Throws on zero q.
 Vec3 quat_to_euler_compat(const Quat& q, EulerOrder order, const Vec3& ref);
+// Blender's Quaternion.to_euler(order) (mathutils, in double instead of float32): of the two
+// solutions — the middle angle in [−π/2, π/2], or (a+π, π−b, c+π) — each angle in [−π, π], the
+// one with the smaller sum of absolute angles (ties: the first). Within 16·FLT_EPSILON of gimbal
+// lock (cos of the middle angle), as Blender, the locked solution: middle angle ±π/2, last angle 0.
+// Differs from quat_to_euler, which always returns the first solution. Throws on zero q.
+Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order);
+// Blender's Quaternion.to_euler(order, compat): both solutions, each made compatible with `compat`
+// as Blender's compatible_eul does (3.5 on: whole turns bringing each angle within π of compat),
+// then the one with the smaller sum of absolute differences from compat (ties: the first). Unlike
+// euler_compat it searches no gimbal-lock family. Blender 3.4's compatible_eul moved an angle only
+// beyond 5.1 rad from compat: it agrees whenever each angle of the result is within 2π − 5.1 rad
+// of compat. Throws on zero q or non-finite compat.
+Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order, const Vec3& compat);
 // In place over n consecutive triples: each triple after the first becomes euler_compat of itself
 // against the (already filtered) previous one. Removes flips between the two solutions and 2π
 // jumps without changing any orientation. n = 0 or 1 leaves the array unchanged.

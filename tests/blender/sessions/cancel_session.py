@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import bake, fcurves, operators  # noqa: E402
+from quatcurve_blender import bake, bake_ops, fcurves  # noqa: E402
 import rigs  # noqa: E402
 
 VERDICT = sys.argv[sys.argv.index("--") + 1]
@@ -43,14 +43,14 @@ def record_progress():
             yield done
 
     bake.BakePlan.compute_steps = compute_steps
-    modal = operators.QUATCURVE_OT_bake.modal
+    modal = bake_ops.QUATCURVE_OT_bake.modal
 
     def recording_modal(self, context, event):
         result = modal(self, context, event)
         returned.append(sorted(result))
         return result
 
-    operators.QUATCURVE_OT_bake.modal = recording_modal
+    bake_ops.QUATCURVE_OT_bake.modal = recording_modal
 
 
 def state():

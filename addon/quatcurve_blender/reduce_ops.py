@@ -8,7 +8,8 @@ not given by the caller come from the panel's settings.
 
 import bpy
 
-from . import bake, native, reduce
+from . import native, reduce, targets
+from .targets import TargetError
 
 INTERPOLATION_ITEMS = (
     ("BEZIER", "Bezier", "Bezier keys with fitted handles (FREE, broken at keys): the fewest keys"),
@@ -78,8 +79,8 @@ class QUATCURVE_OT_reduce(bpy.types.Operator):
                                          synchronized=self.synchronized, new_action=self.new_action)
         try:
             native.require()
-            result = reduce.reduce(bake.gather_targets(context, verb="reduce"), settings)
-        except (reduce.ReduceError, bake.BakeError, RuntimeError) as error:
+            result = reduce.reduce(targets.gather_targets(context, verb="reduce"), settings)
+        except (TargetError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         if scene_settings is not None:

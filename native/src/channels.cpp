@@ -1,0 +1,246 @@
+// Rotation channels and sampling policies (see channels.hpp for what each function promises).
+#include "quatcurve/channels.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "numbers.hpp"
+#include "quatcurve/metrics.hpp"
+
+namespace quatcurve {
+
+namespace {
+
+using numbers::kTwoPi;
+
+// Below this |sin(angle/2)| an axis-angle axis is undefined (the rotation is the identity, ±).
+constexpr double kUndefinedAxis = 1e-7;
+// Most frames a sampling policy returns (800 MB of doubles): beyond it the caller asked for nonsense.
+constexpr double kMaxFrames = 1e8;
+
+std::size_t frame_count(double span, const char* what) {
+    if (!(span < kMaxFrames))
+        throw InvalidArgument(std::string(what) + ": more than 100000000 frames");
+    return static_cast<std::size_t>(span) + 1;
+}
+
+std::string row_name(const char* name, std::size_t row) { return std::string(name) + "[" + std::to_string(row) + "]"; }
+
+Vec3 read_vec3(const double* p) { return Vec3(p[0], p[1], p[2]); }
+
+void check_reference(const double* reference, std::size_t rows, std::size_t channels) {
+    for (std::size_t k = 0; k < rows * channels; ++k)
+        check_finite(reference[k], row_name("reference", k / channels));
+}
+
+std::vector<double> euler_channels(const std::vector<Quat>& q, EulerOrder order, const double* reference,
+                                   std::size_t reference_rows, EulerBranch branch) {
+    const std::size_t n = q.size();
+    std::vector<Vec3> angles(n);
+    auto ref = [&](std::size_t s) { return read_vec3(reference + 3 * (reference_rows == 1 ? 0 : s)); };
+    if (branch == EulerBranch::blender) {
+        for (std::size_t s = 0; s < n; ++s) {
+            if (reference_rows == n && n > 1) angles[s] = blender_quat_to_euler(q[s], order, ref(s));
+            else if (s > 0) angles[s] = blender_quat_to_euler(q[s], order, angles[s - 1]);
+            else if (reference_rows) angles[s] = blender_quat_to_euler(q[s], order, ref(0));
+            else angles[s] = blender_quat_to_euler(q[s], order);
+        }
+    } else {
+        for (std::size_t s = 0; s < n; ++s)
+            angles[s] = reference_rows ? quat_to_euler_compat(q[s], order, ref(s)) : quat_to_euler(q[s], order);
+        if (n >= 2) {
+            // Filtering from a locked sample would leave the choice between its two (equally near)
+            // solutions to rounding; from the sample farthest from the lock it is unambiguous.
+            std::size_t anchor = 0;
+            for (std::size_t s = 1; s < n; ++s)
+                if (gimbal_distance(angles[s], order) > gimbal_distance(angles[anchor], order)) anchor = s;
+            euler_filter(angles.data() + anchor, n - anchor, order);
+            std::reverse(angles.begin(), angles.begin() + anchor + 1);
+            euler_filter(angles.data(), anchor + 1, order);
+            std::reverse(angles.begin(), angles.begin() + anchor + 1);
+        }
+    }
+    std::vector<double> out(3 * n);
+    for (std::size_t s = 0; s < n; ++s)
+        for (int c = 0; c < 3; ++c) out[3 * s + c] = angles[s][c];
+    return out;
+}
+
+std::vector<double> axis_angle_channels(std::vector<Quat> q, const double* reference) {
+    const std::size_t n = q.size();
+    hemisphere_continuous(q.data(), n);
+    std::vector<Vec3> axis(n);
+    std::vector<double> angle(n);
+    for (std::size_t s = 0; s < n; ++s) quat_to_axis_angle(q[s], axis[s], angle[s]);
+    // Undefined axes take the nearest defined one before them (or, before the first, after them).
+    std::ptrdiff_t last = -1;
+    for (std::size_t s = 0; s < n; ++s) {
+        if (std::fabs(std::sin(0.5 * angle[s])) > kUndefinedAxis) last = static_cast<std::ptrdiff_t>(s);
+        else if (last >= 0) axis[s] = axis[static_cast<std::size_t>(last)];
+    }
+    const auto first = std::find_if(angle.begin(), angle.end(),
+                                    [](double a) { return std::fabs(std::sin(0.5 * a)) > kUndefinedAxis; });
+    if (first != angle.end())
+        std::fill(axis.begin(), axis.begin() + (first - angle.begin()), axis[static_cast<std::size_t>(first - angle.begin())]);
+    // (axis, angle) ≡ (−axis, −angle): each axis on its predecessor's side.
+    double sign = 1.0;
+    std::vector<double> out(4 * n);
+    double previous = 0.0;
+    for (std::size_t s = 0; s < n; ++s) {
+        if (s == 0) {
+            if (reference != nullptr && glm::dot(axis[0], read_vec3(reference + 1)) < 0.0) sign = -1.0;
+        } else if (glm::dot(axis[s], axis[s - 1]) < 0.0) {
+            sign = -sign;
+        }
+        // Unwrapped: the angle moves by the step nearest the previous one (mod 2π, as numpy.unwrap).
+        const double a = sign * angle[s];
+        const double start = s > 0 ? previous : (reference != nullptr ? reference[0] : a);
+        previous = start + std::remainder(a - start, kTwoPi);
+        out[4 * s] = previous;
+        for (int c = 0; c < 3; ++c) out[4 * s + 1 + c] = sign * axis[s][c];
+    }
+    return out;
+}
+
+}  // namespace
+
+RotationMode parse_rotation_mode(const std::string& name) {
+    RotationMode mode;
+    if (name == "QUATERNION") return mode;
+    if (name == "AXIS_ANGLE") {
+        mode.kind = RotationMode::Kind::axis_angle;
+        return mode;
+    }
+    try {
+        mode.order = parse_euler_order(name);
+    } catch (const InvalidArgument&) {
+        throw InvalidArgument("mode: unknown rotation mode '" + name +
+                              "' (expected QUATERNION, XYZ, XZY, YXZ, YZX, ZXY, ZYX or AXIS_ANGLE)");
+    }
+    mode.kind = RotationMode::Kind::euler;
+    return mode;
+}
+
+std::size_t channel_count(const RotationMode& mode) { return mode.kind == RotationMode::Kind::euler ? 3 : 4; }
+
+Quat channels_to_quat(const double* v, const RotationMode& mode, std::size_t row) {
+    const std::string name = row_name("values", row);
+    switch (mode.kind) {
+        case RotationMode::Kind::euler: {
+            const Vec3 angles = read_vec3(v);
+            check_finite(angles, name);
+            return euler_to_quat(angles, mode.order);
+        }
+        case RotationMode::Kind::axis_angle: {
+            const Vec3 axis = read_vec3(v + 1);
+            check_finite(v[0], name);
+            check_nonzero(axis, name + " axis");
+            return axis_angle_to_quat(axis, v[0]);
+        }
+        case RotationMode::Kind::quaternion:
+            break;
+    }
+    return normalized_rotation(from_wxyz(v), name);
+}
+
+void hemisphere_continuous(Quat* q, std::size_t n, const Quat* reference) {
+    for (std::size_t s = 0; s < n; ++s) {
+        const Quat* before = s > 0 ? &q[s - 1] : reference;
+        if (before != nullptr && glm::dot(q[s], *before) < 0.0) q[s] = -q[s];
+    }
+}
+
+std::vector<double> quats_to_channels(const std::vector<Quat>& q, const RotationMode& mode, const double* reference,
+                                      std::size_t reference_rows, EulerBranch branch) {
+    const std::size_t n = q.size(), channels = channel_count(mode);
+    if (reference == nullptr) reference_rows = 0;
+    if (reference_rows > 1 && (mode.kind != RotationMode::Kind::euler || reference_rows != n))
+        throw InvalidArgument("reference: expected one row" +
+                              std::string(mode.kind == RotationMode::Kind::euler ? " or one per sample" : "") +
+                              ", got " + std::to_string(reference_rows));
+    check_reference(reference, reference_rows, channels);
+    for (std::size_t s = 0; s < n; ++s) check_nonzero(q[s], row_name("quats", s));
+    switch (mode.kind) {
+        case RotationMode::Kind::euler:
+            return euler_channels(q, mode.order, reference, reference_rows, branch);
+        case RotationMode::Kind::axis_angle:
+            return axis_angle_channels(q, reference_rows ? reference : nullptr);
+        case RotationMode::Kind::quaternion:
+            break;
+    }
+    std::vector<Quat> out_q = q;
+    const Quat ref = reference_rows ? from_wxyz(reference) : Quat();
+    hemisphere_continuous(out_q.data(), n, reference_rows ? &ref : nullptr);
+    std::vector<double> out(4 * n);
+    for (std::size_t s = 0; s < n; ++s) to_wxyz(out_q[s], out.data() + 4 * s);
+    return out;
+}
+
+// ---- sampling policies --------------------------------------------------------------------------------
+
+std::vector<double> step_frames(double start, double end, double step) {
+    check_finite(start, "frame_start");
+    check_finite(end, "frame_end");
+    if (!(step >= 1.0) || !std::isfinite(step)) throw InvalidArgument("step: must be at least 1 frame");
+    if (end < start) throw InvalidArgument("frame range: frame_end is before frame_start");
+    const std::size_t count = frame_count(std::floor((end - start) / step + 1e-9), "frame range");
+    std::vector<double> frames(count);
+    for (std::size_t m = 0; m < count; ++m) frames[m] = start + step * static_cast<double>(m);
+    if (frames.back() < end - 1e-6) frames.push_back(end);
+    return frames;
+}
+
+std::vector<double> sample_frames(const std::vector<double>& key_frames, int per_frame) {
+    check_increasing(key_frames, "key_frames");
+    if (per_frame < 1) throw InvalidArgument("per_frame: must be at least 1");
+    if (key_frames.empty()) return {};
+    const double first = key_frames.front(), last = key_frames.back();
+    const std::size_t count = frame_count(std::floor((last - first) * per_frame + 1e-9), "key_frames");
+    std::vector<double> out(key_frames);
+    for (std::size_t m = 0; m < count; ++m) {
+        const double t = first + static_cast<double>(m) / per_frame;
+        // The keys on either side of t: grid points within 1e-4 frames give way to the key.
+        const auto after = std::lower_bound(key_frames.begin(), key_frames.end(), t);
+        const bool near = (after != key_frames.end() && std::fabs(*after - t) < 1e-4) ||
+                          (after != key_frames.begin() && std::fabs(t - *(after - 1)) < 1e-4);
+        if (!near) out.push_back(t);
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+std::vector<double> whole_frame_samples(const std::vector<double>& key_frames) {
+    check_increasing(key_frames, "key_frames");
+    if (key_frames.empty()) return {};
+    const double first = std::ceil(key_frames.front()), last = std::floor(key_frames.back());
+    const std::size_t count = last >= first ? frame_count(last - first, "key_frames") : 0;
+    std::vector<double> out(key_frames);
+    for (std::size_t m = 0; m < count; ++m) out.push_back(first + static_cast<double>(m));
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+void segment_handles(const double* frames, const double* values, std::size_t n, double* left, double* right) {
+    if (n == 0) return;
+    if (n == 1) {
+        left[0] = frames[0] - 1.0, left[1] = values[0];
+        right[0] = frames[0] + 1.0, right[1] = values[0];
+        return;
+    }
+    // Segment g runs from key g to key g + 1; key s has segment s − 1 on its left and s on its right
+    // (the first key mirrors segment 0 to its left, the last key segment n − 2 to its right).
+    for (std::size_t s = 0; s < n; ++s) {
+        const std::size_t in = s > 0 ? s - 1 : 0, out = s + 1 < n ? s : n - 2;
+        left[2 * s] = frames[s] - (frames[in + 1] - frames[in]) / 3.0;
+        left[2 * s + 1] = values[s] - (values[in + 1] - values[in]) / 3.0;
+        right[2 * s] = frames[s] + (frames[out + 1] - frames[out]) / 3.0;
+        right[2 * s + 1] = values[s] + (values[out + 1] - values[out]) / 3.0;
+        for (int c = 0; c < 2; ++c)
+            if (!std::isfinite(left[2 * s + c]) || !std::isfinite(right[2 * s + c]))
+                throw InvalidArgument(row_name("values", s) + ": its handles overflow double precision");
+    }
+}
+
+}  // namespace quatcurve
