@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,6 +43,23 @@ IArray index_array(const std::vector<std::size_t>& indices) {
     IArray out(static_cast<py::ssize_t>(indices.size()));
     auto* p = out.mutable_data();
     for (std::size_t a = 0; a < indices.size(); ++a) p[a] = static_cast<std::int64_t>(indices[a]);
+    return out;
+}
+
+// A 1-D array of sample indices (integers ≥ 0); order and range are checked by the native side.
+std::vector<std::size_t> read_indices(py::handle obj, const char* name) {
+    const Batch b = as_batch(obj, {}, name);
+    if (b.batch_shape.size() != 1)
+        throw py::value_error(std::string(name) + ": expected a 1-D array of sample indices, got shape " +
+                              shape_string(b.array));
+    std::vector<std::size_t> out(b.count);
+    for (std::size_t a = 0; a < b.count; ++a) {
+        const double v = b.data()[a];
+        if (!(v >= 0.0) || v != std::floor(v) || v > 9.007199254740992e15)
+            throw py::value_error(std::string(name) + "[" + std::to_string(a) + "]: not a sample index (" +
+                                  std::to_string(v) + ")");
+        out[a] = static_cast<std::size_t>(v);
+    }
     return out;
 }
 
@@ -170,6 +188,43 @@ synchronized=False lets each channel keep its own keys where that saves keys.)do
 The bound is on the rotation Blender builds from the three evaluated angle channels. Angles are
 kept as given (pass a filtered, continuous sequence). Returns as reduce_keys, with three channels
 (X, Y, Z).)doc");
+
+    m.def(
+        "fit_keys",
+        [](py::handle times, py::handle values, py::handle forced, double tolerance, const std::string& mode,
+           const std::string& interpolation, bool synchronized, double min_gap) {
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const std::vector<double> t = read_times(times);
+            const std::vector<std::size_t> f = read_indices(forced, "forced");
+            ReducedKeys r;
+            if (mode == "QUATERNION") {
+                const Batch q = read_rows(values, 4, "values", t.size());
+                std::vector<Quat> qs(t.size());
+                for (std::size_t k = 0; k < t.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
+                py::gil_scoped_release release;
+                r = fit_keys(t, qs, f, tolerance, ipo, synchronized, min_gap);
+            } else {
+                const EulerOrder ord = parse_euler_order(mode);
+                const Batch a = read_rows(values, 3, "values", t.size());
+                std::vector<Vec3> as(t.size());
+                for (std::size_t k = 0; k < t.size(); ++k) as[k] = Vec3(a.data()[3 * k], a.data()[3 * k + 1], a.data()[3 * k + 2]);
+                py::gil_scoped_release release;
+                r = fit_keys_euler(t, as, ord, f, tolerance, ipo, synchronized, min_gap);
+            }
+            return r;
+        },
+        py::arg("times"), py::arg("values"), py::arg("forced"), py::arg("tolerance"), py::kw_only(),
+        py::arg("mode") = "QUATERNION", py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+        py::arg("min_gap") = 0.01,
+        R"doc(Fit keys through given ones: the reducer with forced keys (an animator's own keys).
+
+times: (N,) strictly increasing frames; values: (N, 4) quaternions (w, x, y, z) for mode='QUATERNION',
+or (N, 3) Euler angles (radians about X, Y, Z) for mode = an Euler order ('XYZ', ...); forced: sample
+indices (increasing) that must be keys of every channel, values as given. Keys are inserted between
+them, at samples at least min_gap frames from every forced key, until Blender's evaluation of the
+F-curves stays within `tolerance` (radians) of every sample. Returns a ReducedKeys (per channel:
+indices, frames, values, handle_left/handle_right (K, 2)); max_error is what Blender's evaluation
+reaches (emulated), above `tolerance` only where no key could be inserted.)doc");
 }
 
 }  // namespace quatcurve::bindings

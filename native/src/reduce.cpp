@@ -92,7 +92,10 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     ReducedKeys best = run(true);
     if (!synchronized && p.n > 2 && tolerance > 0.0) {
         ReducedKeys per_channel = run(false);
-        if (per_channel.key_count() < best.key_count()) best = std::move(per_channel);
+        // Fewer keys wins, unless it misses a bound the synchronized result meets (a segment that
+        // no candidate sample can split: forced keys closer than min_gap to the failing sample).
+        const bool meets = per_channel.max_error <= std::max(tolerance, best.max_error);
+        if (per_channel.key_count() < best.key_count() && meets) best = std::move(per_channel);
     }
     return best;
 }
@@ -101,16 +104,31 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
 
 ReducedKeys reduce_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
                         double tolerance, KeyInterpolation interpolation, bool synchronized) {
-    check_tolerance(tolerance);
-    return reduce(make_quat_problem(times, quats, interpolation == KeyInterpolation::BEZIER),
-                  tolerance, interpolation, synchronized);
+    return fit_keys(times, quats, {}, tolerance, interpolation, synchronized, 0.0);
 }
 
 ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vector<Vec3>& angles,
                               EulerOrder order, double tolerance, KeyInterpolation interpolation,
                               bool synchronized) {
+    return fit_keys_euler(times, angles, order, {}, tolerance, interpolation, synchronized, 0.0);
+}
+
+ReducedKeys fit_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
+                     const std::vector<std::size_t>& forced, double tolerance, KeyInterpolation interpolation,
+                     bool synchronized, double min_gap) {
     check_tolerance(tolerance);
-    return reduce(make_euler_problem(times, angles, order), tolerance, interpolation, synchronized);
+    Problem p = make_quat_problem(times, quats, interpolation == KeyInterpolation::BEZIER);
+    set_forced_keys(p, forced, min_gap);
+    return reduce(p, tolerance, interpolation, synchronized);
+}
+
+ReducedKeys fit_keys_euler(const std::vector<double>& times, const std::vector<Vec3>& angles, EulerOrder order,
+                           const std::vector<std::size_t>& forced, double tolerance,
+                           KeyInterpolation interpolation, bool synchronized, double min_gap) {
+    check_tolerance(tolerance);
+    Problem p = make_euler_problem(times, angles, order);
+    set_forced_keys(p, forced, min_gap);
+    return reduce(p, tolerance, interpolation, synchronized);
 }
 
 }  // namespace quatcurve

@@ -99,8 +99,15 @@ struct Problem {
     std::vector<double> step_tan;
     // Euler: the order's axes (first applied, middle, last) as indices into (X, Y, Z).
     int axis_first = 0, axis_mid = 1, axis_last = 2;
+    // Key choice (fit_keys): forced[k] — sample k must be a key of every channel (the first and the
+    // last always are); candidate[k] — sample k may become an inserted key (not within min_gap
+    // frames of a forced key, where Blender would merge the two). Both empty: every sample is a
+    // candidate and only the ends are forced.
+    std::vector<unsigned char> forced, candidate;
 
     const double* row(std::size_t k) const { return &y[k * C]; }
+    bool is_forced(std::size_t k) const { return k == 0 || k + 1 == n || (!forced.empty() && forced[k]); }
+    bool is_candidate(std::size_t k) const { return candidate.empty() || candidate[k]; }
 };
 
 // Rotation of Euler angles a (about X, Y, Z) for the problem's order: q_last·q_mid·q_first — the
@@ -166,6 +173,11 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
 // Refuses samples whose float32 form (as Blender stores keys) is another rotation.
 void check_float32_storage(const Problem& p, double tolerance);
 
+// Sets p.forced and p.candidate from the forced sample indices (increasing, within the samples;
+// throws InvalidArgument naming forced[a] otherwise) and the minimum gap (frames, ≥ 0) between an
+// inserted key and a forced one.
+void set_forced_keys(Problem& p, const std::vector<std::size_t>& forced, double min_gap);
+
 // ---- stage 2: fitting one segment (reduce_fit.cpp) -------------------------------------------------
 
 // The state of a reduction in progress: per channel its keys, the fitted values at every sample
@@ -220,8 +232,9 @@ private:
 
 // ---- stage 3: key selection (reduce_select.cpp) ----------------------------------------------------
 
-// Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit; the chosen
-// segments' fits are committed in the Fitter's State.
+// Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit where it can be:
+// every forced sample, plus inserted keys at candidate samples; the chosen segments' fits are
+// committed in the Fitter's State.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
                                      double limit);
 

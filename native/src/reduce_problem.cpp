@@ -176,4 +176,31 @@ void check_float32_storage(const Problem& p, double tolerance) {
     }
 }
 
+void set_forced_keys(Problem& p, const std::vector<std::size_t>& forced, double min_gap) {
+    if (!(min_gap >= 0.0) || !std::isfinite(min_gap))
+        throw InvalidArgument("min_gap: must be finite and >= 0 frames");
+    p.forced.assign(p.n, 0);
+    p.candidate.assign(p.n, 1);
+    for (std::size_t a = 0; a < forced.size(); ++a) {
+        const std::size_t k = forced[a];
+        if (k >= p.n)
+            throw InvalidArgument("forced[" + std::to_string(a) + "]: sample " + std::to_string(k) +
+                                  " does not exist (" + std::to_string(p.n) + " samples)");
+        if (a > 0 && !(k > forced[a - 1]))
+            throw InvalidArgument("forced[" + std::to_string(a) + "]: not increasing (" + std::to_string(k) +
+                                  " after " + std::to_string(forced[a - 1]) + ")");
+        p.forced[k] = 1;
+    }
+    // Candidates: samples at least min_gap frames from every forced key (two-pointer sweep).
+    if (min_gap > 0.0 && !forced.empty()) {
+        std::size_t a = 0;
+        for (std::size_t k = 0; k < p.n; ++k) {
+            while (a + 1 < forced.size() && p.t[forced[a + 1]] <= p.t[k]) ++a;
+            double gap = std::fabs(p.t[k] - p.t[forced[a]]);
+            if (a + 1 < forced.size()) gap = std::fmin(gap, std::fabs(p.t[forced[a + 1]] - p.t[k]));
+            if (gap < min_gap && !p.forced[k]) p.candidate[k] = 0;
+        }
+    }
+}
+
 }  // namespace quatcurve::reduce_impl

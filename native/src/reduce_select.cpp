@@ -6,9 +6,11 @@
 namespace quatcurve::reduce_impl {
 
 // Keys for the channels `chans` (shared), fitted against the other channels' current F, every sample
-// within tan²(θ/2) ≤ limit. Greedy: from key i the farthest feasible end, bracketed around the
-// previous segment's length (growing or shrinking by doubling steps) and then pinned down by binary
-// search; then one pass that drops a key wherever the segment joining its neighbours passes. A probe
+// within tan²(θ/2) ≤ limit. The forced keys split the samples into ranges, each keyed on its own.
+// Greedy within a range: from key i the farthest feasible end, bracketed around the previous
+// segment's length (growing or shrinking by doubling steps) and then pinned down by binary search;
+// an end that is not a candidate (too close to a forced key) steps back to the nearest candidate.
+// Then one pass drops an inserted key wherever the segment joining its neighbours passes. A probe
 // that passes commits its fit, and the ends only grow, so the chosen segment's fit is the one held.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
                                      double limit) {
@@ -20,14 +22,16 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
     };
     std::size_t i = 0, last_len = 2;
     while (i < n - 1) {
+        std::size_t end = i + 1;  // the range's end: the next forced key
+        while (!p.is_forced(end)) ++end;
         std::size_t good = i + 1, bad = kNone;  // good: feasible (committed unless i + 1)
-        const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), n - 1 - i);
+        const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), end - i);
         std::size_t step = std::max<std::size_t>(1, last_len / 4);
         if (guess > i + 1) {
             if (probe(i, guess)) {
                 good = guess;
-                while (good < n - 1) {
-                    const std::size_t j = std::min(good + step, n - 1);
+                while (good < end) {
+                    const std::size_t j = std::min(good + step, end);
                     if (!probe(i, j)) {
                         bad = j;
                         break;
@@ -59,16 +63,29 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
                 }
             }
         }
-        if (good == i + 1) fitter.fit(i, good, chans, nc, limit, true);
+        if (good != end && !p.is_candidate(good)) {
+            // Back to the nearest candidate; with none between i and the range's end, the segment
+            // runs to the end (verification then reports what it cannot meet).
+            std::size_t c = good;
+            while (c > i + 1 && !p.is_candidate(c)) --c;
+            if (!p.is_candidate(c)) {
+                c = good;
+                while (c < end && !p.is_candidate(c)) ++c;
+            }
+            good = c;
+            fitter.fit(i, good, chans, nc, limit, true);
+        } else if (good == i + 1) {
+            fitter.fit(i, good, chans, nc, limit, true);
+        }
         keys.push_back(good);
         last_len = good - i;
         i = good;
     }
-    // Removal pass: join neighbours where one segment suffices. A failed probe changes nothing, so
-    // the fits already committed stay valid.
+    // Removal pass: join neighbours where one segment suffices (never across a forced key). A
+    // failed probe changes nothing, so the fits already committed stay valid.
     std::vector<std::size_t> kept{keys[0]};
     for (std::size_t a = 1; a + 1 < keys.size(); ++a) {
-        if (probe(kept.back(), keys[a + 1])) continue;
+        if (!p.is_forced(keys[a]) && probe(kept.back(), keys[a + 1])) continue;
         kept.push_back(keys[a]);
     }
     kept.push_back(keys.back());

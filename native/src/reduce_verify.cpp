@@ -152,6 +152,7 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
         std::sort(fixes.begin(), fixes.end(), [](const Fix& a, const Fix& b) {
             return a.group != b.group ? a.group < b.group : a.seg > b.seg;
         });
+        bool changed = false;
         for (const Fix& f : fixes) {
             const std::vector<int>& grp = groups[f.group];
             std::vector<std::size_t>& keys = s.keys[grp[0]];
@@ -159,9 +160,20 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
             const int nc = static_cast<int>(grp.size());
             if (ipo == KeyInterpolation::BEZIER && !s.exact_param[i * C + grp[0]]) {
                 fitter.fit(i, j, grp.data(), nc, fit_limit, true, true);
+                changed = true;
                 continue;
             }
-            const std::size_t m = f.sample;
+            // Split at the worst sample, or the candidate nearest to it (not too close to a forced
+            // key); a segment with no candidate inside stays as it is and max_error says so.
+            std::size_t m = kNone;
+            for (std::size_t d = 0; m == kNone; ++d) {
+                const bool below = f.sample >= i + 1 + d, above = f.sample + d < j;
+                if (!below && !above) break;
+                if (below && p.is_candidate(f.sample - d)) m = f.sample - d;
+                else if (above && p.is_candidate(f.sample + d)) m = f.sample + d;
+            }
+            if (m == kNone) continue;
+            changed = true;
             fitter.fit(i, m, grp.data(), nc, fit_limit, true);
             fitter.fit(m, j, grp.data(), nc, fit_limit, true);
             for (int c : grp) {
@@ -169,6 +181,7 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
                 kc.insert(std::upper_bound(kc.begin(), kc.end(), i), m);
             }
         }
+        if (!changed) break;
     }
     max_error = 0.0;
     for (std::size_t k = 0; k < p.n; ++k) max_error = std::max(max_error, angle_of_tan2(err[k]));

@@ -262,3 +262,80 @@ TEST(Reduce, BadInputNamesTheArgument) {
     expect_invalid([&] { reduce_keys_euler(t, bad_a, EulerOrder::XYZ, 0.1); }, "angles[1]");
     expect_invalid([&] { reduce_keys_euler(t, {a[0]}, EulerOrder::XYZ, 0.1); }, "angles: 1 triples");
 }
+
+// ---- fit_keys: the reducer with forced keys (an animator's own keys) ----------------------------
+
+TEST(FitKeys, ForcedKeysStayWithTheirValuesAndTheBoundHolds) {
+    const std::vector<double> t = frames_of(401, 1.0, 0.25);  // frames 1..101, 4 samples per frame
+    const std::vector<Quat> q = smooth_quats(21, t.size(), 40, 25.0);
+    const std::vector<std::size_t> forced = {0, 17, 60, 61, 200, 333, 400};
+    for (bool sync : {true, false}) {
+        const ReducedKeys r = fit_keys(t, q, forced, 0.05 * kDeg, KeyInterpolation::BEZIER, sync);
+        EXPECT_LE(quat_max_error(r, t, q), 0.05 * kDeg);
+        EXPECT_LE(r.max_error, 0.05 * kDeg);
+        for (int c = 0; c < 4; ++c) {
+            const auto& ch = r.channels[c];
+            for (std::size_t f : forced) {
+                const auto it = std::find(ch.indices.begin(), ch.indices.end(), f);
+                ASSERT_NE(it, ch.indices.end()) << "channel " << c << " lost forced sample " << f;
+                const std::size_t a = static_cast<std::size_t>(it - ch.indices.begin());
+                EXPECT_EQ(ch.values[a], double(float(q[f][c == 0 ? 3 : c - 1])));  // glm stores x, y, z, w
+                EXPECT_EQ(ch.frames[a], double(float(t[f])));
+            }
+        }
+    }
+    // without forced keys it is reduce_keys, bit for bit
+    const ReducedKeys a = fit_keys(t, q, {}, 0.1 * kDeg, KeyInterpolation::BEZIER, true, 0.0);
+    const ReducedKeys b = reduce_keys(t, q, 0.1 * kDeg, KeyInterpolation::BEZIER, true);
+    ASSERT_EQ(a.channels.size(), b.channels.size());
+    for (std::size_t c = 0; c < a.channels.size(); ++c) {
+        EXPECT_EQ(a.channels[c].indices, b.channels[c].indices);
+        EXPECT_EQ(a.channels[c].handle_left, b.channels[c].handle_left);
+    }
+}
+
+TEST(FitKeys, InsertedKeysKeepTheirDistanceFromForcedOnes) {
+    // samples every 0.005 frames near forced keys at fractional frames: nothing inserted closer
+    // than min_gap (Blender merges keys within 0.01 frames)
+    std::vector<double> t;
+    for (double x = 0.0; x <= 4.0 + 1e-9; x += 0.005) t.push_back(x);
+    const std::vector<Quat> q = smooth_quats(5, t.size(), 50, 40.0);
+    const std::vector<std::size_t> forced = {0, 101, 203, t.size() - 1};
+    const ReducedKeys r = fit_keys(t, q, forced, 0.01 * kDeg, KeyInterpolation::BEZIER, false, 0.05);
+    for (const auto& ch : r.channels)
+        for (double f : ch.frames) {
+            double gap = 1e9;
+            for (std::size_t k : forced) gap = std::min(gap, std::fabs(f - float(t[k])));
+            EXPECT_TRUE(gap == 0.0 || gap >= 0.05 - 1e-6) << f;
+        }
+    EXPECT_LE(quat_max_error(r, t, q), 0.01 * kDeg) << r.max_error / kDeg << " keys " << r.key_count();
+}
+
+TEST(FitKeys, EulerForcedKeys) {
+    const std::vector<double> t = frames_of(121, 0.0, 0.25);
+    std::vector<Vec3> a(t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) {
+        const double x = t[k];
+        a[k] = Vec3(0.3 * std::sin(0.2 * x), 1.2 * std::sin(0.1 * x + 0.4), 2.0 * x / 30.0 * M_PI);  // a spin in Z
+    }
+    const std::vector<std::size_t> forced = {0, 40, 80, 120};
+    const ReducedKeys r = fit_keys_euler(t, a, EulerOrder::XZY, forced, 0.02 * kDeg);
+    ASSERT_EQ(r.channels.size(), 3u);
+    for (const auto& ch : r.channels)
+        for (std::size_t f : forced) EXPECT_NE(std::find(ch.indices.begin(), ch.indices.end(), f), ch.indices.end());
+    EXPECT_LE(r.max_error, 0.02 * kDeg);
+}
+
+TEST(FitKeys, BadForcedKeysAreRefused) {
+    const std::vector<double> t = frames_of(10);
+    const std::vector<Quat> q = smooth_quats(3, t.size());
+    EXPECT_THROW(fit_keys(t, q, {0, 10}, 0.01), InvalidArgument);  // out of range
+    EXPECT_THROW(fit_keys(t, q, {0, 5, 5}, 0.01), InvalidArgument);  // not increasing
+    EXPECT_THROW(fit_keys(t, q, {0, 9}, 0.01, KeyInterpolation::BEZIER, false, -1.0), InvalidArgument);
+    try {
+        fit_keys(t, q, {3, 2}, 0.01);
+        FAIL();
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("forced[1]"), std::string::npos) << e.what();
+    }
+}

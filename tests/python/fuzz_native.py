@@ -41,7 +41,7 @@ import quatcurve as qc
 
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
-EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5}  # slower targets: fewer examples
+EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "fit_keys": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -951,7 +951,8 @@ def frames_distinct(frames, what):
                                              f"({f32[np.nonzero(np.diff(f32) <= 0)[0][0]]!r})")
 
 
-def build_reduce(fn, d, euler):
+def draw_samples(d, euler):
+    """Dense samples for the reducer and the fitter: (t, values, tolerance, must_fail)."""
     rng = d.rng
     level = d.level()
     n = d.count(small=300, huge=20_000)
@@ -984,6 +985,12 @@ def build_reduce(fn, d, euler):
         else:
             tol = d.pick((-1e-9, -1.0, NAN, INF, -INF), "bad_tolerance")
         must_fail = must_fail or f"poisoned {what}"
+    return t, v, tol, must_fail
+
+
+def build_reduce(fn, d, euler):
+    t, v, tol, must_fail = draw_samples(d, euler)
+    n, width = len(t), 3 if euler else 4
     interpolation = d.pick(("LINEAR", "BEZIER"), "interpolation")
     synchronized = d.pick((True, False), "synchronized")
     args = [t, v] + ([d.pick(ORDERS, "order")] if euler else []) + [tol, interpolation, synchronized]
@@ -1028,6 +1035,52 @@ def build_reduce(fn, d, euler):
             repr(out.channels[0])
 
     return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
+
+
+def build_fit(fn, d):
+    """fit_keys: the reducer with forced keys; forced indices stay keys of every channel."""
+    euler = d.chance(0.4, "euler")
+    t, v, tol, must_fail = draw_samples(d, euler)
+    n = len(t)
+    rng = d.rng
+    forced = np.sort(rng.choice(n, size=min(n, int(rng.integers(0, 8))), replace=False)) if n else np.zeros(0, int)
+    form = d.pick(("ok", "ok", "ok", "out_of_range", "unsorted", "negative", "fraction", "2d"), "forced_form")
+    if form == "out_of_range" and n:
+        forced = np.append(forced, n + int(rng.integers(0, 3)))
+        must_fail = must_fail or "forced out of range"
+    elif form == "unsorted" and forced.size >= 2:
+        forced = forced[::-1].copy()
+        must_fail = must_fail or "forced not increasing"
+    elif form == "negative":
+        forced = np.append(-1, forced)
+        must_fail = must_fail or "negative forced index"
+    elif form == "fraction":
+        forced = np.append(forced.astype(float), 0.5)
+        must_fail = must_fail or "fractional forced index"
+    elif form == "2d":
+        forced = forced.reshape(1, -1)
+        must_fail = must_fail or "forced not 1-D"
+    min_gap = d.pick((0.0, 0.01, 0.3, -1.0, NAN), "min_gap")
+    if not min_gap >= 0:
+        must_fail = must_fail or f"min_gap {min_gap!r}"
+    mode = d.pick(ORDERS, "order") if euler else "QUATERNION"
+    kwargs = {"mode": mode, "interpolation": d.pick(("LINEAR", "BEZIER"), "interpolation"),
+              "synchronized": d.pick((True, False), "synchronized"), "min_gap": min_gap}
+
+    def check(out):
+        expect(type(out).__name__ == "ReducedKeys", f"result {type(out).__name__}")
+        expect(len(out.channels) == (3 if euler else 4), f"{len(out.channels)} channels")
+        finite(out.max_error, "max_error")
+        if min_gap == 0.0:
+            expect(out.max_error <= max(tol, 1e-6), f"max_error {out.max_error!r} above tolerance {tol!r}")
+        for c, ch in enumerate(out.channels):
+            check_indices(ch.indices, n, f"channel {c} indices")
+            frames_distinct(ch.frames, f"channel {c} frames")
+            missing = set(int(k) for k in np.ravel(forced)) - set(int(k) for k in ch.indices)
+            expect(not missing, f"channel {c} lost forced samples {sorted(missing)[:5]}")
+
+    return Case(lambda: fn(t, v, forced, tol, **kwargs), max(n, 1), check, must_fail, 0,
+                ((t, v, forced, tol), kwargs))
 
 
 # ---- Blender's F-curve evaluation, emulated --------------------------------------------------------
@@ -1408,6 +1461,7 @@ REGISTRY.update({
     "path_metrics": build_path_metrics,
     "reduce_keys": lambda fn, d: build_reduce(fn, d, euler=False),
     "reduce_keys_euler": lambda fn, d: build_reduce(fn, d, euler=True),
+    "fit_keys": build_fit,
     "blender_evaluate": build_blender_evaluate,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,

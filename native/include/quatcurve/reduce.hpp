@@ -89,4 +89,23 @@ ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vecto
                               KeyInterpolation interpolation = KeyInterpolation::LINEAR,
                               bool synchronized = true);
 
+// ---- fitting with given keys ---------------------------------------------------------------------
+// The same solver with keys the caller fixes: every sample listed in `forced` (indices, strictly
+// increasing) is a key of every channel, with its value as given — an animator's own keys — and
+// the reducer inserts as few keys between them as the tolerance needs (the first and last samples
+// are always keys; reduce_keys is fit_keys with no forced keys). An inserted key keeps at least
+// `min_gap` frames from every forced key (Blender 4.x merges keys closer than 0.01 frames on
+// fcurve.update()); a segment with no sample far enough from its forced ends keeps no inserted key
+// and max_error reports what it reaches. BEZIER handles are fitted per segment (FREE handles), so a
+// forced key's two handles are set too. Throws InvalidArgument for a forced index out of range or
+// not increasing, and for min_gap < 0, besides reduce_keys' own checks.
+ReducedKeys fit_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
+                     const std::vector<std::size_t>& forced, double tolerance,
+                     KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false,
+                     double min_gap = 0.01);
+ReducedKeys fit_keys_euler(const std::vector<double>& times, const std::vector<Vec3>& angles, EulerOrder order,
+                           const std::vector<std::size_t>& forced, double tolerance,
+                           KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false,
+                           double min_gap = 0.01);
+
 }  // namespace quatcurve
