@@ -18,18 +18,18 @@ if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
     import importlib
 
     # Lowest layer first, so each module reloads against already-reloaded modules below it.
-    for _name in ("native", "fcurves", "targets", "write", "plot", "reduce", "bake", "compare",
-                  "bake_ops", "compare_ops", "reduce_ops", "ui"):
+    for _name in ("native", "fcurves", "targets", "write", "plot", "reduce", "bake", "compare", "fit",
+                  "bake_ops", "compare_ops", "reduce_ops", "fit_ops", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
 from . import native, fcurves, targets, write  # noqa: E402, F401  (reading and writing layers)
-from . import bake, compare, plot, reduce  # noqa: E402, F401        (tasks)
-from . import bake_ops, compare_ops, reduce_ops, ui  # noqa: E402    (operators, settings, panels)
+from . import bake, compare, fit, plot, reduce  # noqa: E402, F401   (tasks)
+from . import bake_ops, compare_ops, fit_ops, reduce_ops, ui  # noqa: E402  (operators, settings, panels)
 
-_modules = (bake_ops, compare_ops, reduce_ops, ui)
+_modules = (bake_ops, compare_ops, reduce_ops, fit_ops, ui)
 
 
 def register():

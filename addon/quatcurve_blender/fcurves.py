@@ -427,6 +427,40 @@ def _get_enum(points, prop, n):
     return buf
 
 
+def read_key_types(fcurve):
+    """Raw keyframe types of every key (int64): KEYFRAME 0, EXTREME 1, BREAKDOWN 2, JITTER 3,
+    MOVING_HOLD 4, GENERATED 5 (4.2+)."""
+    return _get_enum(fcurve.keyframe_points, "type", len(fcurve.keyframe_points)).astype(np.int64)
+
+
+def write_key_types(fcurve, types):
+    """Sets every key's type from raw values, in bulk where Blender takes it, key by key otherwise
+    (checked by reading back, as for handle types)."""
+    points = fcurve.keyframe_points
+    n = len(points)
+    types = np.asarray(types, dtype=np.int64)
+    points.foreach_set("type", types.astype(_INTERPOLATION_DTYPE))
+    if n and not np.array_equal(_get_enum(points, "type", n), types):
+        items = {item.value: item.identifier for item in bpy.types.Keyframe.bl_rna.properties["type"].enum_items}
+        for point, t in zip(points, types):
+            point.type = items[int(t)]
+
+
+def read_key_selection(fcurve):
+    """Whether each key (its control point) is selected, bool array."""
+    n = len(fcurve.keyframe_points)
+    buf = np.zeros(n, dtype=bool)
+    fcurve.keyframe_points.foreach_get("select_control_point", buf)
+    return buf
+
+
+def write_key_selection(fcurve, selected):
+    """Selects the keys where `selected` is True (control points and both handles), deselects the rest."""
+    selected = np.asarray(selected, dtype=bool)
+    for prop in ("select_control_point", "select_left_handle", "select_right_handle"):
+        fcurve.keyframe_points.foreach_set(prop, selected)
+
+
 # ---- digests ----------------------------------------------------------------------------------------
 
 def fcurve_digest(fcurve, h=None):

@@ -1,0 +1,522 @@
+"""Fit: the animator's own sparse rotation keys play a quatcurve method in Blender itself.
+
+    found = targets.gather_targets(bpy.context, verb="fit")
+    result = fit.fit(found, fit.FitSettings(method="SQUAD", tolerance=0.05))
+    print(result.summary())
+
+Blender's evaluator is not replaced: its own F-curves are shaped so that it plays the method. For
+each target the animator's rotation keys stay where they are — same frames, same values (quaternion
+signs may be flipped so that neighbours share a hemisphere) — and the native fitter
+(`quatcurve.fit_keys`, the reducer with forced keys) sets their Bezier handles (FREE) and inserts as
+few keys as the tolerance needs, so that Blender's evaluation, with no add-on loaded, stays within
+the tolerance of the method's curve at every frame and at `subframes` points per frame (the bound is
+verified by emulating Blender's F-curve evaluation, which tests/blender/test_blender_eval.py checks
+against Blender). Quaternion channels need not stay unit between keys: Blender normalizes when it
+builds the rotation, and the fit uses that freedom.
+
+Inserted keys are marked: keyframe type GENERATED (Blender 4.2+) or, on Blender 3.4 which lacks it,
+JITTER (the documented stand-in). A refit replaces every marked key and keeps every other one, so an
+animator who wants to keep an inserted key changes its type to Keyframe.
+
+Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
+keys' signature — what live mode compares) and per key ease in / ease out (`Action.quatcurve_eases`,
+by frame, carried along when keys move). Rotation modes: quaternion and the six Euler orders (turns
+over 180° between Euler keys are kept, as the bake keeps them); axis-angle is refused (the fitter
+has no axis-angle metric yet). Everything is read and computed before anything is written, so an
+error leaves the file untouched; the operator's UNDO flag makes the write one undo step.
+"""
+
+import hashlib
+import math
+import time
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from . import fcurves, native, targets
+from .targets import TargetError
+
+METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+# Raw Keyframe.type values (foreach_get/foreach_set): KEYFRAME 0, EXTREME 1, BREAKDOWN 2, JITTER 3,
+# MOVING_HOLD 4, GENERATED 5 (4.2+).
+KEY_TYPE_KEYFRAME = 0
+KEY_TYPE_GENERATED = 5 if bpy.app.version >= (4, 2, 0) else 3
+GENERATED_NAME = "GENERATED" if bpy.app.version >= (4, 2, 0) else "JITTER"
+# Blender 4.x merges keys closer than this on fcurve.update(): inserted keys keep their distance.
+MIN_KEY_GAP = 0.01
+
+
+class FitError(TargetError):
+    """A fit that cannot be done; the message names the target, channel and frame. Raised before
+    anything is written."""
+
+
+@dataclass
+class FitSettings:
+    """method: the curve Blender should play through the keys; tolerance in degrees (largest rotation
+    error of Blender's evaluation against the method at every frame and subframe); tension,
+    continuity, bias (TCB); shortest_path (SLERP); clamped (SQUAD, TCB, CATMULL_ROM: overshoot-free
+    tangents); subframes: checked points per frame (4: every quarter frame)."""
+    method: str = "SLERP"
+    tolerance: float = 0.05
+    tension: float = 0.0
+    continuity: float = 0.0
+    bias: float = 0.0
+    shortest_path: bool = True
+    clamped: bool = True
+    subframes: int = 4
+
+
+def check_settings(settings):
+    if settings.method not in METHODS:
+        raise FitError("method %r: cannot be fitted (methods: %s)" % (settings.method, ", ".join(METHODS)))
+    if not (settings.tolerance > 0) or not math.isfinite(settings.tolerance):
+        raise FitError("tolerance %r°: must be a finite angle above 0" % (settings.tolerance,))
+    for name in ("tension", "continuity", "bias"):
+        value = getattr(settings, name)
+        if not (-1.0 <= value <= 1.0):
+            raise FitError("%s %r: must be within -1..1" % (name, value))
+    if not (1 <= int(settings.subframes) <= 64) or int(settings.subframes) != settings.subframes:
+        raise FitError("subframes %r: must be a whole number from 1 to 64" % (settings.subframes,))
+
+
+def curve_options(settings, ease_in=None, ease_out=None):
+    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease)."""
+    options = {}
+    if settings.method == "SLERP":
+        options["shortest_path"] = bool(settings.shortest_path)
+    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
+        options["clamped"] = bool(settings.clamped)
+    if settings.method == "TCB":
+        options.update(tension=settings.tension, continuity=settings.continuity, bias=settings.bias)
+    if ease_in is not None and np.any(ease_in):
+        options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
+    if ease_out is not None and np.any(ease_out):
+        options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
+    return options
+
+
+# ---- records on the action: fitted targets and per-key ease -----------------------------------------
+
+def target_key(target):
+    """(slot, owner path): what identifies a target's rotation channels inside its action."""
+    owner = target.owner
+    path = owner.path_from_id() if target.bone is not None else ""
+    return fcurves.slot_identifier(target.id_data) or "", path
+
+
+def find_record(action, target):
+    """The fit record of `target` in `action`, or None."""
+    slot, path = target_key(target)
+    for record in getattr(action, "quatcurve_fits", ()):
+        if record.owner_path == path and record.slot == slot:
+            return record
+    return None
+
+
+def key_eases(action, target, frames):
+    """(ease_in, ease_out) arrays for the key `frames` from the action's ease records (0 where none)."""
+    slot, path = target_key(target)
+    ease_in, ease_out = np.zeros(len(frames)), np.zeros(len(frames))
+    for item in getattr(action, "quatcurve_eases", ()):
+        if item.owner_path != path or item.slot != slot:
+            continue
+        k = np.flatnonzero(np.abs(frames - item.frame) < 1e-4)
+        if k.size:
+            ease_in[k[0]], ease_out[k[0]] = item.ease_in, item.ease_out
+    return ease_in, ease_out
+
+
+def set_key_eases(action, target, frames, ease_in, ease_out):
+    """Replaces the target's ease records by one per key frame with a non-zero ease."""
+    slot, path = target_key(target)
+    items = action.quatcurve_eases
+    for i in reversed(range(len(items))):
+        if items[i].owner_path == path and items[i].slot == slot:
+            items.remove(i)
+    for f, a, b in zip(frames, ease_in, ease_out):
+        if a or b:
+            item = items.add()
+            item.slot, item.owner_path, item.frame, item.ease_in, item.ease_out = slot, path, float(f), a, b
+
+
+def carry_eases(old_frames, new_frames, ease_in, ease_out):
+    """Eases of `old_frames` carried to `new_frames`: by frame where a frame stayed, else by order when
+    the keys are as many as before (a key moved in time keeps its ease)."""
+    old_frames, new_frames = np.asarray(old_frames, float), np.asarray(new_frames, float)
+    out_in, out_out = np.zeros(len(new_frames)), np.zeros(len(new_frames))
+    if len(old_frames) == len(new_frames):
+        return np.asarray(ease_in, float).copy(), np.asarray(ease_out, float).copy()
+    for k, f in enumerate(new_frames):
+        j = np.flatnonzero(np.abs(old_frames - f) < 1e-4)
+        if j.size:
+            out_in[k], out_out[k] = ease_in[j[0]], ease_out[j[0]]
+    return out_in, out_out
+
+
+# ---- reading the animator's keys ---------------------------------------------------------------------
+
+@dataclass(eq=False)
+class AnimatorKeys:
+    """A target's own rotation keys (every key not marked as generated).
+
+    frames (K,): the union of the channels' animator key frames (channels keyed separately, e.g. with
+    "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types (K,) raw
+    keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
+    target: object
+    mode: str
+    prop: str
+    path: str
+    action: object
+    curves: list
+    frames: np.ndarray
+    values: np.ndarray
+    types: np.ndarray
+    selected: np.ndarray
+
+    @property
+    def is_euler(self):
+        return self.mode in fcurves.EULER_ORDERS
+
+    def signature(self):
+        """A digest of the animator's keys (frames, values, types): live mode refits when it changes."""
+        h = hashlib.sha256(("%s %s" % (self.mode, self.path)).encode())
+        for a in (self.frames, self.values, self.types):
+            h.update(np.ascontiguousarray(a).tobytes())
+        return h.hexdigest()
+
+
+def read_animator_keys(target):
+    """AnimatorKeys of `target` in its current rotation mode, from its active action. Raises FitError
+    (naming target, channel and frame) for axis-angle, no active action, no rotation keys, F-curve
+    modifiers, NaN/infinite keys, two different keys on one frame, drivers, protected data."""
+    try:
+        targets.check_editable(target, new_action=False)
+    except TargetError as e:
+        raise FitError(str(e)) from None
+    mode = target.owner.rotation_mode
+    if mode == "AXIS_ANGLE":
+        raise FitError("%s: rotation mode AXIS_ANGLE cannot be fitted yet (quaternion and Euler modes can: "
+                       "set the rotation mode, e.g. with Blender's Convert Rotation)" % target.name)
+    prop, count = fcurves.rotation_property(mode)
+    path = target.data_path(prop)
+    try:
+        targets.refuse_drivers(target, prop, count)
+    except TargetError as e:
+        raise FitError(str(e)) from None
+    action = fcurves.active_action(target.id_data)
+    if action is None:
+        strips = fcurves.nla_strips(target.id_data)
+        raise FitError("%s: no active action%s: fit works on the action the target plays (enter tweak "
+                       "mode on the strip, or make its action active)"
+                       % (target.name, " (only NLA strips)" if strips else ""))
+    channels = fcurves.Channels.of(target.id_data)
+    curves = channels.find_all(path, count) if channels is not None else [None] * count
+    per_channel = []
+    for c, curve in enumerate(curves):
+        if curve is None or not fcurves.key_count(curve):
+            per_channel.append(None)
+            continue
+        if len(curve.modifiers):
+            raise FitError("%s: %s[%d] has F-curve modifiers (%s): the fit shapes keys only, remove them first"
+                           % (target.name, prop, c, ", ".join(m.type for m in curve.modifiers)))
+        frames, values = fcurves.read_keys(curve)
+        types = fcurves.read_key_types(curve)
+        selected = fcurves.read_key_selection(curve)
+        mine = types != KEY_TYPE_GENERATED
+        frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
+        order = np.argsort(frames, kind="stable")
+        frames, values, types, selected = frames[order], values[order], types[order], selected[order]
+        bad = ~np.isfinite(values)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise FitError("%s: %s[%d] is %s at frame %s" % (target.name, prop, c, values[k], targets.num(frames[k])))
+        same = np.flatnonzero(frames[1:] == frames[:-1])
+        for k in same:
+            if values[k] != values[k + 1]:
+                raise FitError("%s: %s[%d] has two different keys on frame %s (%s and %s)" % (
+                    target.name, prop, c, targets.num(frames[k]), targets.num(round(float(values[k]), 6)),
+                    targets.num(round(float(values[k + 1]), 6))))
+        keep = np.r_[True, frames[1:] != frames[:-1]]
+        per_channel.append((frames[keep], values[keep], types[keep], selected[keep]))
+    if not any(p is not None for p in per_channel):
+        raise FitError("%s: no rotation keys on %s (rotation mode %s)" % (target.name, prop, mode))
+    frames = np.unique(np.concatenate([p[0] for p in per_channel if p is not None]))
+    K = len(frames)
+    values = np.empty((K, count))
+    types = np.full(K, -1, dtype=np.int64)
+    selected = np.zeros((count, K), dtype=bool)
+    current = getattr(target.owner, prop)
+    for c, p in enumerate(per_channel):
+        if p is None:
+            values[:, c] = current[c]
+            continue
+        where = np.searchsorted(frames, p[0])
+        own = np.zeros(K, dtype=bool)
+        own[where] = True
+        values[where, c] = p[1]
+        selected[c, where] = p[3]
+        fill = np.flatnonzero(types[where] < 0)
+        types[where[fill]] = p[2][fill]
+        if (~own).any():  # this channel has no key of its own there: Blender's evaluation
+            values[~own, c] = fcurves.evaluate(curves[c], frames[~own])
+    types[types < 0] = KEY_TYPE_KEYFRAME
+    return AnimatorKeys(target, mode, prop, path, action, list(curves), frames, values, types, selected)
+
+
+# ---- the fit ------------------------------------------------------------------------------------------
+
+def sample_times(frames, subframes):
+    """Every 1/subframes frame from the first key to the last, and every key frame (sorted, unique;
+    grid points within 1e-6 frames of a key are left to the key)."""
+    lo, hi = frames[0], frames[-1]
+    first, last = math.ceil(lo * subframes - 1e-9), math.floor(hi * subframes + 1e-9)
+    grid = np.arange(first, last + 1, dtype=np.float64) / subframes
+    near = np.abs(grid[:, None] - frames[None, :]).min(axis=1) < 1e-6 if len(grid) else np.zeros(0, bool)
+    return np.union1d(grid[~near], frames)
+
+
+@dataclass(eq=False)
+class FitPlan:
+    """What fit writes for one target: per channel (frames, values, handle_left, handle_right, types),
+    the selection of the animator's keys, and the figures the report gives."""
+    keys: AnimatorKeys
+    settings: FitSettings
+    channels: list
+    max_error: float          # radians, Blender's evaluation (emulated) against the method
+    animator_count: int
+    generated_count: int
+    samples: int
+    ease_in: np.ndarray
+    ease_out: np.ndarray
+
+
+def curve_of(keys, settings, ease_in=None, ease_out=None):
+    """The native curve of the settings' method through the animator's keys, and the key values the
+    fit writes (quaternion signs made to follow the curve)."""
+    qc = native.require()
+    options = curve_options(settings, ease_in, ease_out)
+    try:
+        if keys.is_euler:
+            return qc.Curve.from_euler(keys.frames, keys.values, order=keys.mode, method=settings.method,
+                                       **options), keys.values
+        norms = np.linalg.norm(keys.values, axis=1)
+        if (norms == 0).any():
+            k = int(np.flatnonzero(norms == 0)[0])
+            raise FitError("%s: the quaternion is zero at frame %s (no rotation defined)"
+                           % (keys.target.name, targets.num(keys.frames[k])))
+        curve = qc.Curve(keys.frames, keys.values, method=settings.method, **options)
+    except ValueError as e:
+        raise FitError("%s: %s" % (keys.target.name, e)) from None
+    # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
+    at_keys = curve.sample(keys.frames)
+    signs = np.where(np.sum(at_keys * keys.values, axis=1) < 0, -1.0, 1.0)
+    return curve, keys.values * signs[:, None]
+
+
+def plan_target(keys, settings, ease_in=None, ease_out=None):
+    """The fitted keys of one target (nothing written). Fewer than two keys: None."""
+    qc = native.require()
+    K = len(keys.frames)
+    if K < 2:
+        return None
+    ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
+    ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
+    curve, key_values = curve_of(keys, settings, ease_in, ease_out)
+    t = sample_times(keys.frames, int(settings.subframes))
+    forced = np.searchsorted(t, keys.frames)
+    q = curve.sample(t)
+    seg = np.clip(np.searchsorted(keys.frames, t, side="right") - 1, 0, K - 2)
+    if keys.is_euler:
+        values = np.empty((len(t), 3))
+        for k in range(K - 1):
+            idx = np.arange(forced[k], forced[k + 1])
+            values[idx] = qc.quats_to_channels(q[idx], keys.mode, reference=key_values[k])
+        mode = keys.mode
+    else:
+        # Sign: the curve's (continuous, reaching every key with the key's sign as written). Scale:
+        # the key norms interpolated along each segment, so stored non-unit keys stay as they are
+        # and the channels do not jump in size next to them.
+        reach = np.sum(q[forced] * key_values, axis=1)
+        sign_at = np.where(reach < 0, -1.0, 1.0)
+        norms = np.linalg.norm(key_values, axis=1)
+        u = (t - keys.frames[seg]) / (keys.frames[seg + 1] - keys.frames[seg])
+        values = q * (sign_at[seg] * ((1 - u) * norms[seg] + u * norms[seg + 1]))[:, None]
+        mode = "QUATERNION"
+    values[forced] = key_values
+    try:
+        fitted = qc.fit_keys(t, values, forced, math.radians(settings.tolerance), mode=mode,
+                             interpolation="BEZIER", synchronized=False, min_gap=MIN_KEY_GAP)
+    except ValueError as e:
+        raise FitError("%s: %s" % (keys.target.name, e)) from None
+    channels, generated = [], 0
+    for ch in fitted.channels:
+        types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
+        at = np.searchsorted(forced, ch.indices)
+        is_key = (at < K) & (forced[np.minimum(at, K - 1)] == ch.indices)
+        types[is_key] = keys.types[at[is_key]]
+        generated += int((~is_key).sum())
+        channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
+    return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
+                   ease_in, ease_out)
+
+
+def write_plan(plan):
+    """Writes one target's fitted keys into its action, in place: the rotation F-curves' keys are
+    replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
+    selection kept) and the generated keys; then the fit record and the eases are stored."""
+    keys = plan.keys
+    channels = fcurves.Channels.of(keys.target.id_data, keys.action, create=True)
+    group = channels.group_of(keys.path)
+    for c, (frames, values, left, right, types) in enumerate(plan.channels):
+        curve = keys.curves[c] if c < len(keys.curves) else None
+        if curve is None:
+            curve = channels.new_fcurve(keys.path, c, group=group)
+        fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
+        fcurves.write_key_types(curve, types)
+        chosen = np.zeros(len(frames), dtype=bool)
+        at = np.searchsorted(keys.frames, frames)
+        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
+        chosen[on_key] = keys.selected[c, at[on_key]]
+        fcurves.write_key_selection(curve, chosen)
+    store_record(keys, plan.settings)
+    set_key_eases(keys.action, keys.target, keys.frames, plan.ease_in, plan.ease_out)
+    keys.target.id_data.update_tag(refresh={"TIME"})
+
+
+def store_record(keys, settings):
+    """The target's fit record: method, settings, and the signature and frames of its animator keys."""
+    record = find_record(keys.action, keys.target)
+    if record is None:
+        record = keys.action.quatcurve_fits.add()
+        record.slot, record.owner_path = target_key(keys.target)
+    record.method = settings.method
+    for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
+        setattr(record, name, getattr(settings, name))
+    record.prop = keys.prop
+    record.signature = keys.signature()
+    record.key_frames = " ".join(repr(float(f)) for f in keys.frames)
+
+
+def settings_of(record):
+    """The FitSettings stored in a fit record."""
+    return FitSettings(method=record.method, tolerance=record.tolerance, tension=record.tension,
+                       continuity=record.continuity, bias=record.bias, shortest_path=record.shortest_path,
+                       clamped=record.clamped, subframes=record.subframes)
+
+
+def record_frames(record):
+    return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
+
+
+# ---- the task -------------------------------------------------------------------------------------------
+
+@dataclass
+class TargetResult:
+    name: str
+    mode: str
+    animator_keys: int
+    generated_keys: int
+    max_error_deg: float
+    skipped: str = ""
+
+    def line(self, tolerance):
+        if self.skipped:
+            return "%s: left as it is (%s)" % (self.name, self.skipped)
+        over = "" if self.max_error_deg <= tolerance else " — ABOVE the tolerance: keys too close to insert between"
+        return "%s: %s, %d animator keys + %d generated, max error %.4f°%s" % (
+            self.name, self.mode, self.animator_keys, self.generated_keys, self.max_error_deg, over)
+
+
+@dataclass
+class FitResult:
+    settings: FitSettings
+    targets: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def fitted(self):
+        return [t for t in self.targets if not t.skipped]
+
+    def summary(self):
+        n = len(self.fitted)
+        return "Fitted %d target%s with %s (%d animator + %d generated keys, max error %.4f°) in %.2f s" % (
+            n, "" if n == 1 else "s", self.settings.method, sum(t.animator_keys for t in self.fitted),
+            sum(t.generated_keys for t in self.fitted), max([t.max_error_deg for t in self.fitted] or [0.0]),
+            self.seconds)
+
+    def lines(self):
+        return [t.line(self.settings.tolerance) for t in self.targets]
+
+
+def fit(found, settings, only_changed=False):
+    """Fits every target (see the module docstring). Reads and plans all targets first, then writes:
+    an error leaves everything untouched. A target with fewer than two rotation keys is left as it is
+    and named in the result. only_changed: skip targets whose fit record's signature still matches
+    (live mode). Raises FitError."""
+    check_settings(settings)
+    start = time.perf_counter()
+    result = FitResult(settings)
+    plans = []
+    for target in found:
+        keys = read_animator_keys(target)
+        record = find_record(keys.action, target)
+        if only_changed and record is not None and record.signature == keys.signature():
+            continue
+        ease_in, ease_out = key_eases(keys.action, target, keys.frames)
+        if record is not None and record.key_frames:
+            old = record_frames(record)
+            if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
+                o_in, o_out = key_eases(keys.action, target, old)
+                ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
+        plan = plan_target(keys, settings, ease_in, ease_out)
+        if plan is None:
+            result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), 0, 0.0,
+                                               skipped="%d rotation key%s: nothing to fit" % (
+                                                   len(keys.frames), "" if len(keys.frames) == 1 else "s")))
+            continue
+        plans.append(plan)
+        result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), plan.generated_count,
+                                           math.degrees(plan.max_error)))
+    for plan in plans:
+        write_plan(plan)
+    result.seconds = time.perf_counter() - start
+    return result
+
+
+def unfit(found):
+    """Unmarks the targets: their fit records and eases are removed (keys, handles and generated keys
+    stay as they are: the handles are now the animator's). Returns the names unmarked."""
+    names = []
+    for target in found:
+        action = fcurves.active_action(target.id_data)
+        record = find_record(action, target) if action is not None else None
+        if record is None:
+            continue
+        action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
+        set_key_eases(action, target, [], [], [])
+        names.append(target.name)
+    return names
+
+
+def fitted_targets(action):
+    """Every Target whose fit record is in `action` (objects playing it, with the record's slot)."""
+    found = []
+    records = list(getattr(action, "quatcurve_fits", ()))
+    if not records:
+        return found
+    for obj in fcurves.action_users(action):
+        if fcurves.active_action(obj) != action:
+            continue
+        slot = fcurves.slot_identifier(obj) or ""
+        for record in records:
+            if record.slot != slot:
+                continue
+            if record.owner_path == "":
+                found.append(targets.Target(obj))
+            elif obj.pose is not None and record.owner_path.startswith('pose.bones["'):
+                name = record.owner_path[len('pose.bones["'):-2].replace('\\"', '"')
+                if name in obj.pose.bones:
+                    found.append(targets.Target(obj, name))
+    return found

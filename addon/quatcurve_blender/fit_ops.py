@@ -1,0 +1,253 @@
+"""The `quatcurve.fit`, `quatcurve.unfit` and `quatcurve.set_ease` operators, the fit settings and last
+result (`scene.quatcurve_fit`), and the records fit keeps on actions (`Action.quatcurve_fits`,
+`Action.quatcurve_eases`).
+
+Fit shapes the selected objects' (Object mode) or pose bones' (Pose mode) own rotation keys so that
+Blender plays the chosen method (fit.py). Properties not given by the caller come from the panel's
+settings, as for bake and reduce.
+"""
+
+import bpy
+import numpy as np
+
+from . import fcurves, fit, native, targets
+from .targets import TargetError
+
+METHOD_ITEMS = (
+    ("SLERP", "Slerp", "Constant angular speed along the shortest arc between keys (Maya's Quaternion Slerp; "
+                       "glTF's LINEAR rotation)"),
+    ("NLERP", "Nlerp", "Normalized linear interpolation of quaternions"),
+    ("SQUAD", "Squad", "Smooth spherical quadrangle through the keys (Maya's Quaternion Cubic)"),
+    ("CATMULL_ROM", "Catmull-Rom", "Smooth spherical spline through the keys"),
+    ("TCB", "TCB", "Kochanek-Bartels with tension, continuity, bias (3ds Max's TCB rotation)"),
+    ("SPLINE_C2", "C2 Spline", "Continuous angular velocity and acceleration (may overshoot on uneven spacing)"),
+)
+
+
+def fit_properties():
+    """The fit settings as property definitions, shared by scene.quatcurve_fit and the operator."""
+    P = bpy.props
+    return {
+        "method": P.EnumProperty(name="Method", items=METHOD_ITEMS, default="SLERP",
+                                 description="The interpolation Blender should play through the keys"),
+        "tolerance": P.FloatProperty(
+            name="Tolerance (°)", default=0.05, min=1e-4, soft_max=5.0, precision=3,
+            description="Largest rotation error of Blender's playback against the method, at every frame "
+                        "and subframe, in degrees"),
+        "tension": P.FloatProperty(name="Tension", default=0.0, min=-1.0, max=1.0, description="TCB tension"),
+        "continuity": P.FloatProperty(name="Continuity", default=0.0, min=-1.0, max=1.0,
+                                      description="TCB continuity"),
+        "bias": P.FloatProperty(name="Bias", default=0.0, min=-1.0, max=1.0, description="TCB bias"),
+        "shortest_path": P.BoolProperty(name="Shortest Path", default=True,
+                                        description="Slerp: the shorter arc between keys"),
+        "clamped": P.BoolProperty(
+            name="No Overshoot", default=True,
+            description="Squad, TCB, Catmull-Rom: tangents clamped so that no segment overshoots its keys "
+                        "and holds stay still; off: the textbook tangents"),
+        "subframes": P.IntProperty(name="Subframes", default=4, min=1, max=64,
+                                   description="Points per frame where the tolerance is checked"),
+    }
+
+
+class QuatCurveFitRecord(bpy.types.PropertyGroup):
+    """Action.quatcurve_fits item: one fitted target's rotation channels (slot, owner path) and the
+    settings it was fitted with; signature and key_frames describe the animator's keys then."""
+    __annotations__ = dict(
+        {name: prop for name, prop in fit_properties().items() if name != "method"},
+        method=bpy.props.StringProperty(name="Method", default="SLERP"),
+        slot=bpy.props.StringProperty(name="Slot"),
+        owner_path=bpy.props.StringProperty(name="Owner Path"),
+        prop=bpy.props.StringProperty(name="Rotation Property"),
+        signature=bpy.props.StringProperty(name="Signature"),
+        key_frames=bpy.props.StringProperty(name="Key Frames"),
+    )
+
+
+class QuatCurveEaseRecord(bpy.types.PropertyGroup):
+    """Action.quatcurve_eases item: ease in / ease out of one key (by frame) of a target."""
+    __annotations__ = dict(
+        slot=bpy.props.StringProperty(name="Slot"),
+        owner_path=bpy.props.StringProperty(name="Owner Path"),
+        frame=bpy.props.FloatProperty(name="Frame"),
+        ease_in=bpy.props.FloatProperty(name="Ease In", min=0.0, max=1.0),
+        ease_out=bpy.props.FloatProperty(name="Ease Out", min=0.0, max=1.0),
+    )
+
+
+class QuatCurveFitSettings(bpy.types.PropertyGroup):
+    """scene.quatcurve_fit: the panel's fit settings, live mode, the ease to set, the last result."""
+    __annotations__ = dict(
+        fit_properties(),
+        live=bpy.props.BoolProperty(
+            name="Live", default=False,
+            description="Keep fitted targets fitted while you edit their rotation keys (insert, move, delete, "
+                        "change, undo): their generated keys and handles are refitted after each change"),
+        ease_in=bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0,
+                                        description="Slow the motion into the selected keys (path unchanged)"),
+        ease_out=bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0,
+                                         description="Slow the motion out of the selected keys (path unchanged)"),
+        last_summary=bpy.props.StringProperty(name="Last Fit", default=""),
+        last_lines=bpy.props.StringProperty(name="Last Fit Details", default=""),
+    )
+
+
+def settings_from(props):
+    """FitSettings from an operator or the scene settings."""
+    return fit.FitSettings(method=props.method, tolerance=props.tolerance, tension=props.tension,
+                           continuity=props.continuity, bias=props.bias, shortest_path=props.shortest_path,
+                           clamped=props.clamped, subframes=props.subframes)
+
+
+def draw_settings(layout, settings, context=None, max_lines=6):
+    """The panel's fit box: settings, buttons, ease, live toggle, whether the active target is fitted,
+    last result."""
+    col = layout.column(align=True)
+    col.prop(settings, "method", text="")
+    col.prop(settings, "tolerance")
+    if settings.method == "TCB":
+        col.prop(settings, "tension")
+        col.prop(settings, "continuity")
+        col.prop(settings, "bias")
+    if settings.method == "SLERP":
+        col.prop(settings, "shortest_path")
+    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
+        col.prop(settings, "clamped")
+    row = layout.row(align=True)
+    row.operator("quatcurve.fit", text="Fit Rotation Keys", icon="IPO_EASE_IN_OUT")
+    row.operator("quatcurve.unfit", text="", icon="X")
+    layout.prop(settings, "live", toggle=True, icon="REC" if settings.live else "PLAY")
+    col = layout.column(align=True)
+    col.prop(settings, "ease_in")
+    col.prop(settings, "ease_out")
+    col.operator("quatcurve.set_ease", text="Set Ease on Selected Keys")
+    if context is not None:
+        status = active_status(context)
+        if status:
+            layout.label(text=status, icon="CHECKMARK")
+    if settings.last_summary:
+        col = layout.column(align=True)
+        col.scale_y = 0.8
+        for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
+            col.label(text=line)
+
+
+def active_status(context):
+    """'Fitted: SQUAD, 0.05°' for the active target when it carries a fit record, else ''."""
+    obj = context.active_object
+    if obj is None:
+        return ""
+    bone = context.active_pose_bone.name if context.mode == "POSE" and context.active_pose_bone else None
+    target = targets.Target(obj, bone)
+    action = fcurves.active_action(obj)
+    record = fit.find_record(action, target) if action is not None else None
+    return "Fitted: %s, %.3g°" % (record.method, record.tolerance) if record is not None else ""
+
+
+class QUATCURVE_OT_fit(bpy.types.Operator):
+    """Shape the selected objects' or pose bones' own rotation keys so that Blender plays the chosen method"""
+    bl_idname = "quatcurve.fit"
+    bl_label = "Fit Rotation Keys"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = fit_properties()
+
+    def execute(self, context):
+        scene_settings = getattr(context.scene, "quatcurve_fit", None)
+        if scene_settings is not None:
+            for name in fit_properties():
+                if not self.properties.is_property_set(name):
+                    setattr(self, name, getattr(scene_settings, name))
+        try:
+            native.require()
+            result = fit.fit(targets.gather_targets(context, verb="fit"), settings_from(self))
+        except (TargetError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        if scene_settings is not None:
+            scene_settings.last_summary = result.summary()
+            scene_settings.last_lines = "\n".join(result.lines())
+        self.report({"INFO"}, result.summary())
+        return {"FINISHED"}
+
+
+class QUATCURVE_OT_unfit(bpy.types.Operator):
+    """Unmark the selected fitted targets: their keys and handles stay, and are the animator's from now on"""
+    bl_idname = "quatcurve.unfit"
+    bl_label = "Unmark Fitted Rotation"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        try:
+            names = fit.unfit(targets.gather_targets(context, verb="unmark"))
+        except TargetError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, "Unmarked %s" % (", ".join(names) if names else "nothing (no fitted target selected)"))
+        return {"FINISHED"}
+
+
+class QUATCURVE_OT_set_ease(bpy.types.Operator):
+    """Set ease in / ease out on the selected rotation keys of the selected fitted targets, and refit them"""
+    bl_idname = "quatcurve.set_ease"
+    bl_label = "Set Ease on Selected Keys"
+    bl_options = {"REGISTER", "UNDO"}
+    ease_in: bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0)
+    ease_out: bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0)
+
+    def execute(self, context):
+        scene_settings = getattr(context.scene, "quatcurve_fit", None)
+        if scene_settings is not None:
+            for name in ("ease_in", "ease_out"):
+                if not self.properties.is_property_set(name):
+                    setattr(self, name, getattr(scene_settings, name))
+        try:
+            native.require()
+            changed = set_ease(targets.gather_targets(context, verb="ease"), self.ease_in, self.ease_out)
+        except (TargetError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, "Ease in %.2f / out %.2f on %d key%s" % (
+            self.ease_in, self.ease_out, changed, "" if changed == 1 else "s"))
+        return {"FINISHED"}
+
+
+def set_ease(found, ease_in, ease_out):
+    """Sets the ease of the selected animator keys of each fitted target and refits it with its own
+    settings. Returns the number of keys changed. Raises FitError for a target that is not fitted."""
+    plans, changed = [], 0
+    for target in found:
+        keys = fit.read_animator_keys(target)
+        record = fit.find_record(keys.action, target)
+        if record is None:
+            raise fit.FitError("%s: not fitted (fit it first: ease is part of the fit)" % target.name)
+        chosen = keys.selected.any(axis=0)
+        if not chosen.any():
+            continue
+        e_in, e_out = fit.key_eases(keys.action, target, keys.frames)
+        e_in[chosen], e_out[chosen] = ease_in, ease_out
+        changed += int(chosen.sum())
+        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out)
+        if plan is not None:
+            plans.append(plan)
+    for plan in plans:
+        fit.write_plan(plan)
+    return changed
+
+
+_classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveFitSettings, QUATCURVE_OT_fit, QUATCURVE_OT_unfit,
+            QUATCURVE_OT_set_ease)
+
+
+def register():
+    for cls in _classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.quatcurve_fit = bpy.props.PointerProperty(type=QuatCurveFitSettings)
+    bpy.types.Action.quatcurve_fits = bpy.props.CollectionProperty(type=QuatCurveFitRecord)
+    bpy.types.Action.quatcurve_eases = bpy.props.CollectionProperty(type=QuatCurveEaseRecord)
+
+
+def unregister():
+    del bpy.types.Action.quatcurve_eases
+    del bpy.types.Action.quatcurve_fits
+    del bpy.types.Scene.quatcurve_fit
+    for cls in reversed(_classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,44 @@
+"""Blender's own evaluation of rotations in a saved .blend, in a fresh process without the add-on.
+
+    blender -b --factory-startup FILE.blend --python evaluate_rotations.py -- REQUEST.json OUT.json
+    python evaluate_rotations.py FILE.blend REQUEST.json OUT.json        (bpy module)
+
+REQUEST: {"targets": [[object, bone or null], ...], "times": [frame, ...]}. OUT: {"quats": {name:
+[[w, x, y, z], ...]}} — the owner's rotation as Blender builds it from its rotation mode, at each
+time (scene.frame_set with the subframe), normalized. Nothing of quatcurve is imported."""
+import json
+import math
+import sys
+
+import bpy
+from mathutils import Euler, Quaternion
+
+argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+if len(argv) == 3:  # bpy module: the file comes first
+    bpy.ops.wm.open_mainfile(filepath=argv[0])
+    argv = argv[1:]
+request_path, out_path = argv
+with open(request_path) as f:
+    request = json.load(f)
+assert "quatcurve_blender" not in sys.modules, "the add-on must not be loaded"
+scene = bpy.context.scene
+owners = {}
+for obj_name, bone in request["targets"]:
+    obj = bpy.data.objects[obj_name]
+    owners["%s/%s" % (obj_name, bone) if bone else obj_name] = obj.pose.bones[bone] if bone else obj
+out = {name: [] for name in owners}
+for t in request["times"]:
+    whole = math.floor(t)
+    scene.frame_set(int(whole), subframe=float(t - whole))
+    for name, owner in owners.items():
+        mode = owner.rotation_mode
+        if mode == "QUATERNION":
+            q = Quaternion(owner.rotation_quaternion).normalized()
+        elif mode == "AXIS_ANGLE":
+            angle, x, y, z = owner.rotation_axis_angle
+            q = Quaternion((x, y, z), angle)
+        else:
+            q = Euler(owner.rotation_euler, mode).to_quaternion()
+        out[name].append(list(q))
+with open(out_path, "w") as f:
+    json.dump({"quats": out, "blender": bpy.app.version_string}, f)

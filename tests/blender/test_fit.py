@@ -1,0 +1,261 @@
+"""quatcurve.fit in every Blender: the animator's keys stay (frames, values, count; quaternion signs may
+flip), generated keys are marked, and Blender's own evaluation — in a fresh process without the
+add-on, from the saved .blend — reproduces the method's native curve within the tolerance at every
+frame and 4 subframes. Objects and pose bones, every method, Euler orders with spins, quaternion
+signs, refits, bad input (nothing changed), fewer than two keys."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+import pytest
+
+from bake_helpers import add_empty, add_rig, angles_between, file_state, key, select_bones, select_objects
+from quatcurve_blender import fcurves, fit, native
+
+EVALUATE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sessions", "evaluate_rotations.py")
+IS_BINARY = bool(bpy.app.binary_path)
+METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+TOL = 0.05  # degrees
+
+
+def fresh_blender_quats(blend, targets, times, tmp_path):
+    """Blender's evaluation of the targets' rotations at `times`, in a fresh process from `blend`."""
+    request, out = tmp_path / "request.json", tmp_path / "out.json"
+    request.write_text(json.dumps({"targets": targets, "times": [float(t) for t in times]}))
+    if IS_BINARY:
+        cmd = [bpy.app.binary_path, "--background", "--factory-startup", str(blend), "--python", EVALUATE,
+               "--", str(request), str(out)]
+    else:
+        cmd = [sys.executable, EVALUATE, str(blend), str(request), str(out)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, PYTHONNOUSERSITE="1"))
+    assert proc.returncode == 0 and out.exists(), proc.stdout[-2000:] + proc.stderr[-2000:]
+    return {name: np.array(q) for name, q in json.loads(out.read_text())["quats"].items()}
+
+
+def check_times(first, last, subframes=4):
+    return np.arange(first * subframes, last * subframes + 1) / subframes
+
+
+def rotation_keys(owner):
+    """Per rotation channel of the owner's mode: (frames, values, types) of every key."""
+    prop, count = fcurves.rotation_property(owner.rotation_mode)
+    channels = fcurves.Channels.of(owner.id_data)
+    out = []
+    for curve in channels.find_all(owner.path_from_id(prop), count):
+        frames, values = fcurves.read_keys(curve)
+        out.append((frames, values, fcurves.read_key_types(curve)))
+    return out
+
+
+def animator_keys(owner):
+    return [(f[t != fit.KEY_TYPE_GENERATED], v[t != fit.KEY_TYPE_GENERATED]) for f, v, t in rotation_keys(owner)]
+
+
+def native_curve(method, frames, values, mode, **options):
+    qc = native.require()
+    if mode == "QUATERNION":
+        return qc.Curve(frames, values, method, **options)
+    return qc.Curve.from_euler(frames, values, order=mode, method=method, **options)
+
+
+QUAT_KEYS = [(1, (1, 0, 0, 0)), (5, (0.7071, 0.7071, 0, 0)), (6, (0.5, 0.5, 0.5, 0.5)),
+             (30, (-0.2, 0.1, 0.9, -0.38)), (31, (0.1, 0.2, 0.9, -0.37))]  # keys 3→4 in opposite hemispheres
+
+
+@pytest.fixture
+def quat_object(scene):
+    obj = add_empty("Quat", "QUATERNION")
+    key(obj, "rotation_quaternion", QUAT_KEYS, interpolation="BEZIER")
+    select_objects(obj)
+    return obj
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_fit_quaternion_object_plays_the_method_in_a_fresh_blender(quat_object, method, tmp_path):
+    before = animator_keys(quat_object)
+    assert bpy.ops.quatcurve.fit(method=method, tolerance=TOL) == {"FINISHED"}
+    after = animator_keys(quat_object)
+    frames = np.array([f for f, _ in QUAT_KEYS], float)
+    values = np.array([v for _, v in QUAT_KEYS], float)
+    signs = None
+    for c, ((f0, v0), (f1, v1)) in enumerate(zip(before, after)):
+        np.testing.assert_array_equal(f0, f1)  # same frames, same count
+        s = np.sign(v1 * v0 + (v0 == 0))  # values equal up to one sign per key
+        signs = s if signs is None else signs
+        np.testing.assert_array_equal(np.abs(v1), np.abs(v0))
+    generated = sum(int((t == fit.KEY_TYPE_GENERATED).sum()) for _, _, t in rotation_keys(quat_object))
+    blend = tmp_path / "fit.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    times = check_times(1, 31)
+    got = fresh_blender_quats(blend, [["Quat", None]], times, tmp_path)["Quat"]
+    want = native_curve(method, frames, values, "QUATERNION").sample(times)
+    err = np.degrees(angles_between(got, want))
+    assert err.max() <= TOL + 1e-4, "max %.5f° at frame %s (%d generated keys)" % (err.max(), times[err.argmax()], generated)
+
+
+def test_refit_replaces_generated_keys_and_keeps_the_animators(quat_object):
+    bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL)
+    first = rotation_keys(quat_object)
+    bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL)
+    second = rotation_keys(quat_object)
+    for (f0, v0, t0), (f1, v1, t1) in zip(first, second):
+        np.testing.assert_array_equal(f0, f1)
+        np.testing.assert_array_equal(v0, v1)
+        np.testing.assert_array_equal(t0, t1)
+    # another method replaces the generated keys, keeps the animator's
+    bpy.ops.quatcurve.fit(method="SLERP", tolerance=0.01)
+    assert [len(f) for f, _ in animator_keys(quat_object)] == [len(QUAT_KEYS)] * 4
+    record = fit.find_record(fcurves.active_action(quat_object), fit.targets.Target(quat_object))
+    assert record is not None and record.method == "SLERP" and record.tolerance == pytest.approx(0.01)
+
+
+def test_generated_keys_are_marked(quat_object):
+    bpy.ops.quatcurve.fit(method="SPLINE_C2", tolerance=0.01)
+    types = np.concatenate([t for _, _, t in rotation_keys(quat_object)])
+    assert (types == fit.KEY_TYPE_GENERATED).any()
+    expected = "GENERATED" if bpy.app.version >= (4, 2, 0) else "JITTER"
+    curve = rotation_keys(quat_object)
+    channels = fcurves.Channels.of(quat_object)
+    points = channels.find(quat_object.path_from_id("rotation_quaternion"), 0).keyframe_points
+    assert {p.type for p in points} <= {"KEYFRAME", expected}
+    assert all(p.handle_left_type == "FREE" and p.interpolation == "BEZIER" for p in points)
+    assert curve
+
+
+@pytest.mark.parametrize("order", ["XYZ", "ZXY"])
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD", "TCB"])
+def test_fit_euler_keeps_spins(scene, order, method, tmp_path):
+    obj = add_empty("Spin", order)
+    keys = [(1, (0, 0, 0)), (11, (30, 10, 200)), (25, (0, 40, 500)), (40, (10, 0, 360 + 45))]
+    key(obj, "rotation_euler", keys, interpolation="BEZIER", degrees=True)
+    select_objects(obj)
+    before = animator_keys(obj)
+    assert bpy.ops.quatcurve.fit(method=method, tolerance=TOL) == {"FINISHED"}
+    for (f0, v0), (f1, v1) in zip(before, animator_keys(obj)):
+        np.testing.assert_array_equal(f0, f1)
+        np.testing.assert_array_equal(v0, v1)  # Euler keys: exactly the animator's values
+    blend = tmp_path / "spin.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    times = check_times(1, 40)
+    got = fresh_blender_quats(blend, [["Spin", None]], times, tmp_path)["Spin"]
+    frames = np.array([k[0] for k in keys], float)
+    angles = np.radians([k[1] for k in keys])
+    want = native_curve(method, frames, angles, order).sample(times)
+    err = np.degrees(angles_between(got, want))
+    assert err.max() <= TOL + 1e-4, "max %.5f° at frame %s" % (err.max(), times[err.argmax()])
+
+
+def test_fit_pose_bones_with_mixed_modes(scene, tmp_path):
+    rig = add_rig("Rig", bones=("Q", "E", "Still"))
+    rig.pose.bones["E"].rotation_mode = "YZX"
+    key(rig.pose.bones["Q"], "rotation_quaternion", QUAT_KEYS[:4], interpolation="BEZIER")
+    key(rig.pose.bones["E"], "rotation_euler", [(1, (0, 0, 0)), (10, (90, 0, 0)), (20, (90, 90, 0))],
+        interpolation="BEZIER", degrees=True)
+    key(rig.pose.bones["Still"], "rotation_quaternion", [(3, (1, 0, 0, 0))])
+    select_bones(rig, ("Q", "E", "Still"))
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
+    lines = bpy.context.scene.quatcurve_fit.last_lines
+    assert "Rig/Still: left as it is (1 rotation key: nothing to fit)" in lines
+    assert "Rig/Q: QUATERNION, 4 animator keys" in lines and "Rig/E: YZX, 3 animator keys" in lines
+    blend = tmp_path / "rig.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    times = check_times(1, 30)
+    got = fresh_blender_quats(blend, [["Rig", "Q"], ["Rig", "E"]], times, tmp_path)
+    q_keys = np.array([v for _, v in QUAT_KEYS[:4]], float)
+    want_q = native_curve("SQUAD", np.array([1, 5, 6, 30.0]), q_keys, "QUATERNION").sample(times)
+    want_e = native_curve("SQUAD", np.array([1, 10, 20.0]), np.radians([(0, 0, 0), (90, 0, 0), (90, 90, 0)]),
+                          "YZX").sample(times)
+    assert np.degrees(angles_between(got["Rig/Q"], want_q)).max() <= TOL + 1e-4
+    assert np.degrees(angles_between(got["Rig/E"], want_e)).max() <= TOL + 1e-4
+
+
+def test_channels_keyed_separately_take_the_union_of_frames(scene):
+    obj = add_empty("Sparse", "XYZ")
+    obj.rotation_euler = (0, 0, 0)
+    for i in range(3):
+        obj.keyframe_insert("rotation_euler", index=i, frame=1)
+    obj.rotation_euler = (math.radians(40), 0, 0)
+    obj.keyframe_insert("rotation_euler", index=0, frame=10)  # only X at 10
+    obj.rotation_euler = (math.radians(40), 0, math.radians(80))
+    obj.keyframe_insert("rotation_euler", index=2, frame=20)  # only Z at 20
+    select_objects(obj)
+    assert bpy.ops.quatcurve.fit(method="SLERP", tolerance=TOL) == {"FINISHED"}
+    for frames, _ in animator_keys(obj):
+        np.testing.assert_array_equal(frames, [1, 10, 20])
+
+
+@pytest.mark.parametrize("case", ["nan", "tolerance", "driver", "duplicate", "axis_angle", "modifier"])
+def test_bad_input_is_refused_and_changes_nothing(scene, case):
+    obj = add_empty("Bad", "QUATERNION")
+    key(obj, "rotation_quaternion", QUAT_KEYS[:3], interpolation="BEZIER")
+    select_objects(obj)
+    kwargs = {"method": "SQUAD", "tolerance": TOL}
+    curve = fcurves.Channels.of(obj).find(obj.path_from_id("rotation_quaternion"), 1)
+    expect = ""
+    if case == "nan":
+        curve.keyframe_points[1].co[1] = float("nan")
+        expect = r"Bad: rotation_quaternion\[1\] is nan at frame 5"
+    elif case == "tolerance":
+        kwargs["tolerance"] = 0.0
+        expect = "tolerance"
+    elif case == "driver":
+        obj.driver_add("rotation_quaternion", 2)
+        expect = r"rotation_quaternion\[2\] is driven by a driver"
+    elif case == "duplicate":
+        curve.keyframe_points.add(1)
+        curve.keyframe_points[-1].co = (5, 0.25)
+        expect = r"rotation_quaternion\[1\] has two different keys on frame 5"
+    elif case == "axis_angle":
+        obj.rotation_mode = "AXIS_ANGLE"
+        obj.keyframe_insert("rotation_axis_angle", frame=1)
+        obj.keyframe_insert("rotation_axis_angle", frame=9)
+        expect = "AXIS_ANGLE cannot be fitted yet"
+    elif case == "modifier":
+        curve.modifiers.new("NOISE")
+        expect = "F-curve modifiers"
+    state = file_state()
+    if case == "tolerance":  # the operator's property has a minimum above 0; the function refuses
+        for bad in (0.0, -1.0, float("nan")):
+            with pytest.raises(fit.FitError, match=r"tolerance .*: must be a finite angle above 0"):
+                fit.fit([fit.targets.Target(obj)], fit.FitSettings(tolerance=bad))
+    else:
+        with pytest.raises(RuntimeError, match=expect):
+            bpy.ops.quatcurve.fit(**kwargs)
+    assert file_state() == state
+    assert len(getattr(fcurves.active_action(obj), "quatcurve_fits", [])) == 0
+
+
+def quarter_frame_steps(owner, around):
+    """Blender's rotation steps (degrees) over the quarter frames before and after frame `around`."""
+    quats, scene = [], bpy.context.scene
+    for t in (around - 0.25, around, around + 0.25):
+        scene.frame_set(int(math.floor(t)), subframe=t - math.floor(t))
+        quats.append(tuple(owner.rotation_quaternion))
+    return np.degrees(angles_between(np.array(quats[:2]), np.array(quats[1:])))
+
+
+def test_unfit_and_set_ease(quat_object):
+    bpy.ops.quatcurve.fit(method="SLERP", tolerance=TOL)
+    plain = quarter_frame_steps(quat_object, 5.0)
+    # select the key at frame 5 on every channel, ease fully into and out of it
+    for curve in fcurves.Channels.of(quat_object).fcurves:
+        for p in curve.keyframe_points:
+            p.select_control_point = p.co[0] == 5
+    assert bpy.ops.quatcurve.set_ease(ease_in=1.0, ease_out=1.0) == {"FINISHED"}
+    action = fcurves.active_action(quat_object)
+    target = fit.targets.Target(quat_object)
+    e_in, e_out = fit.key_eases(action, target, np.array([1, 5, 6, 30, 31.0]))
+    np.testing.assert_array_equal(e_in, [0, 1, 0, 0, 0])
+    np.testing.assert_array_equal(e_out, [0, 1, 0, 0, 0])
+    # Blender now slows into and out of frame 5: a quarter frame moves u² instead of u of the segment
+    eased = quarter_frame_steps(quat_object, 5.0)
+    assert (eased < 0.3 * plain).all(), (eased, plain)
+    assert bpy.ops.quatcurve.unfit() == {"FINISHED"}
+    assert fit.find_record(action, target) is None
+    with pytest.raises(RuntimeError, match="not fitted"):
+        bpy.ops.quatcurve.set_ease(ease_in=0.5)
