@@ -347,13 +347,18 @@ def draw_view3d():
     gpu.state.blend_set("ALPHA")
     gpu.state.depth_test_set("NONE")
     try:
-        for source, points in sorted(found[2].items(), key=lambda kv: kv[0] != BLENDER):
+        # Tripods first, then the trails over them: Blender's wider, the method's on top, so both
+        # show where they coincide.
+        ordered = sorted(found[2].items(), key=lambda kv: kv[0] != BLENDER)
+        for source, points in ordered:
             kind = BLENDER if source == BLENDER else "METHOD"
-            _draw_lines(_polyline(points.tips), TRAIL_COLORS[kind], 3.0)
             for i in range(3):
                 tips = points.tripods[:, i]
                 segments = np.stack([np.broadcast_to(points.origin, tips.shape), tips], axis=1)
                 _draw_lines(segments, TRIPOD_COLORS[kind][i], 1.5)
+        for source, points in ordered:
+            kind = BLENDER if source == BLENDER else "METHOD"
+            _draw_lines(_polyline(points.tips), TRAIL_COLORS[kind], 5.0 if kind == BLENDER else 2.0)
     finally:
         gpu.state.blend_set("NONE")
 

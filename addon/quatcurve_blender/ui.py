@@ -113,8 +113,11 @@ def draw_compare_plot(layout, context, compare_settings, preview_scale=9.0):
     in the background; until then a placeholder) and the button that opens it in an Image Editor."""
     target = trails.active_target(context)
     name = target.name if target is not None else None
+    # The plot image compare made for this target (compare_ops keeps only the last run's table, but
+    # every compared target's image stays, named by compare.image_name).
     entry = next((t for t in compare_ops.last_table(compare_settings) if t["name"] == name), None)
-    image = bpy.data.images.get(entry["image"]) if entry and entry.get("image") else None
+    image_name = entry["image"] if entry and entry.get("image") else compare.image_name(name) if name else ""
+    image = bpy.data.images.get(image_name) if image_name else None
     if image is None:
         if name:
             layout.label(text="No plot of %s yet: Compare it" % name, icon="IMAGE_DATA")
@@ -174,6 +177,12 @@ def show_in_image_editor(context, window, image):
         area.type = "IMAGE_EDITOR"
     space = area.spaces.active
     space.image = image
+    region = next((r for r in area.regions if r.type == "WINDOW"), None)
+    try:  # the whole plot in view; a failure here leaves it shown as it is
+        with context.temp_override(window=window, screen=screen, area=area, region=region):
+            bpy.ops.image.view_all(fit_view=True)
+    except RuntimeError:
+        pass
     area.tag_redraw()
     return area
 
