@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import compare_ops, native, reduce_ops
+from . import compare, compare_ops, fit_ops, native, reduce_ops, trails
 
 
 def draw_status(layout):
@@ -108,6 +108,89 @@ def draw_compare_table(layout, settings, max_targets=4):
         box.label(text="… and %d more (see the report)" % (len(table) - max_targets))
 
 
+def draw_compare_plot(layout, context, compare_settings, preview_scale=9.0):
+    """The active target's comparison plot: a preview of its image (Blender renders image previews
+    in the background; until then a placeholder) and the button that opens it in an Image Editor."""
+    target = trails.active_target(context)
+    name = target.name if target is not None else None
+    # The plot image compare made for this target (compare_ops keeps only the last run's table, but
+    # every compared target's image stays, named by compare.image_name).
+    entry = next((t for t in compare_ops.last_table(compare_settings) if t["name"] == name), None)
+    image_name = entry["image"] if entry and entry.get("image") else compare.image_name(name) if name else ""
+    image = bpy.data.images.get(image_name) if image_name else None
+    if image is None:
+        if name:
+            layout.label(text="No plot of %s yet: Compare it" % name, icon="IMAGE_DATA")
+        return
+    box = layout.box()
+    box.label(text=name, icon="IMAGE_DATA")
+    preview = image.preview_ensure()
+    if preview is not None and preview.icon_id:
+        box.template_icon(icon_value=preview.icon_id, scale=preview_scale)
+    op = box.operator("quatcurve.show_compare_plot", text="Show in Image Editor", icon="WINDOW")
+    op.image_name = image.name
+
+
+class QUATCURVE_OT_show_compare_plot(bpy.types.Operator):
+    """Open a comparison plot in an Image Editor (the active target's by default)"""
+    bl_idname = "quatcurve.show_compare_plot"
+    bl_label = "Show Comparison Plot in Image Editor"
+    bl_options = {"REGISTER"}
+    image_name: bpy.props.StringProperty(name="Image", default="",
+                                         description="The plot image (empty: the active target's)")
+
+    def execute(self, context):
+        name = self.image_name
+        if not name:
+            target = trails.active_target(context)
+            name = compare.image_name(target.name) if target is not None else ""
+        image = bpy.data.images.get(name)
+        if image is None:
+            self.report({"WARNING"}, "No comparison plot %s: run Compare first" % (repr(name) if name else "(no active target)"))
+            return {"CANCELLED"}
+        window = context.window
+        if bpy.app.background or window is None:
+            self.report({"WARNING"}, "No window to show '%s' in (background mode); it is in bpy.data.images" % name)
+            return {"CANCELLED"}
+        area = show_in_image_editor(context, window, image)
+        if area is None:
+            self.report({"WARNING"}, "No area could be turned into an Image Editor for '%s'" % name)
+            return {"CANCELLED"}
+        self.report({"INFO"}, "Showing '%s'" % name)
+        return {"FINISHED"}
+
+
+def show_in_image_editor(context, window, image):
+    """The window's Image Editor showing `image`: an existing one, else the operator's area (or the
+    largest one) split in two, its new half made an Image Editor. Returns the area (None if none)."""
+    screen = window.screen
+    area = next((a for a in screen.areas if a.type == "IMAGE_EDITOR"), None)
+    if area is None:
+        source = context.area if context.area is not None and context.area.type != "EMPTY" else \
+            max(screen.areas, key=lambda a: a.width * a.height)
+        before = set(a.as_pointer() for a in screen.areas)
+        with context.temp_override(window=window, screen=screen, area=source):
+            bpy.ops.screen.area_split(direction="VERTICAL", factor=0.5)
+        area = next((a for a in screen.areas if a.as_pointer() not in before), None)
+        if area is None:
+            return None
+        area.type = "IMAGE_EDITOR"
+    space = area.spaces.active
+    space.image = image
+    region = next((r for r in area.regions if r.type == "WINDOW"), None)
+    try:  # the whole plot in view; a failure here leaves it shown as it is
+        with context.temp_override(window=window, screen=screen, area=area, region=region):
+            bpy.ops.image.view_all(fit_view=True)
+    except RuntimeError:
+        pass
+    area.tag_redraw()
+    return area
+
+
+# ---- panels ---------------------------------------------------------------------------------------
+# A parent panel per editor and one small class per task below it; a task's panel is the same class
+# in every editor (see _task_panels). A new task adds one class to TASK_PANELS.
+
 class _SidebarPanel:
     bl_label = "QuatCurve"
     bl_region_type = "UI"
@@ -117,27 +200,9 @@ class _SidebarPanel:
         layout = self.layout
         if draw_status(layout):
             layout.label(text="quatcurve %s" % native.module.__version__)
-        settings = getattr(context.scene, "quatcurve", None)
-        if settings is None:
-            return
-        draw_bake_settings(layout, settings)
-        row = layout.row(align=True)
-        row.scale_y = 1.4
-        row.operator("quatcurve.bake", text="Bake", icon="ACTION")
-        if hasattr(bpy.types, "QUATCURVE_OT_compare"):
-            row.operator("quatcurve.compare", text="Compare", icon="GRAPH")
-        draw_last_result(layout, settings)
-        compare_settings = getattr(context.scene, "quatcurve_compare", None)
-        if compare_settings is not None:
-            box = layout.box()
-            box.label(text="Compare", icon="GRAPH")
-            draw_compare_settings(box, compare_settings)
-            draw_compare_table(layout, compare_settings)
-        reduce_settings = getattr(context.scene, "quatcurve_reduce", None)
-        if reduce_settings is not None:
-            box = layout.box()
-            box.label(text="Reduce Keys", icon="IPO_BEZIER")
-            reduce_ops.draw_settings(box, reduce_settings)
+        target = trails.active_target(context)
+        layout.label(text=target.name if target is not None else "No active object",
+                     icon="BONE_DATA" if target is not None and target.bone else "OBJECT_DATA")
 
 
 class QUATCURVE_PT_view3d(_SidebarPanel, bpy.types.Panel):
@@ -150,13 +215,152 @@ class QUATCURVE_PT_graph(_SidebarPanel, bpy.types.Panel):
     bl_space_type = "GRAPH_EDITOR"
 
 
-_classes = (QUATCURVE_PT_view3d, QUATCURVE_PT_graph)
+class BakePanel:
+    """Bake: settings, button, last bake."""
+    task = "bake"
+    bl_label = "Bake"
+    bl_options = set()
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "quatcurve", None) is not None
+
+    def draw(self, context):
+        settings = context.scene.quatcurve
+        layout = self.layout
+        draw_bake_settings(layout, settings)
+        row = layout.row()
+        row.scale_y = 1.4
+        row.operator("quatcurve.bake", text="Bake", icon="ACTION")
+        draw_last_result(layout, settings)
+
+
+class ReducePanel:
+    """Reduce Keys: settings, button, last reduction."""
+    task = "reduce"
+    bl_label = "Reduce Keys"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "quatcurve_reduce", None) is not None
+
+    def draw(self, context):
+        reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce)
+
+
+class FitPanel:
+    """Fit: the animator's own keys play a method — settings, Fit / Unmark, Live, ease, last fit."""
+    task = "fit"
+    bl_label = "Fit Rotation Keys"
+    bl_options = set()
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "quatcurve_fit", None) is not None
+
+    def draw(self, context):
+        fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context)
+
+
+class ComparePanel:
+    """Compare: settings, button, the active target's plot, the last table."""
+    task = "compare"
+    bl_label = "Compare"
+    bl_options = set()
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "quatcurve_compare", None) is not None
+
+    def draw(self, context):
+        settings = context.scene.quatcurve_compare
+        layout = self.layout
+        draw_compare_settings(layout, settings)
+        row = layout.row()
+        row.scale_y = 1.4
+        row.operator("quatcurve.compare", text="Compare", icon="GRAPH")
+        draw_compare_plot(layout, context, settings)
+        draw_compare_table(layout, settings)
+
+
+class TrailsPanel:
+    """Orientation Trails (3D Viewport): the toggle in the header, settings, what is drawn."""
+    task = "trails"
+    bl_label = "Orientation Trails"
+    bl_options = set()
+    spaces = ("VIEW_3D",)
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "quatcurve_trails", None) is not None
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.quatcurve_trails, "show", text="")
+
+    def draw(self, context):
+        settings = context.scene.quatcurve_trails
+        layout = self.layout
+        layout.active = settings.show
+        col = layout.column(align=True)
+        col.prop(settings, "show_method")
+        sub = col.row()
+        sub.active = settings.show_method
+        sub.prop(settings, "method", text="")
+        layout.row().prop(settings, "axis", expand=True)
+        col = layout.column(align=True)
+        col.prop(settings, "step")
+        col.prop(settings, "size")
+        col.prop(settings, "use_scene_range")
+        draw_trail_status(layout, context, settings)
+
+
+def draw_trail_status(layout, context, settings):
+    """What the trails show for the active target (or why nothing), and the colour legend."""
+    if not settings.show:
+        return
+    target = trails.active_target(context)
+    if target is None or not native.available():
+        return
+    method, frame_range = trails.settings_key(settings, context.scene)
+    trail = trails.CACHE.get(target, method, frame_range)
+    col = layout.column(align=True)
+    col.scale_y = 0.8
+    if trail.error:
+        wrapped_labels(col, trail.error, 44)
+        return
+    col.label(text="%s: frames %g..%g" % (target.name, trail.frames[0], trail.frames[-1]))
+    col.label(text="Magenta: Blender's evaluation")
+    if method:
+        col.label(text="Cyan: %s" % method)
+
+
+TASK_PANELS = (FitPanel, BakePanel, ReducePanel, ComparePanel, TrailsPanel)
+
+
+def _task_panels():
+    """One Panel class per task and editor, child of that editor's QuatCurve panel."""
+    out = []
+    for parent in (QUATCURVE_PT_view3d, QUATCURVE_PT_graph):
+        for task in TASK_PANELS:
+            if parent.bl_space_type not in getattr(task, "spaces", (parent.bl_space_type,)):
+                continue
+            idname = "%s_%s" % (parent.bl_idname, task.task)
+            out.append(type(idname, (task, bpy.types.Panel), {
+                "bl_idname": idname, "bl_space_type": parent.bl_space_type, "bl_region_type": "UI",
+                "bl_category": parent.bl_category, "bl_parent_id": parent.bl_idname,
+                "bl_options": set(task.bl_options)}))
+    return tuple(out)
+
+
+_classes = (QUATCURVE_OT_show_compare_plot, QUATCURVE_PT_view3d, QUATCURVE_PT_graph) + _task_panels()
 # Menus that list the bake (so F3 menu search finds it): Object/Pose > Animation, Graph Editor > Key.
 _MENUS = ("VIEW3D_MT_object_animation", "GRAPH_MT_key")
 
 
 def draw_bake_menu_item(self, context):
     self.layout.separator()
+    self.layout.operator("quatcurve.fit", icon="IPO_EASE_IN_OUT")
     self.layout.operator("quatcurve.bake", icon="ACTION")
     self.layout.operator("quatcurve.compare", icon="GRAPH")
     self.layout.operator("quatcurve.reduce", icon="IPO_BEZIER")

@@ -144,3 +144,86 @@ def test_sidebar_panels_draw_in_a_window(tmp_path):
         finally:
             bpy.data.images.remove(image)
     print("screenshots: %s" % ", ".join(verdict["screenshots"]))
+
+
+# ---- orientation trails and subpanels on the demo scene (sessions/trails_session.py) -----------------
+
+ROOT = os.path.dirname(ADDON_DIR)
+MOCAP = os.path.join(os.path.dirname(ROOT), "shared", "data", "mocap", "mocapbank.bvh")
+# Screenshots are kept for people to look at: QUATCURVE_SCREENSHOTS, else build/screenshots/.
+SCREENSHOTS = os.environ.get("QUATCURVE_SCREENSHOTS") or os.path.join(ROOT, "build", "screenshots")
+MAGENTA = lambda rgb: (rgb[..., 0] > 0.7) & (rgb[..., 2] > 0.7) & (rgb[..., 1] < 0.35)  # noqa: E731
+CYAN = lambda rgb: (rgb[..., 1] > 0.7) & (rgb[..., 2] > 0.7) & (rgb[..., 0] < 0.35)  # noqa: E731
+
+
+def load_rgb(path):
+    """(H, W, 3) floats of a PNG, rows bottom to top (window coordinates)."""
+    image = bpy.data.images.load(path)
+    try:
+        width, height = image.size
+        pixels = np.empty(width * height * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        return pixels.reshape(height, width, 4)[..., :3]
+    finally:
+        bpy.data.images.remove(image)
+
+
+def colour_near(rgb, xy, is_colour, radius=3):
+    """True when a pixel within `radius` of window position xy has the colour."""
+    x, y = int(round(xy[0])), int(round(xy[1]))
+    patch = rgb[max(0, y - radius):y + radius + 1, max(0, x - radius):x + radius + 1]
+    return bool(is_colour(patch).any())
+
+
+def test_trails_drawn_where_the_orientation_projects(tmp_path):
+    blender = debian_blender()
+    if blender is None:
+        pytest.skip("the window test runs in the Debian Blender 3.4.1 binary's pass (this is %s)"
+                    % (bpy.app.binary_path or "the bpy module"))
+    xvfb = shutil.which("xvfb-run")
+    if xvfb is None:
+        pytest.skip("xvfb-run is missing (Debian: apt-get install xvfb xauth): no window for the UI test")
+    env = dict(os.environ, PATH="/usr/local/bin:/usr/bin:/bin")
+    demo = tmp_path / "demo_scene.blend"
+    subprocess.run([blender, "--background", "--factory-startup", "--python",
+                    os.path.join(ROOT, "build_scripts", "demo_scene.py"), "--", str(demo)]
+                   + ([MOCAP] if os.path.exists(MOCAP) else []),
+                   check=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=240, env=env)
+    verdict_path = tmp_path / "trails.json"
+    proc = subprocess.run([xvfb, "-a", "-s", "-screen 0 1600x1200x24", blender, "--factory-startup",
+                           "--window-geometry", "0", "0", "1600", "1200", "--enable-event-simulate", str(demo),
+                           "--python", os.path.join(os.path.dirname(__file__), "sessions", "trails_session.py"),
+                           "--", str(verdict_path), SCREENSHOTS],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300, env=env)
+    log = proc.stdout
+    assert verdict_path.exists(), "the session wrote no verdict (exit %s):\n%s" % (proc.returncode, log[-4000:])
+    verdict = json.loads(verdict_path.read_text())
+    assert verdict["ok"], "the session failed:\n%s\n%s" % ("\n".join(verdict["errors"]), log[-3000:])
+    assert "Traceback" not in log, log[-3000:]
+    assert verdict["draw_handlers"] == 1 and verdict["drawn"].get("trails")
+    for panel in ("bake", "compare", "trails"):
+        assert verdict["drawn"].get("QUATCURVE_PT_view3d_" + panel), verdict["drawn"]
+    assert verdict["drawn"].get("QUATCURVE_PT_graph_compare"), verdict["drawn"]
+    assert all(v == ["FINISHED"] for v in verdict["compare"].values()), verdict["compare"]
+    assert verdict["show_plot"] == ["FINISHED"] and verdict["image_editor"] == "QuatCurve compare: FixedAngle"
+
+    # FixedAngle: Blender's Euler path (magenta) bows away from SLERP's great circle (cyan). Where the
+    # two tips are apart, each colour sits on its own projected tip, and nothing magenta is there
+    # with the trails off.
+    shot, off = (load_rgb(verdict["screenshots"][n]) for n in ("trails_FixedAngle", "trails_FixedAngle_off"))
+    tips = verdict["points"]["trails_FixedAngle"]
+    blender_tips, slerp_tips = tips["BLENDER"]["tips"], tips["SLERP"]["tips"]
+    apart = [i for i, (b, s) in enumerate(zip(blender_tips, slerp_tips))
+             if b is not None and s is not None and np.hypot(b[0] - s[0], b[1] - s[1]) > 10]
+    assert len(apart) >= 5, "the two trails should part in the middle of the range: %s" % tips
+    for i in apart:
+        assert colour_near(shot, blender_tips[i], MAGENTA), "no magenta at frame %s's tip %s" % (i + 1, blender_tips[i])
+        assert colour_near(shot, slerp_tips[i], CYAN), "no cyan at frame %s's tip %s" % (i + 1, slerp_tips[i])
+        assert not colour_near(off, blender_tips[i], MAGENTA), "magenta with the trails off at %s" % blender_tips[i]
+    # Spin and the Mocap bone: SLERP (on top) runs where Blender's trail runs; cyan on nearly every tip.
+    for name in [n for n in ("trails_Spin", "trails_Mocap") if n in verdict["points"]]:
+        shot = load_rgb(verdict["screenshots"][name])
+        seen = [p for p in verdict["points"][name]["SLERP"]["tips"] if p is not None]
+        found = sum(colour_near(shot, p, CYAN) for p in seen)
+        assert len(seen) >= 10 and found >= 0.9 * len(seen), "%s: cyan at %d of %d tips" % (name, found, len(seen))
+    print("screenshots in %s: %s" % (SCREENSHOTS, ", ".join(sorted(verdict["screenshots"]))))
