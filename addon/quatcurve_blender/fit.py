@@ -290,6 +290,20 @@ class FitPlan:
     samples: int
     ease_in: np.ndarray
     ease_out: np.ndarray
+    notes: list = field(default_factory=list)
+
+
+def path_notes(name, curve, frames):
+    """One note per key segment whose path breaks the path rule (longer than 1.5 × its keyed arc +
+    10°): the target, the frames and the ratio. Clamped methods never do; SPLINE_C2 may."""
+    qc = native.require()
+    notes = []
+    for k, (arc, length) in enumerate(curve.segment_paths()):
+        if length > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK:
+            notes.append("%s: frames %s..%s turn %.1f° for a keyed arc of %.1f° (%.1f×): beyond 1.5 × arc + 10°"
+                         % (name, targets.num(frames[k]), targets.num(frames[k + 1]), math.degrees(length),
+                            math.degrees(arc), length / arc if arc > 0 else float("inf")))
+    return notes
 
 
 def curve_of(keys, settings, ease_in=None, ease_out=None):
@@ -359,7 +373,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out)
+                   ease_in, ease_out, path_notes(keys.target.name, curve, keys.frames))
 
 
 def write_plan(plan):
@@ -420,6 +434,7 @@ class TargetResult:
     generated_keys: int
     max_error_deg: float
     skipped: str = ""
+    notes: list = field(default_factory=list)
 
     def line(self, tolerance):
         if self.skipped:
@@ -447,7 +462,7 @@ class FitResult:
             self.seconds)
 
     def lines(self):
-        return [t.line(self.settings.tolerance) for t in self.targets]
+        return [t.line(self.settings.tolerance) for t in self.targets] + [n for t in self.targets for n in t.notes]
 
 
 def fit(found, settings, only_changed=False):
@@ -478,7 +493,7 @@ def fit(found, settings, only_changed=False):
             continue
         plans.append(plan)
         result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), plan.generated_count,
-                                           math.degrees(plan.max_error)))
+                                           math.degrees(plan.max_error), notes=plan.notes))
     for plan in plans:
         write_plan(plan)
     result.seconds = time.perf_counter() - start

@@ -259,3 +259,16 @@ def test_unfit_and_set_ease(quat_object):
     assert fit.find_record(action, target) is None
     with pytest.raises(RuntimeError, match="not fitted"):
         bpy.ops.quatcurve.set_ease(ease_in=0.5)
+
+
+def test_path_rule_breaks_are_reported(scene):
+    # a quick move then a long ease: SPLINE_C2 (exact C2, never clamped) overshoots and is named
+    obj = add_empty("Ease", "QUATERNION")
+    key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (2, (0.766, 0.643, 0, 0)), (102, (0.74, 0.64, 0.05, 0.0))],
+        interpolation="BEZIER")
+    select_objects(obj)
+    assert bpy.ops.quatcurve.fit(method="SPLINE_C2", tolerance=0.1) == {"FINISHED"}
+    lines = bpy.context.scene.quatcurve_fit.last_lines
+    assert "Ease: frames 2..102 turn" in lines and "beyond 1.5 × arc + 10°" in lines
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=0.1) == {"FINISHED"}
+    assert "beyond 1.5" not in bpy.context.scene.quatcurve_fit.last_lines
