@@ -63,42 +63,43 @@ inline Vec3 rot(const Quat& q, const Vec3& v) {
 }
 inline Vec3 rot_inv(const Quat& q, const Vec3& v) { return rot(qconj(q), v); }
 
+// Taylor coefficients: cos x = Σ (−1)^n x^2n/(2n)!, sin x/x = Σ (−1)^n x^2n/(2n+1)!, n ≤ 11.
+inline constexpr double kTaylorCos[12] = {
+    1.0, -1.0 / 2, 1.0 / 24, -1.0 / 720, 1.0 / 40320, -1.0 / 3628800, 1.0 / 479001600,
+    -1.0 / 87178291200.0, 1.0 / 20922789888000.0, -1.0 / 6402373705728000.0,
+    1.0 / 2432902008176640000.0, -1.0 / 1124000727777607680000.0};
+inline constexpr double kTaylorSinc[12] = {
+    1.0, -1.0 / 6, 1.0 / 120, -1.0 / 5040, 1.0 / 362880, -1.0 / 39916800,
+    1.0 / 6227020800.0, -1.0 / 1307674368000.0, 1.0 / 355687428096000.0,
+    -1.0 / 121645100408832000.0, 1.0 / 51090942171709440000.0,
+    -1.0 / 25852016738884976640000.0};
+
+// cos x and sin x/x from x² by the first N terms of their series (Horner).
+template <int N>
+inline void taylor_cos_sinc(double x2, double& cq, double& sq) {
+    cq = kTaylorCos[N - 1];
+    sq = kTaylorSinc[N - 1];
+#pragma GCC unroll 12
+    for (int n = N - 2; n >= 0; --n) {
+        cq = cq * x2 + kTaylorCos[n];
+        sq = sq * x2 + kTaylorSinc[n];
+    }
+}
+
 // c = cos(θ/2) and k = sin(θ/2)/θ from θ² (so exp(ρ/2) = (c, k·ρ) with θ = |ρ|), without sqrt.
 // For θ ≤ 2π: Taylor series of the quarter angle x = θ/4 (|x| ≤ π/2, truncation below 1e-19;
-// eight terms instead of twelve for θ ≤ 1.6), then the double-angle step c = cos²x − sin²x, k = 2·cos x·sin x/θ. Beyond 2π: libm.
+// eight terms instead of twelve for θ ≤ 1.6, x² ≤ 0.16, truncation below 3e-20 — the common case of
+// samples within a segment), then the double-angle step c = cos²x − sin²x, k = 2·cos x·sin x/θ.
+// Beyond 2π: libm.
 inline void exp_coeffs(double theta2, double& c, double& k) {
     QUATCURVE_EXPECTS(theta2 >= 0.0 && theta2 < 1e300, "exp_coeffs: θ² finite and non-negative");
     if (theta2 <= kTwoPi * kTwoPi) {
-        // Taylor coefficients: cos x = Σ (−1)^n x^2n/(2n)!, sin x/x = Σ (−1)^n x^2n/(2n+1)!, n ≤ 11.
-        static constexpr double kCos[12] = {
-            1.0, -1.0 / 2, 1.0 / 24, -1.0 / 720, 1.0 / 40320, -1.0 / 3628800, 1.0 / 479001600,
-            -1.0 / 87178291200.0, 1.0 / 20922789888000.0, -1.0 / 6402373705728000.0,
-            1.0 / 2432902008176640000.0, -1.0 / 1124000727777607680000.0};
-        static constexpr double kSinc[12] = {
-            1.0, -1.0 / 6, 1.0 / 120, -1.0 / 5040, 1.0 / 362880, -1.0 / 39916800,
-            1.0 / 6227020800.0, -1.0 / 1307674368000.0, 1.0 / 355687428096000.0,
-            -1.0 / 121645100408832000.0, 1.0 / 51090942171709440000.0,
-            -1.0 / 25852016738884976640000.0};
         const double x2 = theta2 * (1.0 / 16.0);
         double cq, sq;
         if (theta2 <= 2.56) {
-            // θ ≤ 1.6 (x² ≤ 0.16), the common case of samples within a segment: eight terms leave a
-            // truncation below 3e-20, as the full series does over its range.
-            cq = kCos[7];
-            sq = kSinc[7];
-#pragma GCC unroll 7
-            for (int n = 6; n >= 0; --n) {
-                cq = cq * x2 + kCos[n];
-                sq = sq * x2 + kSinc[n];
-            }
+            taylor_cos_sinc<8>(x2, cq, sq);
         } else {
-            cq = kCos[11];
-            sq = kSinc[11];
-#pragma GCC unroll 11
-            for (int n = 10; n >= 0; --n) {
-                cq = cq * x2 + kCos[n];
-                sq = sq * x2 + kSinc[n];
-            }
+            taylor_cos_sinc<12>(x2, cq, sq);
         }
         sq *= 0.25;  // sin x / θ, since θ = 4x
         c = cq * cq - theta2 * sq * sq;
