@@ -90,7 +90,12 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     };
 
     ReducedKeys best = run(true);
-    if (!synchronized && p.n > 2 && tolerance > 0.0) {
+    // Per channel can only drop keys the synchronized result inserted: none inserted (the forced
+    // keys alone meet the bound, the common case of a fit through an animator's keys), no second run.
+    std::size_t forced = 0;
+    for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
+    const bool only_forced = best.key_count() == forced * static_cast<std::size_t>(C);
+    if (!synchronized && p.n > 2 && tolerance > 0.0 && !only_forced) {
         ReducedKeys per_channel = run(false);
         // Fewer keys wins, unless it misses a bound the synchronized result meets (a segment that
         // no candidate sample can split: forced keys closer than min_gap to the failing sample).
