@@ -371,7 +371,7 @@ def compare_target(target, settings):
             curve = keys.curve(method, **settings.curve_options(method))
             paths[method] = ("engine", np.asarray(curve.sample(frames), dtype=np.float64), None, None)
             segment_paths[method] = np.asarray(curve.segment_paths(), dtype=np.float64).reshape(-1, 2)
-            breaks += path_rule.breaks(curve, keys.frames, target.name, method)
+            breaks += path_rule.breaks(curve, keys.frames, target.name, method, segment_paths[method])
         except ValueError as error:
             raise CompareError("%s: %s: %s" % (target.name, method, error)) from None
     reference = paths[REFERENCE_METHOD][1]
@@ -564,11 +564,10 @@ def plot_path(report_path, target_name):
     return "%s_%s.png" % (stem, re.sub(r"[^A-Za-z0-9_.-]+", "_", target_name))
 
 
-def write_report(report, report_path):
-    """Writes the JSON report at `report_path` and each target's plot as a PNG beside it (see
-    plot_path), saved by Blender from the target's image datablock (plot_image makes it when
-    missing); returns (report_path, [png paths]). The JSON names each target's PNG (file name only,
-    relative to the report's folder); its schema is report.schema.json beside this file."""
+def save_plots(report, report_path):
+    """Saves each target's plot as a PNG beside `report_path` (see plot_path): Blender writes its image
+    datablock (plot_image; `filepath_raw`, `file_format = 'PNG'`, `image.save()`) and then packs it
+    from that file, so it is saved with the .blend too. Returns the PNG paths."""
     folder = os.path.dirname(os.path.abspath(report_path))
     os.makedirs(folder, exist_ok=True)
     pngs = []
@@ -581,8 +580,21 @@ def write_report(report, report_path):
             image.save()
         except RuntimeError as error:
             raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, str(error).strip())) from None
+        image.pack()
         t.plot_file = os.path.basename(path)
         pngs.append(path)
+    return pngs
+
+
+def write_report(report, report_path):
+    """Writes the JSON report at `report_path` and, unless save_plots did already, each target's plot as
+    a PNG beside it; returns (report_path, [png paths]). The JSON names each target's PNG (file name
+    only, relative to the report's folder); its schema is report.schema.json beside this file."""
+    if all(t.plot_file and t.image_name for t in report.targets):
+        folder = os.path.dirname(os.path.abspath(report_path))
+        pngs = [os.path.join(folder, t.plot_file) for t in report.targets]
+    else:
+        pngs = save_plots(report, report_path)
     data = report.to_json()
     tmp = report_path + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:
@@ -598,9 +610,9 @@ def image_name(target_name):
 
 def plot_image(comparison):
     """The image datablock holding a target's plot (Image Editor): the one already made for this
-    comparison, else a new one named image_name(target), replacing an older one of that name.
-    Blender's pixels are floats 0..1, rows bottom to top. Packed and given a fake user, so it is saved
-    with the .blend (an image nothing uses is dropped on save)."""
+    comparison, else a new one named image_name(target), replacing an older one of that name, with a
+    fake user. Blender's pixels are floats 0..1, rows bottom to top. Not packed yet: make_images or
+    save_plots packs it (an unpacked generated image would lose its pixels in a saved .blend)."""
     image = bpy.data.images.get(comparison.image_name) if comparison.image_name else None
     if image is not None:
         return image
@@ -611,18 +623,22 @@ def plot_image(comparison):
     pixels = comparison.render_plot()
     image = bpy.data.images.new(name, pixels.shape[1], pixels.shape[0], alpha=True)
     image.pixels.foreach_set((pixels[::-1].astype(np.float32) * np.float32(1.0 / 255.0)).ravel())
-    image.pack()
     image.use_fake_user = True
     comparison.image_name = image.name
     return image
 
 
 def make_images(report):
-    """One image datablock per target holding its plot (plot_image), replacing older ones of the same
-    name. Returns the images."""
+    """One packed image datablock per target holding its plot (plot_image), replacing older ones of the
+    same name; for a comparison without a report path (save_plots packs the others from their PNG).
+    Returns the images."""
+    images = []
     for t in report.targets:
-        t.image_name = None
-    return [plot_image(t) for t in report.targets]
+        t.image_name, t.plot_file = None, None
+        image = plot_image(t)
+        image.pack()
+        images.append(image)
+    return images
 
 
 def last_plot_image(target_name):

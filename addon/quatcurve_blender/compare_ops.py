@@ -104,11 +104,12 @@ class QUATCURVE_OT_compare(bpy.types.Operator):
             native.require()
             settings = self._settings(context)
             report = compare.compare(compare.gather_targets(context), settings)
-            compare.make_images(report)
             written = ""
-            if self.report_path:
+            if self.report_path:  # the images are saved as PNG, then packed from those files
                 path, pngs = compare.write_report(report, bpy.path.abspath(self.report_path))
                 written = "; wrote %s and %d plot%s" % (path, len(pngs), "" if len(pngs) == 1 else "s")
+            else:
+                compare.make_images(report)
         except (compare.CompareError, RuntimeError, OSError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

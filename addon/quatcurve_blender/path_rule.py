@@ -45,13 +45,15 @@ class PathRuleBreak:
                 "ratio": self.ratio if math.isfinite(self.ratio) else None}
 
 
-def breaks(curve, key_frames, target, method):
+def breaks(curve, key_frames, target, method, segment_paths=None):
     """[PathRuleBreak] of `curve` (a quatcurve.Curve through keys at key_frames), one per key segment
-    whose sampled path is longer than the rule allows; [] when it obeys it everywhere."""
+    whose sampled path is longer than the rule allows; [] when it obeys it everywhere. segment_paths:
+    the curve's Curve.segment_paths() when the caller already has them."""
     qc = native.require()
     found = []
-    for i, (arc, path) in enumerate(curve.segment_paths()):
-        if path > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK:
-            found.append(PathRuleBreak(target, method, float(key_frames[i]), float(key_frames[i + 1]),
-                                       float(arc), float(path)))
+    paths = curve.segment_paths() if segment_paths is None else segment_paths
+    for i in (i for i, (arc, path) in enumerate(paths) if path > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK):
+        arc, path = paths[i]
+        found.append(PathRuleBreak(target, method, float(key_frames[i]), float(key_frames[i + 1]),
+                                   float(arc), float(path)))
     return found

@@ -136,6 +136,13 @@ class Canvas:
         mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
         self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
 
+    def blend_pixels(self, rows, cols, coverage, colour):
+        """Mixes `colour` over the pixels (rows[i], cols[i]) by coverage[i] (0..1); each pixel once."""
+        keep = coverage > 0
+        rows, cols, a = rows[keep], cols[keep], coverage[keep, None].astype(np.float32)
+        mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
+        self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
+
     def text(self, x, y, text, colour=INK, scale=1, align="left", valign="top", rotate=False):
         """Draws `text` with its anchor at (x, y): align left/center/right, valign top/middle/bottom
         (of the unrotated text box). rotate=True turns it 90° counter-clockwise (reads bottom to top);
@@ -195,16 +202,14 @@ class Canvas:
         bottom = (rows[1] if rows else self.height)
         lo = np.maximum(span_lo - width / 2.0, top)
         hi = np.minimum(span_hi + width / 2.0, bottom)
-        r0 = max(int(np.floor(lo.min())), 0)
-        r1 = min(int(np.ceil(hi.max())), self.height)
-        if r0 >= r1:
-            return
-        r = np.arange(r0, r1, dtype=float)[:, None]
-        coverage = np.clip(np.minimum(r + 1.0, hi) - np.maximum(r, lo), 0.0, 1.0)  # (rows, cols)
-        c0, c1 = int(cols[0]), int(cols[-1]) + 1
-        full = np.zeros((r1 - r0, c1 - c0))
-        full[:, cols - c0] = coverage
-        self.blend(c0, r0, full, colour)
+        # The pixels of each column's span only (a sparse list), each covered by its overlap with it.
+        first_row = np.maximum(np.floor(lo), 0).astype(np.int64)
+        end_row = np.minimum(np.ceil(hi), self.height).astype(np.int64)
+        count = np.maximum(end_row - first_row, 0)
+        which = np.repeat(np.arange(len(cols)), count)
+        r = first_row[which] + (np.arange(which.size) - np.repeat(np.cumsum(count) - count, count))
+        coverage = np.clip(np.minimum(r + 1.0, hi[which]) - np.maximum(r, lo[which]), 0.0, 1.0)
+        self.blend_pixels(r, cols[which], coverage, colour)
 
 
 # ---- axes -----------------------------------------------------------------------------------------------
