@@ -31,20 +31,26 @@ def object_table(target):
     for name, s in target["sources"].items():
         lines.append("  %-20s %9.2f° %12s %11.1f°" % (name, s["max_deviation_deg"], ratio_text(s["speed_ratio"]),
                                                       s["path_length_deg"]))
+    for b in target["path_rule"]:
+        lines.append("  path rule: %s frames %g-%g: path %.1f° vs keyed arc %.1f° (%s)" % (
+            b["method"], b["frame_start"], b["frame_end"], b["path_deg"], b["arc_deg"],
+            "a hold" if b["ratio"] is None else "%.2f×" % b["ratio"]))
     lines.append("  -> " + target["recommendation"]["text"])
     return lines
 
 
 def bone_table(targets):
-    """One row per bone: Blender's own curves and the recommended method against SLERP."""
-    lines = ["  %-22s %12s %13s  %-12s %9s %10s  %s" % (
+    """One row per bone: Blender's own curves and the recommended method against SLERP ("no
+    difference": the methods agree within the sampling error; its figures are then SLERP's)."""
+    lines = ["  %-22s %12s %13s  %-13s %9s %10s  %s" % (
         "bone", "Blender dev", "Blender ratio", "recommended", "its dev", "its ratio", "Euler")]
     for t in targets:
         blender = t["sources"]["BLENDER"]
         rec = t["recommendation"]
         best = t["sources"][rec["method"]]
-        lines.append("  %-22s %11.3f° %13s  %-12s %8.3f° %10s  %s" % (
-            t["name"], blender["max_deviation_deg"], ratio_text(blender["speed_ratio"]), rec["method"],
+        lines.append("  %-22s %11.3f° %13s  %-13s %8.3f° %10s  %s" % (
+            t["name"], blender["max_deviation_deg"], ratio_text(blender["speed_ratio"]),
+            "no difference" if rec["no_difference"] else rec["method"],
             best["max_deviation_deg"], ratio_text(best["speed_ratio"]), rec["euler_order"]))
     return lines
 

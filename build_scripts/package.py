@@ -29,7 +29,7 @@ ADDON = os.path.join(ROOT, "addon", "quatcurve_blender")
 def addon_sources():
     """The add-on's tracked source files (never build outputs or caches)."""
     for name in sorted(os.listdir(ADDON)):
-        if name.endswith(".py") or name == "blender_manifest.toml":
+        if name.endswith(".py") or name in ("blender_manifest.toml", "report.schema.json"):
             yield name
 
 

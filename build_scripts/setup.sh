@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
 # Installs what a fresh Debian 12 machine lacks to build and test quatcurve. Idempotent and quiet:
 # a second run changes nothing and takes a few seconds.
-#   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest for its Python), Xvfb
-#   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11); `import quatcurve` works in it
+#   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
+#      Python), Xvfb
+#   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
 #      once the module is built (a .pth file points at build/python)
 #   3. one venv per pinned bpy version in $VENV_CACHE
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 APT_PACKAGES="build-essential cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
-python3-pytest blender xvfb xauth"
+python3-pytest python3-jsonschema blender xvfb xauth"
 
 missing=()
 for pkg in $APT_PACKAGES; do
@@ -46,5 +47,5 @@ site="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["pu
 echo "$BUILD_DIR/python" > "$site/quatcurve-build.pth"
 
 for v in $BPY_VERSIONS; do
-  pip_env "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3"
+  pip_env "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3" "jsonschema==4.26.0"
 done

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fcurves, native, targets, write
+from . import fcurves, native, path_rule, targets, write
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
 
@@ -184,8 +184,10 @@ class BakePlan:
         try:
             curve = source.curve(settings.method, **settings.curve_options())
             quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
+            broken = path_rule.breaks(curve, source.frames, item.target.name, settings.method)
         except ValueError as error:
             raise BakeError("%s: %s" % (item.target.name, error)) from error
+        item.notes += ["path rule: " + b.text() for b in broken]
         reference = None
         if source.mode == item.output_mode and source.is_euler:
             # The keyed angles, linear between keys: a cheap guide to the branch, not output math.

@@ -13,7 +13,7 @@ succeeded. IN.blend is only written with --in-place; the output is saved to a te
 same folder and renamed over the target, so it is either complete or untouched.
 
 This module parses arguments and selects targets by name or glob pattern; the work is done by the
-functions the operators call (bake.bake, compare.compare / make_images / write_report).
+functions the operators call (bake.bake, compare.compare / save_plots / write_report).
 
 When Blender runs this file as a script (`--python cli.py`) it is not inside its package: the
 add-on's parent folder is put on sys.path and the package is imported (and registered) by name.
@@ -362,7 +362,6 @@ def bake_and_save(args, settings, comparing, source, output, report_file):
     report = None
     if comparing is not None:
         report = compare.compare(chosen, comparing)
-        compare.make_images(report)
     result = bake.bake(chosen, settings)
     scene.frame_set(scene.frame_current)  # re-evaluate with the baked curves, as the operator does
     if hasattr(scene, "quatcurve"):
@@ -376,6 +375,8 @@ def bake_and_save(args, settings, comparing, source, output, report_file):
     for line in result.lines():
         print("  " + line)
     print("total: " + result.summary())
+    if report is not None:  # the plots as PNG files, then packed from them into the .blend saved next
+        compare.save_plots(report, report_file)
     save_atomically(output)
     print("saved %s" % output)
     if report is not None:

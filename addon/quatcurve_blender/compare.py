@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, native, plot, targets
+from . import fcurves, native, path_rule, plot, targets
 from .targets import TargetError
 
 ENGINE_METHODS = ("SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2", "NLERP")
@@ -55,9 +55,17 @@ MAX_SAMPLES = 2_000_000  # per target; refused before sampling
 REPORT_FORMAT = "quatcurve-compare"
 REPORT_VERSION = 1
 
-# A method counts as smooth through the keys (for the recommendation) when its largest angular
-# velocity jump at a key is below this fraction of the path's mean angular speed.
+# The recommendation (see recommend and README "Compare"):
+# smooth at the keys: the largest angular velocity jump at a key is at most this fraction of the mean
+# keyed speed (the keyed arcs over the keyed frames);
 SMOOTH_JUMP_FRACTION = 0.1
+# steady: in every moving key segment the speed ratio is at most this × the ratio the keys ask for;
+STEADY_EXCESS = 1.5
+# passes the keys / holds: within this many degrees of each key; a segment with a keyed arc this
+# small is a hold.
+KEY_TOLERANCE_DEG = 0.01
+# the keys reverse at a key when the motion turns back by more than this there (a stop is expected).
+REVERSAL_DEG = 150.0
 
 
 def euler_source(order):
@@ -144,6 +152,7 @@ class SourceResult:
     metrics: dict                     # quatcurve.path_metrics (radians, frames)
     euler_order: str = None           # for Euler sources
     gimbal: tuple = None              # (closest distance in radians, frames) for Euler sources
+    segment_paths: np.ndarray = None  # engine methods: (K-1, 2) keyed arc, sampled path (Curve.segment_paths)
 
     def to_json(self):
         m = self.metrics
@@ -179,6 +188,8 @@ class TargetComparison:
     sources: dict                     # source name → SourceResult, in display order
     euler_orders: dict = field(default_factory=dict)  # order → (closest gimbal distance rad, frames)
     recommendation: dict = field(default_factory=dict)
+    path_rule: list = field(default_factory=list)  # path_rule.PathRuleBreak of the engine methods
+    keyed_speed_ratios: np.ndarray = None  # per key segment (keyed_speed_ratios)
     plot_file: str = None             # set by write_report
     image_name: str = None            # set by make_images
     _pixels: np.ndarray = None
@@ -223,6 +234,8 @@ class TargetComparison:
             "sources": {name: s.to_json() for name, s in self.sources.items()},
             "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": [_num(f) for f in frames]}
                              for order, (d, frames) in self.euler_orders.items()},
+            "keyed_speed_ratios": [_num(r) for r in self.keyed_speed_ratios],
+            "path_rule": [b.to_json() for b in self.path_rule],
             "recommendation": dict(self.recommendation),
             "plot": self.plot_file,
         }
@@ -253,6 +266,8 @@ class CompareReport:
             lines.append("  %-22s %12s %12s %12s" % ("source", "max dev", "speed ratio", "path length"))
             for row in t.table_rows():
                 lines.append("  %-22s %12s %12s %12s" % row)
+            for b in t.path_rule:
+                lines.append("  path rule: " + b.text())
             lines.append("  -> " + t.recommendation.get("text", ""))
         return lines
 
@@ -350,10 +365,13 @@ def compare_target(target, settings):
     paths[SOURCE_BLENDER_QUATERNION] = ("blender_quaternion", quats, None, None)
 
     methods = [REFERENCE_METHOD] + [m for m in settings.methods if m != REFERENCE_METHOD]
+    segment_paths, breaks = {}, []
     for method in methods:
         try:
             curve = keys.curve(method, **settings.curve_options(method))
             paths[method] = ("engine", np.asarray(curve.sample(frames), dtype=np.float64), None, None)
+            segment_paths[method] = np.asarray(curve.segment_paths(), dtype=np.float64).reshape(-1, 2)
+            breaks += path_rule.breaks(curve, keys.frames, target.name, method, segment_paths[method])
         except ValueError as error:
             raise CompareError("%s: %s: %s" % (target.name, method, error)) from None
     reference = paths[REFERENCE_METHOD][1]
@@ -362,14 +380,15 @@ def compare_target(target, settings):
     sources = {}
     for name, (kind, quats, order, angles) in paths.items():
         metrics = qc.path_metrics(frames, quats, keys.frames, reference, key_quats=key_quats)
-        result = SourceResult(name, kind, quats, metrics)
+        result = SourceResult(name, kind, quats, metrics, segment_paths=segment_paths.get(name))
         if order is not None:
             distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances(angles, order), tolerance)
             result.euler_order, result.gimbal = order, (float(distance), _compress_frames(where))
         sources[name] = result
 
     comparison = TargetComparison(target.name, keys.mode, np.asarray(keys.frames, dtype=np.float64), frames,
-                                  settings.subframes, sources)
+                                  settings.subframes, sources, path_rule=breaks)
+    comparison.keyed_speed_ratios = keyed_speed_ratios(keys.frames, segment_paths[REFERENCE_METHOD][:, 0], key_quats)
     # How close the motion itself (Blender's evaluation) comes to gimbal lock in each order.
     for order in fcurves.EULER_ORDERS:
         distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances_from_quats(current, order),
@@ -385,45 +404,137 @@ def _compress_frames(frames, limit=50):
 
 
 def recommend(comparison):
-    """The recommendation for one target:
-    - method: among the engine methods that are smooth through the keys (largest angular velocity
-      jump below SMOOTH_JUMP_FRACTION of the mean speed), the steadiest speed and smallest deviation
-      from SLERP — the smallest sum of the two ranks, ties to the steadier speed;
-    - constant_speed_method: the steadiest speed of all engine methods (SLERP is constant within
-      segments but usually jumps at keys: its jump is quoted);
-    - euler_order: the order whose closest approach to gimbal lock over the motion is farthest."""
+    """The recommendation for one target (README "Compare", "The recommendation"):
+
+    1. eligible: the engine methods that pass through the keys (within KEY_TOLERANCE_DEG of SLERP
+       at every key frame), obey the path rule in every key segment, do not drift where the keys
+       hold (path below KEY_TOLERANCE_DEG in a segment whose keys coincide), and keep a steady speed:
+       in every moving segment the speed ratio is at most STEADY_EXCESS × the ratio the keys
+       themselves ask for (keyed_speed_ratios; a stop is allowed only where the keys reverse or hold);
+    2. "no difference" when every eligible method stays within half a sample step of every other
+       (the sampling cannot tell them apart): the first eligible method in ENGINE_METHODS is named;
+    3. otherwise, among the eligible: the ones smooth at the keys (velocity jump at most
+       SMOOTH_JUMP_FRACTION of the mean keyed speed) first, then the least extra path (sampled path
+       minus the keyed arcs), then the steadiest speed; with no eligible method, the steadiest of
+       all (the smallest speed excess), said so.
+    constant_speed_method: the smallest speed excess of all engine methods; euler_order: the order
+    whose closest approach to gimbal lock over the motion is farthest."""
+    qc = native.require()
     engine = {n: s for n, s in comparison.sources.items() if s.kind == "engine"}
-    duration = float(comparison.frames[-1] - comparison.frames[0])
-    moving = max((s.metrics["path_length"] for s in engine.values()), default=0.0)
-    mean_speed = moving / duration if duration > 0 else 0.0
-    smooth = {n: s for n, s in engine.items()
-              if s.metrics["max_velocity_jump"] <= SMOOTH_JUMP_FRACTION * mean_speed + 1e-9}
-    pool = smooth or engine
+    frames, key_frames = comparison.frames, comparison.key_frames
+    at_keys = np.searchsorted(frames, key_frames)
+    arcs = engine[REFERENCE_METHOD].segment_paths[:, 0]
+    hold = arcs <= math.radians(KEY_TOLERANCE_DEG)
+    allowed = comparison.keyed_speed_ratios
+    duration = float(key_frames[-1] - key_frames[0])
+    mean_keyed_speed = float(arcs.sum()) / duration if duration > 0 else 0.0
 
-    # Values equal to 1e-6 tie (methods that coincide, e.g. every method on two keys); a tie goes to
-    # the method listed first in ENGINE_METHODS (SLERP, the simplest).
-    def value(n, name):
-        return round(comparison.sources[n].metrics[name], 6)
+    verdicts = {}
+    for name, s in engine.items():
+        m = s.metrics
+        reasons = []
+        key_error = float(np.max(m["deviation"][at_keys]))
+        if key_error > math.radians(KEY_TOLERANCE_DEG):
+            reasons.append("misses a key by %.3f°" % math.degrees(key_error))
+        broken = [b for b in comparison.path_rule if b.method == name]
+        if broken:
+            reasons.append("breaks the path rule at frames %g-%g" % (broken[0].frame_start, broken[0].frame_end))
+        paths = s.segment_paths[:, 1]
+        drift = float(np.max(paths[hold], initial=0.0))
+        if drift > math.radians(KEY_TOLERANCE_DEG):
+            reasons.append("drifts %.2f° where the keys hold" % math.degrees(drift))
+        ratios = np.asarray(m["segment_speed_ratios"], dtype=np.float64)
+        exempt = hold | ~np.isfinite(allowed)  # holds, and stops the keys ask for
+        with np.errstate(invalid="ignore", divide="ignore"):
+            excess = np.where(exempt, 1.0, ratios / np.where(exempt, 1.0, allowed))
+        excess = np.where(np.isnan(excess), np.inf, excess)
+        worst = int(np.argmax(excess)) if len(excess) else 0
+        speed_excess = float(excess[worst]) if len(excess) else 1.0
+        if speed_excess > STEADY_EXCESS:
+            reasons.append("%s at frames %g-%g" % (
+                "stops" if not math.isfinite(speed_excess) or ratios[worst] >= STOP_RATIO
+                else "speed varies %.1f× more than the keys ask" % speed_excess,
+                key_frames[worst], key_frames[worst + 1]))
+        smooth = bool(m["max_velocity_jump"] <= SMOOTH_JUMP_FRACTION * mean_keyed_speed + 1e-9)
+        verdicts[name] = {"eligible": not reasons, "reasons": reasons, "smooth": smooth,
+                          "speed_excess": _num(speed_excess),
+                          "extra_path_deg": math.degrees(max(float(paths.sum() - s.segment_paths[:, 0].sum()), 0.0)),
+                          "key_error_deg": math.degrees(key_error)}
 
-    def ranks(name):  # competition ranking: the number of methods strictly better
-        return {n: sum(value(o, name) < value(n, name) for o in pool) for n in pool}
-
-    speed_rank, deviation_rank = ranks("speed_ratio"), ranks("max_deviation")
     listed = ENGINE_METHODS.index
-    method = min(pool, key=lambda n: (speed_rank[n] + deviation_rank[n], value(n, "speed_ratio"),
-                                      value(n, "max_deviation"), listed(n)))
-    steadiest = min(engine, key=lambda n: (value(n, "speed_ratio"), value(n, "max_deviation"), listed(n)))
+    eligible = sorted((n for n in engine if verdicts[n]["eligible"]), key=listed)
+
+    def excess_of(n):
+        e = verdicts[n]["speed_excess"]
+        return math.inf if e is None else e
+
+    # Agreement: the largest angle between any two eligible methods' paths, against the sampling's
+    # resolution (half the largest angle the reference moves between two samples).
+    reference = engine[REFERENCE_METHOD].quats
+    sampling_error = 0.5 * float(np.max(qc.angular_deviation(reference[1:], reference[:-1]), initial=0.0))
+    spread = 0.0
+    for i, a in enumerate(eligible):
+        for b in eligible[i + 1:]:
+            spread = max(spread, float(np.max(qc.angular_deviation(engine[a].quats, engine[b].quats))))
+    no_difference = len(eligible) >= 1 and spread <= sampling_error + 1e-12
+
+    if no_difference:
+        method = eligible[0]
+        text = "no difference: %s agree within %.2f°, under the sampling's %.2f° (half a sample step); %s" % (
+            ", ".join(eligible) if len(eligible) < len(engine) else "all methods", math.degrees(spread),
+            math.degrees(sampling_error), method)
+    elif eligible:
+        method = min(eligible, key=lambda n: (not verdicts[n]["smooth"], round(verdicts[n]["extra_path_deg"], 3),
+                                              round(excess_of(n), 3), listed(n)))
+        v = verdicts[method]
+        text = "%s: passes the keys, obeys the path rule, steady (speed ratio at most %.2f× the keys' own), " \
+               "%s, %.2f° of extra path" % (
+                   method, excess_of(method),
+                   "smooth at keys" if v["smooth"] else "not smooth at keys (velocity jumps %.2f°/frame; no smooth "
+                   "method is eligible)" % math.degrees(engine[method].metrics["max_velocity_jump"]),
+                   v["extra_path_deg"])
+    else:
+        method = min(engine, key=lambda n: (round(excess_of(n), 3), listed(n)))
+        text = "%s, with reservations: no method is eligible (%s: %s)" % (
+            method, method, "; ".join(verdicts[method]["reasons"]))
+    others = [n for n in engine if n not in eligible]
+    if others and not no_difference:
+        text += "; not: " + ", ".join("%s (%s)" % (n, verdicts[n]["reasons"][0]) for n in others)
+    steadiest = min(engine, key=lambda n: (round(excess_of(n), 3), listed(n)))
     order = max(comparison.euler_orders, key=lambda o: comparison.euler_orders[o][0])
-    m, s = pool[method].metrics, engine[steadiest].metrics
-    text = "%s: speed ratio %s, %.2f° from SLERP%s" % (
-        method, _ratio_text(m["speed_ratio"]), math.degrees(m["max_deviation"]),
-        "" if method in smooth else " (no method is smooth through these keys)")
-    if steadiest != method:
-        text += "; steadiest: %s (ratio %s, velocity jumps up to %.2f°/frame at keys)" % (
-            steadiest, _ratio_text(s["speed_ratio"]), math.degrees(s["max_velocity_jump"]))
-    text += "; Euler order %s stays %.1f° from gimbal lock" % (
-        order, math.degrees(comparison.euler_orders[order][0]))
-    return {"method": method, "constant_speed_method": steadiest, "euler_order": order, "text": text}
+    text += "; Euler order %s stays %.1f° from gimbal lock" % (order, math.degrees(comparison.euler_orders[order][0]))
+    return {"method": method, "no_difference": bool(no_difference), "eligible": eligible,
+            "agreement_deg": math.degrees(spread), "sampling_error_deg": math.degrees(sampling_error),
+            "constant_speed_method": steadiest, "euler_order": order, "methods": verdicts, "text": text}
+
+
+def keyed_speed_ratios(key_frames, arcs, key_quats):
+    """Per key segment, the speed ratio the keys themselves ask for: the largest over the smallest
+    keyed speed (arc / frames) of the segment and its neighbours — 1 for evenly spaced keys, more
+    where the keys speed up or slow down; inf (a stop is expected) where a neighbour holds or the
+    motion reverses at one of the segment's keys (the outgoing direction turns more than REVERSAL_DEG
+    from the incoming one)."""
+    qc = native.require()
+    k = len(key_frames)
+    speeds = np.asarray(arcs, np.float64) / np.diff(np.asarray(key_frames, np.float64))
+    moving = np.asarray(arcs) > math.radians(KEY_TOLERANCE_DEG)
+    reverses = np.zeros(k, bool)
+    if k > 2:
+        q = np.asarray(key_quats, np.float64)
+        inverse = qc.quat_inverse(q[1:-1])
+        back, ahead = qc.quat_multiply(inverse, q[:-2]), qc.quat_multiply(inverse, q[2:])
+        back = qc.quat_log(back * np.sign(back[:, :1] + 1e-300))[:, 1:]   # towards the previous key
+        ahead = qc.quat_log(ahead * np.sign(ahead[:, :1] + 1e-300))[:, 1:]         # towards the next key
+        # The turn at the key: the angle between the incoming direction (−back) and the outgoing one.
+        cos_turn = -np.einsum("ij,ij->i", back, ahead) / np.maximum(
+            np.linalg.norm(back, axis=1) * np.linalg.norm(ahead, axis=1), 1e-300)
+        reverses[1:-1] = cos_turn < math.cos(math.radians(REVERSAL_DEG))
+    out = np.empty(k - 1)
+    for i in range(k - 1):
+        near = speeds[max(i - 1, 0):i + 2]
+        stop = reverses[i] or reverses[i + 1] or not moving[max(i - 1, 0):i + 2].all()
+        out[i] = math.inf if stop else float(near.max() / near.min())
+    return out
 
 
 # ---- all targets --------------------------------------------------------------------------------------------
@@ -453,22 +564,38 @@ def plot_path(report_path, target_name):
     return "%s_%s.png" % (stem, re.sub(r"[^A-Za-z0-9_.-]+", "_", target_name))
 
 
-def write_report(report, report_path):
-    """Writes the JSON report at `report_path` and each target's plot as a PNG beside it (see
-    plot_path); returns (report_path, [png paths]). The JSON names each target's PNG (file name only,
-    relative to the report's folder)."""
+def save_plots(report, report_path):
+    """Saves each target's plot as a PNG beside `report_path` (see plot_path): Blender writes its image
+    datablock (plot_image; `filepath_raw`, `file_format = 'PNG'`, `image.save()`) and then packs it
+    from that file, so it is saved with the .blend too. Returns the PNG paths."""
     folder = os.path.dirname(os.path.abspath(report_path))
     os.makedirs(folder, exist_ok=True)
     pngs = []
     for t in report.targets:
         path = plot_path(report_path, t.name)
-        plot.write_png(path, t.render_plot())
+        image = plot_image(t)
+        image.filepath_raw = path
+        image.file_format = "PNG"
+        try:
+            image.save()
+        except RuntimeError as error:
+            raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, str(error).strip())) from None
+        image.pack()
         t.plot_file = os.path.basename(path)
         pngs.append(path)
+    return pngs
+
+
+def write_report(report, report_path):
+    """Writes the JSON report at `report_path` and, unless save_plots did already, each target's plot as
+    a PNG beside it; returns (report_path, [png paths]). The JSON names each target's PNG (file name
+    only, relative to the report's folder); its schema is report.schema.json beside this file."""
+    if all(t.plot_file and t.image_name for t in report.targets):
+        folder = os.path.dirname(os.path.abspath(report_path))
+        pngs = [os.path.join(folder, t.plot_file) for t in report.targets]
+    else:
+        pngs = save_plots(report, report_path)
     data = report.to_json()
-    errors = validate(data, REPORT_SCHEMA)
-    if errors:  # a bug, not a user error: the report must always match its documented schema
-        raise RuntimeError("compare report does not match its schema: " + "; ".join(errors[:5]))
     tmp = report_path + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:
         json.dump(data, f, indent=1, allow_nan=False)
@@ -481,135 +608,40 @@ def image_name(target_name):
     return "QuatCurve compare: " + target_name
 
 
+def plot_image(comparison):
+    """The image datablock holding a target's plot (Image Editor): the one already made for this
+    comparison, else a new one named image_name(target), replacing an older one of that name, with a
+    fake user. Blender's pixels are floats 0..1, rows bottom to top. Not packed yet: make_images or
+    save_plots packs it (an unpacked generated image would lose its pixels in a saved .blend)."""
+    image = bpy.data.images.get(comparison.image_name) if comparison.image_name else None
+    if image is not None:
+        return image
+    name = image_name(comparison.name)
+    old = bpy.data.images.get(name)
+    if old is not None:
+        bpy.data.images.remove(old)
+    pixels = comparison.render_plot()
+    image = bpy.data.images.new(name, pixels.shape[1], pixels.shape[0], alpha=True)
+    image.pixels.foreach_set((pixels[::-1].astype(np.float32) * np.float32(1.0 / 255.0)).ravel())
+    image.use_fake_user = True
+    comparison.image_name = image.name
+    return image
+
+
 def make_images(report):
-    """One image datablock per target holding its plot (shown in Blender's Image Editor), replaced
-    when it already exists; packed and given a fake user, so it is saved with the .blend (an image
-    nothing uses is dropped on save). Returns the images."""
+    """One packed image datablock per target holding its plot (plot_image), replacing older ones of the
+    same name; for a comparison without a report path (save_plots packs the others from their PNG).
+    Returns the images."""
     images = []
     for t in report.targets:
-        pixels = t.render_plot()
-        name = image_name(t.name)
-        old = bpy.data.images.get(name)
-        if old is not None:
-            bpy.data.images.remove(old)
-        image = bpy.data.images.new(name, plot.WIDTH, plot.HEIGHT, alpha=True)
-        # Blender's rows run bottom to top; its pixels are floats 0..1.
-        flat = (pixels[::-1].astype(np.float32) / 255.0).ravel()
-        image.pixels.foreach_set(flat)
-        image.update()
+        t.image_name, t.plot_file = None, None
+        image = plot_image(t)
         image.pack()
-        image.use_fake_user = True
-        t.image_name = image.name
         images.append(image)
     return images
 
 
-# ---- the report's schema ------------------------------------------------------------------------------------
-# JSON-schema-like: "type" (a JSON type name or a list of them), "properties" + "required" for objects,
-# "values" for objects used as maps, "items" for arrays, "enum". README.md documents the same fields.
-
-_NUMBER = {"type": "number"}
-_NUMBER_OR_NULL = {"type": ["number", "null"]}
-_FRAMES = {"type": "array", "items": _NUMBER}
-
-SOURCE_SCHEMA = {
-    "type": "object",
-    "required": ["kind", "max_deviation_deg", "max_deviation_frame", "mean_deviation_deg", "speed_ratio",
-                 "segment_speed_ratios", "path_length_deg", "key_path_length_deg", "path_length_ratio",
-                 "max_velocity_jump_deg_per_frame", "max_velocity_jump_frame",
-                 "max_acceleration_jump_deg_per_frame2", "max_acceleration_jump_frame", "gimbal"],
-    "properties": {
-        "kind": {"type": "string", "enum": ["blender", "blender_euler", "blender_quaternion", "engine"]},
-        "max_deviation_deg": _NUMBER,
-        "max_deviation_frame": _NUMBER,
-        "mean_deviation_deg": _NUMBER,
-        "speed_ratio": _NUMBER_OR_NULL,
-        "segment_speed_ratios": {"type": "array", "items": _NUMBER_OR_NULL},
-        "path_length_deg": _NUMBER,
-        "key_path_length_deg": _NUMBER,
-        "path_length_ratio": _NUMBER_OR_NULL,
-        "max_velocity_jump_deg_per_frame": _NUMBER,
-        "max_velocity_jump_frame": _NUMBER,
-        "max_acceleration_jump_deg_per_frame2": _NUMBER,
-        "max_acceleration_jump_frame": _NUMBER,
-        "gimbal": {"type": ["object", "null"], "required": ["order", "closest_deg", "frames"],
-                   "properties": {"order": {"type": "string", "enum": list(fcurves.EULER_ORDERS)},
-                                  "closest_deg": _NUMBER, "frames": _FRAMES}},
-    },
-}
-
-TARGET_SCHEMA = {
-    "type": "object",
-    "required": ["name", "rotation_mode", "frames", "key_frames", "reference", "sources", "euler_orders",
-                 "recommendation", "plot"],
-    "properties": {
-        "name": {"type": "string"},
-        "rotation_mode": {"type": "string"},
-        "frames": {"type": "object", "required": ["start", "end", "step", "count"],
-                   "properties": {"start": _NUMBER, "end": _NUMBER, "step": _NUMBER, "count": {"type": "integer"}}},
-        "key_frames": _FRAMES,
-        "reference": {"type": "string"},
-        "sources": {"type": "object", "values": SOURCE_SCHEMA},
-        "euler_orders": {"type": "object", "values": {
-            "type": "object", "required": ["closest_gimbal_deg", "frames"],
-            "properties": {"closest_gimbal_deg": _NUMBER, "frames": _FRAMES}}},
-        "recommendation": {"type": "object", "required": ["method", "constant_speed_method", "euler_order", "text"],
-                           "properties": {"method": {"type": "string", "enum": list(ENGINE_METHODS)},
-                                          "constant_speed_method": {"type": "string", "enum": list(ENGINE_METHODS)},
-                                          "euler_order": {"type": "string", "enum": list(fcurves.EULER_ORDERS)},
-                                          "text": {"type": "string"}}},
-        "plot": {"type": ["string", "null"]},
-    },
-}
-
-REPORT_SCHEMA = {
-    "type": "object",
-    "required": ["format", "version", "blender_version", "quatcurve_version", "settings", "seconds", "targets"],
-    "properties": {
-        "format": {"type": "string", "enum": [REPORT_FORMAT]},
-        "version": {"type": "integer", "enum": [REPORT_VERSION]},
-        "blender_version": {"type": "string"},
-        "quatcurve_version": {"type": "string"},
-        "settings": {"type": "object"},
-        "seconds": _NUMBER,
-        "targets": {"type": "array", "items": TARGET_SCHEMA},
-    },
-}
-
-_JSON_TYPES = {
-    "object": lambda v: isinstance(v, dict),
-    "array": lambda v: isinstance(v, list),
-    "string": lambda v: isinstance(v, str),
-    "integer": lambda v: isinstance(v, int) and not isinstance(v, bool),
-    "number": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
-    "boolean": lambda v: isinstance(v, bool),
-    "null": lambda v: v is None,
-}
-
-
-def validate(value, schema, path="$"):
-    """Errors (strings naming the JSON path) of `value` against a schema of the form above; [] if valid."""
-    types = schema.get("type")
-    if types is not None:
-        types = [types] if isinstance(types, str) else types
-        if not any(_JSON_TYPES[t](value) for t in types):
-            return ["%s: expected %s, got %s" % (path, " or ".join(types), type(value).__name__)]
-    if value is None:
-        return []
-    errors = []
-    if "enum" in schema and value not in schema["enum"]:
-        errors.append("%s: %r is not one of %s" % (path, value, schema["enum"]))
-    if isinstance(value, dict):
-        for key in schema.get("required", ()):
-            if key not in value:
-                errors.append("%s: missing %r" % (path, key))
-        for key, sub in schema.get("properties", {}).items():
-            if key in value:
-                errors += validate(value[key], sub, "%s.%s" % (path, key))
-        if "values" in schema:
-            for key, item in value.items():
-                errors += validate(item, schema["values"], "%s[%r]" % (path, key))
-    if isinstance(value, list) and "items" in schema:
-        for i, item in enumerate(value):
-            errors += validate(item, schema["items"], "%s[%d]" % (path, i))
-    return errors
+def last_plot_image(target_name):
+    """The image datablock of the last comparison plot of a target ('Cube', 'Armature/Bone'), or
+    None. For the UI."""
+    return bpy.data.images.get(image_name(target_name))

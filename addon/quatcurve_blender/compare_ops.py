@@ -48,7 +48,7 @@ class QuatCurveCompareSettings(bpy.types.PropertyGroup):
         last_table=bpy.props.StringProperty(
             name="Last Compare Table", default="",
             description="JSON: [{name, rows: [[source, max deviation, speed ratio, path length]], "
-                        "recommendation, image}]"),
+                        "recommendation, method, no_difference, path_rule: [line], image}]"),
     )
 
 
@@ -57,16 +57,29 @@ def store_result(settings, report):
     settings.last_summary = report.summary()
     settings.last_table = json.dumps([
         {"name": t.name, "rows": [list(r) for r in t.table_rows()],
-         "recommendation": t.recommendation.get("text", ""), "image": t.image_name or ""}
+         "recommendation": t.recommendation.get("text", ""), "method": t.recommendation.get("method", ""),
+         "no_difference": bool(t.recommendation.get("no_difference", False)),
+         "path_rule": [b.text() for b in t.path_rule], "image": t.image_name or ""}
         for t in report.targets])
 
 
 def last_table(settings):
-    """The stored table: [{name, rows, recommendation, image}] ([] when there is none)."""
+    """The stored table: [{name, rows, recommendation, method, no_difference, path_rule, image}] ([] when
+    there is none)."""
     try:
         return json.loads(settings.last_table) if settings.last_table else []
     except ValueError:
         return []
+
+
+def last_result(scene, target_name):
+    """The last comparison of one target ('Cube', 'Armature/Bone') as stored for the panel — {name,
+    rows, recommendation (text), method, no_difference, path_rule (lines), image (its plot's image
+    datablock name)} — or None. With compare.last_plot_image(target_name) for the image itself."""
+    settings = getattr(scene, "quatcurve_compare", None)
+    if settings is None:
+        return None
+    return next((t for t in last_table(settings) if t["name"] == target_name), None)
 
 
 class QUATCURVE_OT_compare(bpy.types.Operator):
@@ -91,11 +104,12 @@ class QUATCURVE_OT_compare(bpy.types.Operator):
             native.require()
             settings = self._settings(context)
             report = compare.compare(compare.gather_targets(context), settings)
-            compare.make_images(report)
             written = ""
-            if self.report_path:
+            if self.report_path:  # the images are saved as PNG, then packed from those files
                 path, pngs = compare.write_report(report, bpy.path.abspath(self.report_path))
                 written = "; wrote %s and %d plot%s" % (path, len(pngs), "" if len(pngs) == 1 else "s")
+            else:
+                compare.make_images(report)
         except (compare.CompareError, RuntimeError, OSError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

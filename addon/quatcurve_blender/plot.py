@@ -1,19 +1,19 @@
-"""Comparison plots drawn with numpy alone: Blender's bundled Python has no matplotlib.
+"""Comparison plots drawn into a numpy array: Blender's bundled Python has no matplotlib, and in
+background mode Blender draws no lines or text into an image (gpu and blf drawing need a GPU
+context; blf draws into image buffers only from 4.x on).
 
 `render_comparison` draws two panels — angular speed over frames per source, and the deviation from
 SLERP over frames per source — with axes, tick labels, titles, axis labels and a legend with colour
-swatches, into an RGBA pixel buffer of the documented fixed size WIDTH × HEIGHT (1200 × 800,
-rows top to bottom). `encode_png` / `write_png` turn it into a PNG with zlib and struct only, so the
-same code runs inside every Blender and outside; `decode_png` reads such files back (tests, tools).
+swatches, into an RGBA uint8 array of the documented fixed size WIDTH × HEIGHT (1200 × 800, rows top
+to bottom). Images and PNG files are Blender's business: compare.py hands the array to an image
+datablock (`image.pixels.foreach_set`) and saves it with `image.save()`.
 
 Text uses the 7×13 "fixed" bitmap font of the X Window System (misc-fixed, public domain: "Public
 domain font. Share and enjoy."), embedded below for printable ASCII plus the degree sign, drawn at
-scale 1 for ticks and legend and 2 for the title. Lines are anti-aliased by coverage: the polyline is
-sampled every quarter pixel and each pixel takes the coverage of the nearest sample's disc.
+scale 1 for ticks and legend and 2 for the title. Series are functions of the frame, so a line is
+drawn a pixel column at a time, every column at once (Canvas.trace): the polyline's vertical extent
+over the column, anti-aliased at its ends.
 """
-
-import struct
-import zlib
 
 import numpy as np
 
@@ -122,16 +122,26 @@ class Canvas:
             self.pixels[y0:y1, x0:x1, :3] = colour
 
     def blend(self, x0, y0, coverage, colour):
-        """Mixes `colour` over the pixels under `coverage` (floats 0..1) placed at (x0, y0), clipped."""
+        """Mixes `colour` over the pixels under `coverage` (floats 0..1) placed at (x0, y0), clipped;
+        only the covered pixels are touched."""
         h, w = coverage.shape
         cx0, cy0 = max(x0, 0), max(y0, 0)
         cx1, cy1 = min(x0 + w, self.width), min(y0 + h, self.height)
         if cx0 >= cx1 or cy0 >= cy1:
             return
-        a = coverage[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0, None]
-        region = self.pixels[cy0:cy1, cx0:cx1, :3]
-        mixed = region * (1.0 - a) + np.asarray(colour, float) * a
-        region[...] = np.rint(mixed).astype(np.uint8)
+        a = coverage[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0]
+        rows, cols = np.nonzero(a > 0)
+        a = a[rows, cols, None].astype(np.float32)
+        rows, cols = rows + cy0, cols + cx0
+        mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
+        self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
+
+    def blend_pixels(self, rows, cols, coverage, colour):
+        """Mixes `colour` over the pixels (rows[i], cols[i]) by coverage[i] (0..1); each pixel once."""
+        keep = coverage > 0
+        rows, cols, a = rows[keep], cols[keep], coverage[keep, None].astype(np.float32)
+        mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
+        self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
 
     def text(self, x, y, text, colour=INK, scale=1, align="left", valign="top", rotate=False):
         """Draws `text` with its anchor at (x, y): align left/center/right, valign top/middle/bottom
@@ -145,50 +155,61 @@ class Canvas:
         y0 = int(round(y - {"top": 0, "middle": h / 2, "bottom": h}[valign]))
         self.blend(x0, y0, mask.astype(float), colour)
 
-    def polyline(self, xs, ys, colour, width=2.0):
-        """Anti-aliased polyline through pixel coordinates (xs, ys); NaN or inf breaks the line."""
+    def trace(self, xs, ys, colour, width=2.0, rows=None):
+        """A line of `width` pixels through (xs, ys) in pixel coordinates, xs increasing (a function of
+        x, as every series of the plot is); NaN or inf breaks it. Drawn column by column, all columns
+        at once: each pixel column c takes the vertical span of the polyline over the window
+        [c + 0.5 − h, c + 0.5 + h] (h = width / 2, at least half a pixel) widened by width / 2 above and
+        below, with the span's end pixels covered by their fraction (anti-aliased vertically). A flat
+        line is `width` pixels tall, a steep one about `width` pixels wide. rows = (top, bottom)
+        clips the span to those pixel rows (a value beyond them is drawn to the edge)."""
         xs, ys = np.asarray(xs, float), np.asarray(ys, float)
         ok = np.isfinite(xs) & np.isfinite(ys)
-        pts = []
-        for run in np.split(np.arange(len(xs)), np.flatnonzero(np.diff(ok.astype(np.int8))) + 1):
-            if len(run) == 0 or not ok[run[0]]:
-                continue
-            px, py = xs[run], ys[run]
-            if len(run) == 1:
-                pts.append(np.stack([px, py], 1))
-                continue
-            seg = np.hypot(np.diff(px), np.diff(py))
-            steps = np.maximum(np.ceil(seg * 4).astype(int), 1)  # a sample every ≤ 1/4 pixel
-            idx = np.repeat(np.arange(len(seg)), steps)
-            frac = np.concatenate([np.arange(n) / n for n in steps])
-            sx = px[idx] + frac * (px[idx + 1] - px[idx])
-            sy = py[idx] + frac * (py[idx + 1] - py[idx])
-            pts.append(np.stack([np.append(sx, px[-1]), np.append(sy, py[-1])], 1))
-        if pts:
-            self.dots(np.concatenate(pts), colour, width / 2.0)
-
-    def dots(self, points, colour, radius):
-        """Discs of `radius` around every point, anti-aliased; overlapping discs take the max coverage."""
-        points = points[(points[:, 0] > -radius - 2) & (points[:, 0] < self.width + radius + 2) &
-                        (points[:, 1] > -radius - 2) & (points[:, 1] < self.height + radius + 2)]
-        if len(points) == 0:
+        if not ok.any():
             return
-        reach = int(np.ceil(radius + 1))
-        x0 = int(np.floor(points[:, 0].min())) - reach
-        y0 = int(np.floor(points[:, 1].min())) - reach
-        x1 = int(np.ceil(points[:, 0].max())) + reach + 1
-        y1 = int(np.ceil(points[:, 1].max())) + reach + 1
-        coverage = np.zeros((y1 - y0, x1 - x0))
-        base_x = np.floor(points[:, 0]).astype(int)
-        base_y = np.floor(points[:, 1]).astype(int)
-        for dy in range(-reach, reach + 1):
-            for dx in range(-reach, reach + 1):
-                px, py = base_x + dx, base_y + dy
-                # Pixel centres are at integer + 0.5.
-                d = np.hypot(px + 0.5 - points[:, 0], py + 0.5 - points[:, 1])
-                c = np.clip(radius + 0.5 - d, 0.0, 1.0)
-                np.maximum.at(coverage, (py - y0, px - x0), c)
-        self.blend(x0, y0, coverage, colour)
+        half = max(width / 2.0, 0.5)
+        run = np.cumsum(~ok)  # points of one finite run share a value; a non-finite point starts a new one
+        idx = np.flatnonzero(ok)
+        # Pieces: the segments between consecutive finite points of one run, and every finite point on
+        # its own (so a lone point is drawn too); each piece spans [xa, xb] with ya, yb at its ends.
+        seg = idx[:-1][(np.diff(idx) == 1) & (run[idx[:-1]] == run[idx[1:]])]
+        xa = np.concatenate([xs[idx], xs[seg]])
+        xb = np.concatenate([xs[idx], xs[seg + 1]])
+        ya = np.concatenate([ys[idx], ys[seg]])
+        yb = np.concatenate([ys[idx], ys[seg + 1]])
+        # Columns whose window [c + 0.5 − half, c + 0.5 + half] meets the piece.
+        first = np.maximum(np.ceil(np.minimum(xa, xb) - 0.5 - half), 0).astype(np.int64)
+        last = np.minimum(np.floor(np.maximum(xa, xb) - 0.5 + half), self.width - 1).astype(np.int64)
+        count = np.maximum(last - first + 1, 0)
+        piece = np.repeat(np.arange(len(xa)), count)
+        if piece.size == 0:
+            return
+        col = first[piece] + (np.arange(piece.size) - np.repeat(np.cumsum(count) - count, count))
+        # The piece's y at the window's ends (clipped to the piece): its extent inside the window.
+        lo_x, hi_x = np.minimum(xa, xb)[piece], np.maximum(xa, xb)[piece]
+        dx = xb[piece] - xa[piece]
+        slope = np.divide(yb[piece] - ya[piece], dx, out=np.zeros_like(dx), where=dx != 0)
+        y0 = ya[piece] + slope * (np.clip(col + 0.5 - half, lo_x, hi_x) - xa[piece])
+        y1 = ya[piece] + slope * (np.clip(col + 0.5 + half, lo_x, hi_x) - xa[piece])
+        # Per column, the least and greatest y of its pieces (sorted by column, reduced per run).
+        order = np.argsort(col, kind="stable")
+        col = col[order]
+        starts = np.flatnonzero(np.r_[True, col[1:] != col[:-1]])
+        cols = col[starts]
+        span_lo = np.minimum.reduceat(np.minimum(y0, y1)[order], starts)
+        span_hi = np.maximum.reduceat(np.maximum(y0, y1)[order], starts)
+        top = (rows[0] if rows else 0)
+        bottom = (rows[1] if rows else self.height)
+        lo = np.maximum(span_lo - width / 2.0, top)
+        hi = np.minimum(span_hi + width / 2.0, bottom)
+        # The pixels of each column's span only (a sparse list), each covered by its overlap with it.
+        first_row = np.maximum(np.floor(lo), 0).astype(np.int64)
+        end_row = np.minimum(np.ceil(hi), self.height).astype(np.int64)
+        count = np.maximum(end_row - first_row, 0)
+        which = np.repeat(np.arange(len(cols)), count)
+        r = first_row[which] + (np.arange(which.size) - np.repeat(np.cumsum(count) - count, count))
+        coverage = np.clip(np.minimum(r + 1.0, hi[which]) - np.maximum(r, lo[which]), 0.0, 1.0)
+        self.blend_pixels(r, cols[which], coverage, colour)
 
 
 # ---- axes -----------------------------------------------------------------------------------------------
@@ -266,9 +287,8 @@ class Panel:
     def draw_series(self, xs, ys, colour, width=2.0):
         px, py = self.to_pixels(xs, ys)
         left, top, right, bottom = self.box
-        # Clip vertically to the plot area (values above the range are cut, not wrapped).
-        py = np.where((py < top - 1) | (py > bottom + 1), np.nan, py)
-        self.canvas.polyline(px, py, colour, width)
+        # Clipped to the plot area: a value beyond the range runs along its edge.
+        self.canvas.trace(px, py, colour, width, rows=(top, bottom + 1))
 
 
 # ---- the comparison figure --------------------------------------------------------------------------------
@@ -295,6 +315,25 @@ def _same_curves(a, b):
     return True
 
 
+def make_panels(canvas, series, key_frames=()):
+    """(speed panel, deviation panel) of the figure for `series`: their pixel boxes and data ranges
+    (Panel.to_pixels maps frames and values to pixel coordinates; canvas may be None to ask only that)."""
+    left, right = PLOT_LEFT, PLOT_RIGHT
+    all_frames = [np.asarray(s["frames"], float) for s in series] + [np.asarray(key_frames, float)]
+    finite_frames = np.concatenate([f[np.isfinite(f)] for f in all_frames] + [np.zeros(0)])
+    x_range = (finite_frames.min(), finite_frames.max()) if finite_frames.size else (0.0, 1.0)
+    if x_range[1] <= x_range[0]:
+        x_range = (x_range[0], x_range[0] + 1.0)
+    speed_max = _finite_max([np.asarray(s["speed"], float) for s in series], 1e-3)
+    deviation_max = _finite_max([np.asarray(s["deviation"], float) for s in series], 1e-3)
+    return (
+        Panel(canvas, (left, SPEED_ROWS[0], right, SPEED_ROWS[1]), x_range, (0.0, speed_max * 1.05),
+              "Angular speed", "frame", "speed (\u00b0/frame)"),
+        Panel(canvas, (left, DEVIATION_ROWS[0], right, DEVIATION_ROWS[1]), x_range, (0.0, deviation_max * 1.05),
+              "Deviation from SLERP", "frame", "deviation (\u00b0)"),
+    )
+
+
 def render_comparison(title, series, key_frames=(), subtitle=""):
     """The comparison figure for one target as an RGBA uint8 array (HEIGHT, WIDTH, 4), rows top down.
 
@@ -311,20 +350,7 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
     if subtitle:
         canvas.text(WIDTH / 2, 44, subtitle, align="center")
     legend_left = LEGEND_LEFT
-    left, right = PLOT_LEFT, PLOT_RIGHT
-    all_frames = [np.asarray(s["frames"], float) for s in series] + [np.asarray(key_frames, float)]
-    finite_frames = np.concatenate([f[np.isfinite(f)] for f in all_frames] + [np.zeros(0)])
-    x_range = (finite_frames.min(), finite_frames.max()) if finite_frames.size else (0.0, 1.0)
-    if x_range[1] <= x_range[0]:
-        x_range = (x_range[0], x_range[0] + 1.0)
-    speed_max = _finite_max([np.asarray(s["speed"], float) for s in series], 1e-3)
-    deviation_max = _finite_max([np.asarray(s["deviation"], float) for s in series], 1e-3)
-    panels = (
-        Panel(canvas, (left, SPEED_ROWS[0], right, SPEED_ROWS[1]), x_range, (0.0, speed_max * 1.05),
-              "Angular speed", "frame", "speed (\u00b0/frame)"),
-        Panel(canvas, (left, DEVIATION_ROWS[0], right, DEVIATION_ROWS[1]), x_range, (0.0, deviation_max * 1.05),
-              "Deviation from SLERP", "frame", "deviation (\u00b0)"),
-    )
+    panels = make_panels(canvas, series, key_frames)
     for panel in panels:
         panel.draw_frame(key_frames)
     colours = []
@@ -354,95 +380,3 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
             canvas.fill_rect(legend_left + 26, yy, legend_left + 27, yy + 4, KEY_LINE)
         canvas.text(legend_left + 50, y + 7, "key frames", valign="middle")
     return canvas.pixels
-
-
-# ---- PNG ----------------------------------------------------------------------------------------------------
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def _chunk(kind, data):
-    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-
-
-def encode_png(pixels):
-    """PNG bytes of an RGBA (or RGB) uint8 array (height, width, 4|3), rows top to bottom. Filter 0 on
-    every row, zlib level 6: plots are mostly flat colour, which deflate packs well on its own."""
-    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
-    height, width, channels = pixels.shape
-    colour_type = {4: 6, 3: 2}[channels]
-    raw = np.zeros((height, 1 + width * channels), np.uint8)
-    raw[:, 1:] = pixels.reshape(height, -1)
-    header = struct.pack(">IIBBBBB", width, height, 8, colour_type, 0, 0, 0)
-    return (_PNG_SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
-            + _chunk(b"IEND", b""))
-
-
-def write_png(path, pixels):
-    with open(path, "wb") as f:
-        f.write(encode_png(pixels))
-
-
-def _unfilter(raw, height, stride, bpp):
-    """Reverses PNG's five row filters (none, sub, up, average, Paeth)."""
-    out = np.zeros((height, stride), np.uint8)
-    rows = raw.reshape(height, stride + 1)
-    prev = np.zeros(stride, np.int32)
-    for y in range(height):
-        kind, line = rows[y, 0], rows[y, 1:].astype(np.int32)
-        if kind == 0:
-            cur = line
-        elif kind == 2:
-            cur = (line + prev) & 0xFF
-        else:  # sub, average, Paeth depend on the pixel to the left: byte by byte
-            cur = np.zeros(stride, np.int32)
-            for i in range(stride):
-                a = cur[i - bpp] if i >= bpp else 0
-                b = prev[i]
-                c = prev[i - bpp] if i >= bpp else 0
-                if kind == 1:
-                    pred = a
-                elif kind == 3:
-                    pred = (a + b) // 2
-                elif kind == 4:
-                    p = a + b - c
-                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                    pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-                else:
-                    raise ValueError("PNG: unknown filter type %d in row %d" % (kind, y))
-                cur[i] = (line[i] + pred) & 0xFF
-        out[y] = cur
-        prev = cur
-    return out
-
-
-def decode_png(data):
-    """(height, width, channels) uint8 array of an 8-bit, non-interlaced RGB or RGBA PNG."""
-    if data[:8] != _PNG_SIGNATURE:
-        raise ValueError("not a PNG file")
-    pos, idat, header = 8, [], None
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
-        (crc,) = struct.unpack(">I", data[pos + 8 + length:pos + 12 + length])
-        if zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
-            raise ValueError("PNG: bad CRC in chunk %r" % kind)
-        if kind == b"IHDR":
-            header = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat.append(body)
-        elif kind == b"IEND":
-            break
-        pos += 12 + length
-    if header is None:
-        raise ValueError("PNG: no IHDR chunk")
-    width, height, depth, colour_type, _, _, interlace = header
-    if depth != 8 or colour_type not in (2, 6) or interlace:
-        raise ValueError("PNG: only 8-bit non-interlaced RGB/RGBA is supported")
-    channels = 4 if colour_type == 6 else 3
-    raw = np.frombuffer(zlib.decompress(b"".join(idat)), np.uint8)
-    return _unfilter(raw, height, width * channels, channels).reshape(height, width, channels)
-
-
-def read_png(path):
-    with open(path, "rb") as f:
-        return decode_png(f.read())

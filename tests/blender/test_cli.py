@@ -14,9 +14,11 @@ import subprocess
 import sys
 
 import bpy
+import numpy as np
 import pytest
 from mathutils import Quaternion
 
+from compare_helpers import load_png, schema_errors
 from quatcurve_blender import cli, compare, fcurves, plot
 
 ADDON_DIR = os.path.dirname(os.path.dirname(os.path.abspath(cli.__file__)))
@@ -147,11 +149,12 @@ def test_bake_with_compare_writes_file_report_and_plots(addon, source_blend, tmp
         ["baked.blend", "report.json"] + [os.path.basename(compare.plot_path(str(report), n)) for n in names])
 
     data = json.loads(report.read_text(encoding="utf-8"))
-    assert compare.validate(data, compare.REPORT_SCHEMA) == []
+    assert schema_errors(data) == []
     assert [t["name"] for t in data["targets"]] == names
     for target in data["targets"]:
-        pixels = plot.read_png(str(out_dir / target["plot"]))
-        assert pixels.shape[:2] == (plot.HEIGHT, plot.WIDTH)
+        pixels = load_png(str(out_dir / target["plot"]))
+        assert pixels.shape == (plot.HEIGHT, plot.WIDTH, 4)
+        assert (np.abs(pixels[:, :, :3] * 255 - plot.INK) < 0.5).all(axis=2).any()  # axes and text in ink
 
     open_blend(out)
     scene = bpy.context.scene

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from mathutils import Euler, Quaternion
 
-from conftest import ROOT
-from quatcurve_blender import compare, fcurves, plot, targets
+from compare_helpers import image_pixels, load_png, report_schema, schema_errors
+from conftest import ROOT, SHARED
+from quatcurve_blender import bake, compare, fcurves, plot, targets
 
 README = os.path.join(ROOT, "README.md")
 
@@ -127,17 +128,17 @@ def test_report_png_and_json(linear_keys, tmp_path):
     assert digests() == before  # scratch actions removed, the user's keys untouched
 
     assert [os.path.basename(p) for p in pngs] == ["report_Fixed.png", "report_Quat.png"]
-    for png in pngs:
-        pixels = plot.read_png(png)
-        assert pixels.shape == (plot.HEIGHT, plot.WIDTH, 4) == (800, 1200, 4)
-        ink = (pixels[..., :3] != plot.BACKGROUND).any(axis=2)
-        assert ink.mean() > 0.02
-        for i in range(len(report.targets[0].sources)):  # every legend colour is drawn
-            assert (pixels[..., :3] == plot.PALETTE[i]).all(axis=2).sum() > 100
+    for t, png in zip(report.targets, pngs):
+        # Saved by Blender and read back by Blender: the drawn pixels, exactly (bytes / 255).
+        expected = t.render_plot().astype(np.float32) / 255
+        np.testing.assert_allclose(load_png(png), expected, atol=1e-6)
+        image = bpy.data.images[t.image_name]
+        assert image.use_fake_user and image.packed_file is not None
+        np.testing.assert_allclose(image_pixels(image), expected, atol=1e-6)
 
     with open(path) as f:
         data = json.load(f)
-    assert check_schema(data, compare.REPORT_SCHEMA) == []
+    assert schema_errors(data) == []
     assert data["blender_version"] == bpy.app.version_string
     names = [t["name"] for t in data["targets"]]
     assert names == ["Fixed", "Quat"]
@@ -159,7 +160,7 @@ def test_report_png_and_json(linear_keys, tmp_path):
 def test_readme_documents_every_report_field():
     with open(README, encoding="utf-8") as f:
         text = f.read()
-    missing = [name for name in schema_property_names(compare.REPORT_SCHEMA) if "`%s`" % name not in text]
+    missing = [name for name in schema_property_names(report_schema()) if "`%s`" % name not in text]
     assert missing == []
 
 
@@ -173,11 +174,10 @@ def test_operator_on_selection_writes_report_image_and_table(linear_keys, tmp_pa
     assert bpy.ops.quatcurve.compare(report_path=report_path) == {"FINISHED"}
     assert digests() == before and len(bpy.data.actions) == actions
     assert os.path.isfile(report_path) and os.path.isfile(str(tmp_path / "out" / "compare_Fixed.png"))
-    image = bpy.data.images[compare.image_name("Fixed")]
+    image = compare.last_plot_image("Fixed")
+    assert image is not None and image.name == compare.image_name("Fixed")
     assert tuple(image.size) == (plot.WIDTH, plot.HEIGHT)
-    pixels = np.empty(plot.WIDTH * plot.HEIGHT * 4, np.float32)
-    image.pixels.foreach_get(pixels)
-    assert pixels.reshape(-1, 4)[:, :3].min() < 0.5  # not blank
+    np.testing.assert_allclose(load_png(str(tmp_path / "out" / "compare_Fixed.png")), image_pixels(image), atol=1e-6)
     table = json.loads(linear_keys.quatcurve_compare.last_table)
     assert [t["name"] for t in table] == ["Fixed"]  # only the selection
     rows = {r[0]: r for r in table[0]["rows"]}
@@ -233,45 +233,16 @@ def test_bad_settings():
         compare.check_settings(compare.CompareSettings(methods=("EULER",)))
 
 
-# ---- a JSON-schema-like validator, independent of compare.validate ---------------------------------------
-
-_TYPES = {"object": dict, "array": list, "string": str, "null": type(None)}
-
-
-def check_schema(value, schema, path="$"):
-    kinds = schema.get("type", [])
-    kinds = [kinds] if isinstance(kinds, str) else kinds
-    ok = not kinds
-    for kind in kinds:
-        if kind == "number":
-            ok |= isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-        elif kind == "integer":
-            ok |= isinstance(value, int) and not isinstance(value, bool)
-        else:
-            ok |= isinstance(value, _TYPES[kind])
-    if not ok:
-        return ["%s: %r is not %s" % (path, value, kinds)]
-    errors = []
-    if "enum" in schema and value not in schema["enum"]:
-        errors.append("%s: %r not in %s" % (path, value, schema["enum"]))
-    if isinstance(value, dict):
-        errors += ["%s: missing %s" % (path, k) for k in schema.get("required", []) if k not in value]
-        for k, sub in schema.get("properties", {}).items():
-            if k in value:
-                errors += check_schema(value[k], sub, path + "." + k)
-        for k, v in value.items() if "values" in schema else ():
-            errors += check_schema(v, schema["values"], "%s[%s]" % (path, k))
-    if isinstance(value, list):
-        for i, v in enumerate(value):
-            errors += check_schema(v, schema.get("items", {}), "%s[%d]" % (path, i))
-    return errors
-
-
 def schema_property_names(schema):
-    names = set(schema.get("properties", {}))
-    subs = list(schema.get("properties", {}).values()) + [schema[k] for k in ("values", "items") if k in schema]
-    for sub in subs:
-        names |= schema_property_names(sub)
+    """Every property name a JSON schema (with $defs) defines."""
+    names = set()
+    if isinstance(schema, dict):
+        names |= set(schema.get("properties", {}))
+        for value in schema.values():
+            names |= schema_property_names(value)
+    elif isinstance(schema, list):
+        for value in schema:
+            names |= schema_property_names(value)
     return names
 
 
@@ -305,3 +276,140 @@ def test_panel_draws_the_last_table(linear_keys):
     assert "prop subframes" in layout.lines and "Fixed" in layout.lines
     assert "SLERP" in layout.lines and "0.00°" in layout.lines and "1.000" in layout.lines
     assert any("gimbal" in line for line in layout.lines)  # the recommendation, wrapped
+
+
+# ---- the plot's pixels, read back through Blender -----------------------------------------------------------
+
+def test_the_slerp_speed_line_lies_at_the_row_of_its_speed(linear_keys):
+    # SLERP is drawn last (methods=SLERP only) and runs at the keyed arc / frames in each segment:
+    # 90°/20 frames = 4.5°/frame, then 30°/10 frames = 3°/frame.
+    obj = keyed_object(linear_keys, "Turn", "XYZ", {1: (0, 0, 0), 21: (0, 0, 90), 31: (0, 0, 120)})
+    settings = compare.CompareSettings(subframes=4, methods=("SLERP",))
+    report = compare.compare([targets.Target(obj)], settings)
+    t = report.targets[0]
+    assert list(t.sources)[-1] == "SLERP"
+    pixels = image_pixels(compare.make_images(report)[0]) * 255
+    speed_panel, _ = plot.make_panels(None, t.plot_series(), t.key_frames)
+    colour = plot.PALETTE[len(t.sources) - 1]
+    for frame, speed in ((6.0, 4.5), (15.0, 4.5), (26.0, 3.0)):
+        x, y = speed_panel.to_pixels(frame, speed)
+        np.testing.assert_allclose(pixels[int(y), int(x), :3], colour, atol=0.5, err_msg=str(frame))
+        assert not np.allclose(pixels[int(y) + 4, int(x), :3], colour, atol=0.5)
+    # The axes in ink, the margin in the background colour, the SLERP swatch in its colour.
+    left, top, right, bottom = speed_panel.box
+    np.testing.assert_allclose(pixels[bottom, (left + right) // 2, :3], plot.INK, atol=0.5)
+    np.testing.assert_allclose(pixels[3, 3, :3], plot.BACKGROUND, atol=0.5)
+    y = 90 + 34 + (len(t.sources) - 1) * 22 + 6
+    np.testing.assert_allclose(pixels[y, plot.LEGEND_LEFT + 20, :3], colour, atol=0.5)
+
+
+# ---- the recommendation ---------------------------------------------------------------------------------------
+
+def recommendation(scene, name, mode, keys, subframes=4):
+    obj = keyed_object(scene, name, mode, keys)
+    t = compare.compare([targets.Target(obj)], compare.CompareSettings(subframes=subframes)).targets[0]
+    return t, t.recommendation
+
+
+def test_evenly_spaced_keys_on_one_axis_recommend_a_smooth_method(linear_keys):
+    t, rec = recommendation(linear_keys, "Even", "XYZ", {f: (f - 1, 0, 0) for f in (1, 11, 21, 31, 41)})
+    chosen = t.sources[rec["method"]].metrics
+    assert rec["methods"][rec["method"]]["smooth"]
+    assert math.degrees(chosen["max_velocity_jump"]) < 0.01
+    assert chosen["speed_ratio"] == pytest.approx(1.0, abs=1e-3)
+    # Every method takes the same path at the same speed here: nothing to choose.
+    assert rec["no_difference"] and rec["text"].startswith("no difference")
+
+
+def test_holds_recommend_no_method_that_drifts(linear_keys):
+    t, rec = recommendation(linear_keys, "Hold", "XYZ",
+                            {1: (0, 0, 0), 11: (0, 0, 0), 21: (0, 0, 120), 31: (0, 0, 120), 41: (0, 0, 0), 51: (0, 0, 0)})
+    assert not rec["no_difference"]
+    assert rec["method"] != "SPLINE_C2"
+    verdict = rec["methods"]["SPLINE_C2"]
+    assert not verdict["eligible"] and any("drifts" in r or "path rule" in r for r in verdict["reasons"])
+    chosen = rec["methods"][rec["method"]]
+    assert chosen["eligible"] and chosen["smooth"]  # the clamped methods ease into the holds
+    holds = [0, 2, 4]
+    assert np.degrees(t.sources[rec["method"]].segment_paths[holds, 1]).max() < compare.KEY_TOLERANCE_DEG
+
+
+def test_hemisphere_recommends_a_steady_method(linear_keys):
+    s, c = math.sin(math.radians(60)), math.cos(math.radians(60))
+    t, rec = recommendation(linear_keys, "Hemisphere", "QUATERNION",
+                            {1: (1, 0, 0, 0), 21: (c, s, 0, 0), 41: (-c, 0, -s, 0), 61: (0.5, 0.5, 0.5, 0.5)})
+    chosen = rec["method"]
+    # The keys ask for a nearly steady turn (keyed speeds 6, 7.6, 4.7°/frame): not a method whose speed
+    # varies more than 1.5× that, nor one that stops between keys.
+    assert rec["methods"][chosen]["speed_excess"] <= compare.STEADY_EXCESS
+    assert t.sources[chosen].metrics["speed_ratio"] < 2.0
+    worst = max(compare.ENGINE_METHODS, key=lambda n: t.sources[n].metrics["speed_ratio"])
+    assert chosen != worst and not rec["no_difference"]
+    assert chosen == "SLERP" and "not smooth at keys" in rec["text"]
+
+
+def test_dense_motion_capture_says_no_difference_or_picks_a_steady_method(linear_keys):
+    # Keys on every frame of a smooth turn with capture noise: the methods differ by less than the
+    # samples can show.
+    rng = np.random.default_rng(3)
+    keys = {}
+    for f in range(1, 121):
+        angle = 40 * math.sin(f / 15.0) + rng.normal(0, 0.3)
+        keys[f] = tuple(Quaternion((0.3, 0.9, 0.3), math.radians(angle)))
+    t, rec = recommendation(linear_keys, "Capture", "QUATERNION", keys)
+    if not rec["no_difference"]:
+        assert rec["methods"][rec["method"]]["speed_excess"] <= compare.STEADY_EXCESS
+    else:
+        assert rec["agreement_deg"] <= rec["sampling_error_deg"]
+        assert "no difference" in rec["text"]
+
+
+def test_demo_motion_capture_never_recommends_a_method_that_stops(linear_keys):
+    bvh = os.path.join(SHARED, "data", "mocap", "mocapbank.bvh")
+    if not os.path.exists(bvh):
+        pytest.skip("%s is not present" % bvh)
+    import sys
+    sys.path.insert(0, os.path.join(ROOT, "build_scripts"))
+    import demo_scene
+    rig = demo_scene.import_bvh(bvh)
+    bones = [targets.Target(rig, name) for name in ("LeftAnkle", "LeftWrist", "Chest")]
+    report = compare.compare(bones, compare.CompareSettings(subframes=4))
+    for t in report.targets:
+        rec = t.recommendation
+        assert rec["no_difference"] or rec["methods"][rec["method"]]["eligible"], t.name
+        assert t.sources[rec["method"]].metrics["speed_ratio"] < compare.STOP_RATIO, t.name
+
+
+# ---- the path rule ---------------------------------------------------------------------------------------------
+
+HOLDS = {1: (0, 0, 0), 11: (0, 0, 0), 21: (0, 0, 120), 31: (0, 0, 120), 41: (0, 0, 0), 51: (0, 0, 0)}
+
+
+def test_compare_reports_path_rule_breaks_with_target_frames_and_ratio(linear_keys, tmp_path):
+    obj = keyed_object(linear_keys, "Holds", "XYZ", HOLDS)
+    report = compare.compare([targets.Target(obj)])
+    t = report.targets[0]
+    assert {b.method for b in t.path_rule} == {"SPLINE_C2"}  # the clamped methods obey the rule
+    frames = [(b.frame_start, b.frame_end) for b in t.path_rule]
+    assert (21.0, 31.0) in frames
+    hold = next(b for b in t.path_rule if (b.frame_start, b.frame_end) == (21.0, 31.0))
+    assert math.degrees(hold.arc) < 1e-6 and math.degrees(hold.path) > 10.0
+    assert not math.isfinite(hold.ratio)
+    lines = report.table_lines()
+    assert any(line.startswith("  path rule: Holds: SPLINE_C2 frames 21-31: path") for line in lines), lines
+    path, _ = compare.write_report(report, str(tmp_path / "r.json"))
+    with open(path) as f:
+        data = json.load(f)
+    assert schema_errors(data) == []
+    entry = next(b for b in data["targets"][0]["path_rule"] if b["frame_start"] == 21.0)
+    assert entry["method"] == "SPLINE_C2" and entry["ratio"] is None and entry["path_deg"] > 10
+
+
+def test_bake_notes_name_the_segments_that_break_the_path_rule(linear_keys):
+    obj = keyed_object(linear_keys, "Holds", "XYZ", {1: (0, 0, 0), 11: (0, 0, 170), 21: (0, 0, 170), 31: (0, 0, 0)})
+    result = bake.bake([targets.Target(obj)], bake.BakeSettings(method="SPLINE_C2"))
+    notes = [n for n in result.notes() if n.startswith("path rule:")]
+    assert notes == [n for n in notes if "Holds: SPLINE_C2 frames 11-21: path" in n] and len(notes) == 1
+    obj2 = keyed_object(linear_keys, "Clamped", "XYZ", {1: (0, 0, 0), 11: (0, 0, 170), 21: (0, 0, 170), 31: (0, 0, 0)})
+    result = bake.bake([targets.Target(obj2)], bake.BakeSettings(method="CATMULL_ROM"))
+    assert not [n for n in result.notes() if n.startswith("path rule:")]

@@ -1,12 +1,11 @@
-"""The numpy-only comparison plot and its PNG encoder (addon/quatcurve_blender/plot.py), outside Blender.
-
-The PNG is decoded here with zlib and struct directly, independently of plot.decode_png.
+"""The comparison plot's drawing (addon/quatcurve_blender/plot.py), outside Blender: pixel values
+checked against the data — a series' line lies at the row its value maps to, in its colour; axes,
+grid and legend in theirs. Images and PNG files are Blender's (tests/blender/test_compare.py reads
+them back through Blender).
 """
 
 import importlib.util
 import os
-import struct
-import zlib
 
 import numpy as np
 import pytest
@@ -36,86 +35,84 @@ def example_series():
     return series
 
 
-def read_png_with_zlib(data):
-    """(width, height, rows) of an 8-bit RGBA PNG whose rows all use filter 0, checking every CRC."""
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, chunks = 8, {}
-    while pos < len(data):
-        (length,) = struct.unpack(">I", data[pos:pos + 4])
-        kind, body = data[pos + 4:pos + 8], data[pos + 8:pos + 8 + length]
-        assert struct.unpack(">I", data[pos + 8 + length:pos + 12 + length])[0] == zlib.crc32(kind + body)
-        chunks.setdefault(kind, []).append(body)
-        pos += 12 + length
-    assert pos == len(data) and b"IEND" in chunks
-    width, height, depth, colour_type, _, _, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"][0])
-    assert (depth, colour_type, interlace) == (8, 6, 0)
-    raw = np.frombuffer(zlib.decompress(b"".join(chunks[b"IDAT"])), np.uint8).reshape(height, 1 + 4 * width)
-    assert (raw[:, 0] == 0).all()
-    return width, height, raw[:, 1:].reshape(height, width, 4)
-
-
 @pytest.fixture(scope="module")
-def png(tmp_path_factory):
-    path = tmp_path_factory.mktemp("plot") / "compare.png"
-    plot.write_png(str(path), plot.render_comparison("Cube", example_series(), key_frames=[1, 21, 41, 61]))
-    return path.read_bytes()
+def pixels():
+    return plot.render_comparison("Cube", example_series(), key_frames=[1, 21, 41, 61])
 
 
-def test_png_has_the_documented_size_and_is_not_blank(png):
-    width, height, pixels = read_png_with_zlib(png)
-    assert (width, height) == (plot.WIDTH, plot.HEIGHT) == (1200, 800)
+def colour_at(pixels, x, y):
+    return tuple(int(v) for v in pixels[int(y), int(x), :3])
+
+
+def test_size_opacity_and_background(pixels):
+    assert pixels.shape == (plot.HEIGHT, plot.WIDTH, 4) == (800, 1200, 4) and pixels.dtype == np.uint8
     assert (pixels[..., 3] == 255).all()
+    assert colour_at(pixels, 5, 5) == plot.BACKGROUND  # the margin
     ink = (pixels[..., :3] != plot.BACKGROUND).any(axis=2)
     assert 0.02 < ink.mean() < 0.5
-    assert len(np.unique(pixels.reshape(-1, 4), axis=0)) > 50  # anti-aliased lines, text, colours
 
 
-def test_every_legend_colour_appears_in_both_panels(png):
-    _, _, pixels = read_png_with_zlib(png)
+def flat_series(values, names=None):
+    """One series per value, each constant (speed and deviation) over frames 0..100."""
+    frames = np.linspace(0.0, 100.0, 401)
+    mid = 0.5 * (frames[1:] + frames[:-1])
+    return [{"name": (names or ["S%d" % i for i in range(len(values))])[i], "speed_frames": mid,
+             "speed": np.full(len(mid), v), "frames": frames, "deviation": np.full(len(frames), v / 2)}
+            for i, v in enumerate(values)]
+
+
+def test_a_constant_series_lies_on_the_row_its_value_maps_to_in_its_colour():
+    series = flat_series([2.0, 7.0])
+    pixels = plot.render_comparison("flat", series)
+    speed, deviation = plot.make_panels(None, series)
+    for i, value in enumerate([2.0, 7.0]):
+        colour = plot.PALETTE[i]
+        for panel, v in ((speed, value), (deviation, value / 2)):
+            for frame in (10.0, 50.0, 90.0):
+                x, y = panel.to_pixels(frame, v)
+                # Width 2 centred on y: the pixel holding y is fully covered, 3 rows away nothing is.
+                assert colour_at(pixels, x, y) == colour, (i, frame)
+                assert colour_at(pixels, x, y - 3) != colour and colour_at(pixels, x, y + 3) != colour
+    # 7 is the largest value: the speed range ends at the next round tick above 7 × 1.05.
+    assert speed.y_lo == 0.0 and speed.y_hi == 8.0
+    x, y = speed.to_pixels(0.0, 0.0)
+    assert (x, y) == (plot.PLOT_LEFT, plot.SPEED_ROWS[1])
+
+
+def test_a_ramp_is_drawn_at_every_column_at_its_value():
+    frames = np.linspace(0.0, 100.0, 11)  # coarse: the line is interpolated between the points
+    series = [{"name": "ramp", "colour": (200, 0, 0), "speed_frames": frames, "speed": frames / 10.0,
+               "frames": frames, "deviation": np.zeros_like(frames)}]
+    pixels = plot.render_comparison("ramp", series)
+    speed, _ = plot.make_panels(None, series)
+    for frame in np.linspace(3.0, 97.0, 40):
+        x, y = speed.to_pixels(frame, frame / 10.0)
+        assert colour_at(pixels, x, y) == (200, 0, 0), frame
+
+
+def test_axes_grid_and_legend_colours(pixels):
+    speed, deviation = plot.make_panels(None, example_series(), key_frames=[1, 21, 41, 61])
+    for panel in (speed, deviation):
+        left, top, right, bottom = panel.box
+        assert colour_at(pixels, (left + right) // 2, top) == plot.INK        # the frame
+        assert colour_at(pixels, left, (top + bottom) // 2) == plot.INK
+        assert colour_at(pixels, left - 3, round(float(panel.to_pixels(0, panel.y_ticks[1])[1]))) == plot.INK  # a tick
+    # A grid line at a y tick, away from the curves: right of the last key line, inside the frame.
+    x, y = speed.to_pixels(speed.x_hi, speed.y_ticks[-2])
+    assert colour_at(pixels, x - 2, y) in (plot.GRID, plot.INK)
+    for i, name in enumerate(NAMES):  # the swatches: 28 × 12 pixels of the series' colour
+        y = 90 + 34 + i * 22
+        swatch = pixels[y:y + 12, plot.LEGEND_LEFT + 12:plot.LEGEND_LEFT + 40, :3]
+        assert (swatch == plot.PALETTE[i]).all(), name
+
+
+def test_every_series_colour_appears_in_both_panels(pixels):
     rgb = pixels[..., :3]
     columns = slice(plot.PLOT_LEFT, plot.PLOT_RIGHT)
     for i, name in enumerate(NAMES):
-        colour = np.array(plot.PALETTE[i], np.uint8)
-        hit = (rgb == colour).all(axis=2)
-        assert hit[:, plot.LEGEND_LEFT:].sum() >= 28 * 12, name                   # the swatch
-        assert hit[slice(*plot.SPEED_ROWS), columns].sum() > 100, name          # speed panel
-        assert hit[slice(*plot.DEVIATION_ROWS), columns].sum() > 100, name      # deviation panel
-
-
-def test_png_round_trip_through_decode_png(png):
-    decoded = plot.decode_png(png)
-    assert decoded.shape == (800, 1200, 4)
-    _, _, pixels = read_png_with_zlib(png)
-    np.testing.assert_array_equal(decoded, pixels)
-
-
-def test_decode_png_undoes_every_filter():
-    rng = np.random.default_rng(5)
-    pixels = rng.integers(0, 256, size=(5, 7, 4), dtype=np.uint8)
-    bpp, rows = 4, []
-    prev = np.zeros(28, np.int32)
-    for y, kind in enumerate([0, 1, 2, 3, 4]):
-        cur = pixels[y].reshape(-1).astype(np.int32)
-        left = np.concatenate([np.zeros(bpp, np.int32), cur[:-bpp]])
-        upleft = np.concatenate([np.zeros(bpp, np.int32), prev[:-bpp]])
-        if kind == 0:
-            pred = np.zeros_like(cur)
-        elif kind == 1:
-            pred = left
-        elif kind == 2:
-            pred = prev
-        elif kind == 3:
-            pred = (left + prev) // 2
-        else:
-            p = left + prev - upleft
-            pa, pb, pc = abs(p - left), abs(p - prev), abs(p - upleft)
-            pred = np.where((pa <= pb) & (pa <= pc), left, np.where(pb <= pc, prev, upleft))
-        rows.append(bytes([kind]) + ((cur - pred) & 0xFF).astype(np.uint8).tobytes())
-        prev = cur
-    ihdr = struct.pack(">IIBBBBB", 7, 5, 8, 6, 0, 0, 0)
-    data = (b"\x89PNG\r\n\x1a\n" + plot._chunk(b"IHDR", ihdr) +
-            plot._chunk(b"IDAT", zlib.compress(b"".join(rows))) + plot._chunk(b"IEND", b""))
-    np.testing.assert_array_equal(plot.decode_png(data), pixels)
+        hit = (rgb == np.array(plot.PALETTE[i], np.uint8)).all(axis=2)
+        assert hit[slice(*plot.SPEED_ROWS), columns].sum() > 100, name
+        assert hit[slice(*plot.DEVIATION_ROWS), columns].sum() > 100, name
 
 
 def test_text_uses_the_embedded_font():
@@ -139,6 +136,12 @@ def test_non_finite_values_break_lines_instead_of_failing():
     series[1]["deviation"] = np.full_like(series[1]["deviation"], np.inf)
     pixels = plot.render_comparison("gaps", series)
     assert pixels.shape == (800, 1200, 4)
+    speed, deviation = plot.make_panels(None, series)
+    gap = speed.to_pixels(series[0]["speed_frames"][[11, 18]], 0)[0]  # well inside the NaN run
+    columns = pixels[slice(*plot.SPEED_ROWS), int(gap[0]) + 2:int(gap[1]) - 1, :3]
+    assert not (columns == plot.PALETTE[0]).all(axis=2).any()  # the line is broken there
+    inside = pixels[slice(*plot.DEVIATION_ROWS), plot.PLOT_LEFT + 1:plot.PLOT_RIGHT, :3]
+    assert not (inside == plot.PALETTE[1]).all(axis=2).any()  # all-inf: nothing drawn
 
 
 def test_legend_names_coinciding_series():
