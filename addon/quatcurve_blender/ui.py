@@ -87,12 +87,13 @@ def _table_row(layout, cells):
         row.label(text=cell)
 
 
-def draw_compare_table(layout, settings, max_targets=4):
+def draw_compare_table(layout, settings, max_targets=4, active=None):
     """The last comparison: per target a table (source, max deviation, speed ratio, path length) and
-    the recommendation, wrapped by hand (labels do not wrap)."""
+    the recommendation, wrapped by hand (labels do not wrap); the active target's first."""
     table = compare_ops.last_table(settings)
     if not table:
         return
+    table = sorted(table, key=lambda t: t["name"] != active)  # stable: the active target first
     box = layout.box()
     box.label(text="Last compare: " + settings.last_summary, icon="INFO")
     for target in table[:max_targets]:
@@ -281,7 +282,8 @@ class ComparePanel:
         row.scale_y = 1.4
         row.operator("quatcurve.compare", text="Compare", icon="GRAPH")
         draw_compare_plot(layout, context, settings)
-        draw_compare_table(layout, settings)
+        target = trails.active_target(context)
+        draw_compare_table(layout, settings, active=target.name if target is not None else None)
 
 
 class TrailsPanel:
