@@ -254,7 +254,7 @@ class FitPanel:
     """Fit: the animator's own keys play a method — settings, Fit / Unmark, Live, ease, last fit."""
     task = "fit"
     bl_label = "Fit Rotation Keys"
-    bl_options = set()
+    bl_options = {"DEFAULT_CLOSED"}
 
     @classmethod
     def poll(cls, context):
