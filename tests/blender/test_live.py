@@ -3,7 +3,7 @@ view_layer.update() / frame_set. After an inserted, a moved, a deleted and a cha
 is refitted once (the animator's keys stay exactly, up to quaternion signs; Blender's evaluation
 plays the method); nothing is touched (digest, refit count) for a location key, with live off, or for
 our own write coming back; a drag defers (test hook, 4.2+ modal operators, 3.4's debounce); only the
-changed bone of a rig refits. Undo in a window: test_session.py (sessions/live_undo_session.py)."""
+changed bone of a rig refits. Undo in a window (Debian's Blender under Xvfb): sessions/live_undo_session.py."""
 import math
 from types import SimpleNamespace
 
@@ -302,3 +302,16 @@ def test_handlers_are_registered_once_and_removed(addon):
     live.unregister()
     assert not any(h in hs for hs in lists for h in (live.on_depsgraph_update, live.on_undo_redo, live.on_load))
     live.register()
+
+
+def test_undo_after_a_live_refit_restores_the_file_exactly(tmp_path):
+    """Debian's Blender with a window (Xvfb), live mode refitting from its timer: insert a key → live
+    refit → ed.undo gives back exactly the file before the insert (the refit made no undo step of its
+    own), ed.redo the refitted keys."""
+    import test_session  # not `from … import`: its tests would be collected here too
+    verdict = test_session.windowed("live_undo_session.py", tmp_path / "live_undo.json")
+    assert verdict["fit"] == ["FINISHED"] and not verdict["errors"], verdict
+    assert verdict["refits_after_insert"] == 1 and verdict["refit_changed_keys"], verdict
+    assert verdict["undo_restored"] and verdict["still_restored"], verdict["differences"]
+    assert verdict["refits_after_undo"] == 1, "live mode refitted after undo: %s" % verdict
+    assert verdict["redo_refitted"] and verdict["refits_after_redo"] == 2, verdict
