@@ -273,7 +273,13 @@ def sample_times(frames, subframes):
     lo, hi = frames[0], frames[-1]
     first, last = math.ceil(lo * subframes - 1e-9), math.floor(hi * subframes + 1e-9)
     grid = np.arange(first, last + 1, dtype=np.float64) / subframes
-    near = np.abs(grid[:, None] - frames[None, :]).min(axis=1) < 1e-6 if len(grid) else np.zeros(0, bool)
+    # Distance to the nearest key by bisection, not a grid × keys table (live mode refits often).
+    if len(frames) > 1:
+        at = np.clip(np.searchsorted(frames, grid), 1, len(frames) - 1)
+        gap = np.minimum(np.abs(grid - frames[at - 1]), np.abs(frames[at] - grid))
+    else:
+        gap = np.abs(grid - frames[0])
+    near = gap < 1e-6
     return np.union1d(grid[~near], frames)
 
 
