@@ -273,7 +273,13 @@ def sample_times(frames, subframes):
     lo, hi = frames[0], frames[-1]
     first, last = math.ceil(lo * subframes - 1e-9), math.floor(hi * subframes + 1e-9)
     grid = np.arange(first, last + 1, dtype=np.float64) / subframes
-    near = np.abs(grid[:, None] - frames[None, :]).min(axis=1) < 1e-6 if len(grid) else np.zeros(0, bool)
+    # Distance to the nearest key by bisection, not a grid × keys table (live mode refits often).
+    if len(frames) > 1:
+        at = np.clip(np.searchsorted(frames, grid), 1, len(frames) - 1)
+        gap = np.minimum(np.abs(grid - frames[at - 1]), np.abs(frames[at] - grid))
+    else:
+        gap = np.abs(grid - frames[0])
+    near = gap < 1e-6
     return np.union1d(grid[~near], frames)
 
 
@@ -424,6 +430,18 @@ def record_frames(record):
     return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
 
 
+def plan_refit(keys, settings, record=None):
+    """plan_target with the target's eases; keys moved in time since `record` (as many as then)
+    keep their ease (fit and live mode)."""
+    ease_in, ease_out = key_eases(keys.action, keys.target, keys.frames)
+    if record is not None and record.key_frames:
+        old = record_frames(record)
+        if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
+            o_in, o_out = key_eases(keys.action, keys.target, old)
+            ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
+    return plan_target(keys, settings, ease_in, ease_out)
+
+
 # ---- the task -------------------------------------------------------------------------------------------
 
 @dataclass
@@ -479,13 +497,7 @@ def fit(found, settings, only_changed=False):
         record = find_record(keys.action, target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        ease_in, ease_out = key_eases(keys.action, target, keys.frames)
-        if record is not None and record.key_frames:
-            old = record_frames(record)
-            if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
-                o_in, o_out = key_eases(keys.action, target, old)
-                ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
-        plan = plan_target(keys, settings, ease_in, ease_out)
+        plan = plan_refit(keys, settings, record)
         if plan is None:
             result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (

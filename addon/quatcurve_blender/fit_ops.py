@@ -10,7 +10,7 @@ settings, as for bake and reduce.
 import bpy
 import numpy as np
 
-from . import fcurves, fit, native, targets
+from . import fcurves, fit, live, native, targets
 from .targets import TargetError
 
 METHOD_ITEMS = (
@@ -79,7 +79,7 @@ class QuatCurveFitSettings(bpy.types.PropertyGroup):
     __annotations__ = dict(
         fit_properties(),
         live=bpy.props.BoolProperty(
-            name="Live", default=False,
+            name="Live", default=False, update=lambda self, context: live.switched(self.id_data),
             description="Keep fitted targets fitted while you edit their rotation keys (insert, move, delete, "
                         "change, undo): their generated keys and handles are refitted after each change"),
         ease_in=bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0,

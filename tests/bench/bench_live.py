@@ -1,0 +1,150 @@
+"""Live fit: how long a refit takes after a key change, and where the time goes (prints a table; not
+a timed test).
+
+Cases (SQUAD, 0.05°, 4 subframes, live mode on, the change made from Python, then
+view_layer.update() — the depsgraph handler refits inside it, as in background mode):
+- one bone with 50 keys (a key every 10 frames), one key's value changed;     target ≤ 20 ms
+- a 100-bone × 1,000-frame action with a key every 10 frames (100 keys per bone):
+  one key of one bone changed (100 signatures checked, 1 refit) and one key of every bone changed
+  (100 refits);                                                                  target ≤ 200 ms
+- nothing relevant changed (a location key): the signature checks alone.
+Each case is run REPEAT times (the changed value alternates), the median printed. Stages come from
+live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: curve,
+sampling and the native fitter; write: keys into Blender); `native` is the time spent inside the
+quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapping it.
+
+  blender -b --factory-startup --python tests/bench/bench_live.py
+  ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_live.py
+"""
+import os
+import statistics
+import sys
+import time
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+
+import quatcurve_blender  # noqa: E402
+from quatcurve_blender import fcurves, fit, live, native, targets  # noqa: E402
+
+REPEAT = 7
+NATIVE = [0.0]
+
+
+class _Timed:
+    """Wraps the native module (and the curves it returns): the time spent inside goes to NATIVE."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    def __getattr__(self, name):
+        value = getattr(self._inner, name)
+        if not callable(value):
+            return value
+
+        def timed(*args, **kwargs):
+            t = time.perf_counter()
+            out = value(*args, **kwargs)
+            NATIVE[0] += time.perf_counter() - t
+            return _Timed(out) if type(out).__name__ == "Curve" else out
+        return timed
+
+
+def build_rig(name, bones, frames, every):
+    """An armature with quaternion bones keyed every `every` frames over `frames` (a smooth random walk)."""
+    arm = bpy.data.armatures.new(name)
+    rig = bpy.data.objects.new(name, arm)
+    bpy.context.scene.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    for i in range(bones):
+        eb = arm.edit_bones.new("B%03d" % i)
+        eb.head, eb.tail = (i * 0.1, 0, 0), (i * 0.1, 0, 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    fcurves.new_action(rig, name + "Action")
+    channels = fcurves.Channels.of(rig, create=True)
+    rng = np.random.default_rng(7)
+    key_frames = np.arange(1, frames + 1, every, dtype=np.float64)
+    for pb in rig.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+        q = np.cumsum(rng.normal(scale=0.15, size=(len(key_frames), 4)), axis=0) + [1, 0, 0, 0]
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        for c in range(4):
+            channels.write(pb.path_from_id("rotation_quaternion"), c, key_frames, q[:, c], interpolation="BEZIER")
+    return rig
+
+
+def nudge(rig, bone_names, k, amount):
+    """Changes the value of the k-th animator key of channel 1 of each named bone."""
+    channels = fcurves.Channels.of(rig)
+    for name in bone_names:
+        curve = channels.find(rig.pose.bones[name].path_from_id("rotation_quaternion"), 1)
+        frames, _ = fcurves.read_keys(curve)
+        types = fcurves.read_key_types(curve)
+        mine = np.flatnonzero(types != fit.KEY_TYPE_GENERATED)
+        curve.keyframe_points[int(mine[k])].co[1] += amount
+
+
+def measure(label, rig, bone_names, change=True, expect=None):
+    rows = []
+    for r in range(REPEAT):
+        if change:
+            nudge(rig, bone_names, 3, 0.02 if r % 2 == 0 else -0.02)
+        else:
+            rig.location = (r, 0, 0)
+            rig.keyframe_insert("location", frame=r + 1)
+        live.STATS.reset()
+        NATIVE[0] = 0.0
+        t = time.perf_counter()
+        bpy.context.view_layer.update()
+        total = time.perf_counter() - t
+        if expect is not None:
+            assert live.STATS.refits == expect, (label, live.STATS)
+        rows.append((total, dict(live.STATS.seconds), NATIVE[0], live.STATS.checks, live.STATS.refits))
+    total = statistics.median(r[0] for r in rows)
+    stages = {s: statistics.median(r[1].get(s, 0.0) for r in rows) for s in ("targets", "read", "signature", "plan", "write")}
+    nat = statistics.median(r[2] for r in rows)
+    handler = sum(stages.values())
+    print("%-34s %8.2f ms  (handler %7.2f: targets %.2f, read %.2f, signature %.2f, plan %.2f [native %.2f], "
+          "write %.2f; %d checked, %d refitted)" % (
+              label, total * 1e3, handler * 1e3, stages["targets"] * 1e3, stages["read"] * 1e3,
+              stages["signature"] * 1e3, stages["plan"] * 1e3, nat * 1e3, stages["write"] * 1e3, rows[0][3], rows[0][4]))
+    return total, nat
+
+
+def main():
+    quatcurve_blender.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    native.require()
+    real_require = native.require
+    settings = fit.FitSettings(method="SQUAD", tolerance=0.05, subframes=4)
+    one = build_rig("One", 1, 491, 10)  # 50 keys
+    big = build_rig("Big", 100, 1000, 10)  # 100 keys per bone
+    t = time.perf_counter()
+    first = fit.fit([targets.Target(one, pb.name) for pb in one.pose.bones], settings)
+    t1 = time.perf_counter()
+    second = fit.fit([targets.Target(big, pb.name) for pb in big.pose.bones], settings)
+    t2 = time.perf_counter()
+    print("quatcurve live refit, Blender %s (%s)" % (bpy.app.version_string, "binary" if bpy.app.binary_path else "bpy module"))
+    print("initial fit: One %.1f ms (%s); Big %.0f ms (%s)" % ((t1 - t) * 1e3, first.summary(), (t2 - t1) * 1e3,
+                                                             second.summary()))
+    bpy.context.scene.quatcurve_fit.live = True
+    bpy.context.view_layer.update()
+    native.require = lambda: _Timed(real_require())
+    try:
+        measure("1 bone x 50 keys, 1 key changed", one, ["B000"], expect=1)
+        measure("100 bones, 1 key of 1 bone", big, ["B042"], expect=1)
+        measure("100 bones, 1 key of every bone", big, [pb.name for pb in big.pose.bones], expect=100)
+        measure("100 bones, a location key", big, [], change=False, expect=0)
+    finally:
+        native.require = real_require
+    quatcurve_blender.unregister()
+
+
+main()
+sys.stdout.flush()
+if not bpy.app.binary_path:
+    os._exit(0)  # the bpy module can hang in its exit-time destructors
