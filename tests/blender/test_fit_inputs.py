@@ -29,15 +29,33 @@ from quatcurve_blender.targets import Target
 TOL = 0.05  # degrees
 
 
+_ENABLED = []
+
+
 def enable_bundled(module, default_set=False):
     """Enables a bundled add-on (again after read_factory_settings); the reason when it cannot.
-    Rigify's register() reads its own preferences: it needs default_set=True (listed in them)."""
+    Rigify's register() reads its own preferences: it needs default_set=True (listed in them).
+    Disabled again after the test (bundled_addons), so later tests run without it."""
     import addon_utils
     try:
         mod = addon_utils.enable(module, default_set=default_set)
     except Exception as error:  # noqa: BLE001 — any failure is a reason to skip
         return "%s could not be enabled: %s" % (module, error)
+    if mod is not None:
+        _ENABLED.append((module, default_set))
     return "" if mod is not None else "%s is not available in Blender %s" % (module, bpy.app.version_string)
+
+
+@pytest.fixture(autouse=True)
+def bundled_addons():
+    yield
+    import addon_utils
+    while _ENABLED:
+        module, default_set = _ENABLED.pop()
+        try:
+            addon_utils.disable(module, default_set=default_set)
+        except Exception as error:  # noqa: BLE001 — cleanup only
+            print("[cleanup] %s not disabled: %s" % (module, error))
 
 
 def operator_missing(op):
