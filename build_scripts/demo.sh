@@ -8,7 +8,10 @@
 #   3. that scene baked with SLERP, SQUAD and SPLINE_C2 into out/demo_<method>.blend (one file per
 #      method: a bake reads the target's current action, so each method bakes from the original keys);
 #   4. the comparison (with the SPLINE_C2 bake): out/report.json and one plot PNG per target beside
-#      it, then the comparison table read from report.json.
+#      it, then the comparison table read from report.json;
+#   5. the fit (cli.py --fit, SQUAD): FixedAngle, Hemisphere and Mocap keep their own keys and get fitted
+#      handles and generated keys in out/demo_fit.blend; a fresh Blender without the add-on then plays
+#      it at every frame and 4 subframes against the native curve (build_scripts/demo_fit_check.py).
 #
 #   build_scripts/demo.sh [--quick]
 # --quick: SLERP and SPLINE_C2 on the three objects only (no motion capture) — the CTest test demo.quick.
@@ -22,7 +25,7 @@ quick=0
 for arg in "$@"; do
   case "$arg" in
     --quick) quick=1 ;;
-    -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) die "unknown argument $arg (see --help)" ;;
   esac
 done
@@ -87,6 +90,16 @@ done
 
 section "4. The comparison"
 "$VENV/bin/python" "$ROOT/build_scripts/demo_table.py" "$OUT/report.json"
+
+section "5. Fitting the animator's keys through the command line, measured by Blender"
+fit_targets="FixedAngle,Hemisphere"
+[ -f "$BVH" ] && [ "$quick" = 0 ] && fit_targets="$fit_targets,Mocap"
+fit_args=(--fit --method SQUAD --tolerance 0.05 --subframes 4 --objects "$fit_targets" --output "$OUT/demo_fit.blend")
+echo "\$ $cli_shown ${fit_args[*]//$ROOT\//} ${scene#$ROOT/}"
+run_script "$CLI" "${fit_args[@]}" "$scene" | quiet_blender
+echo
+run_script "$ROOT/build_scripts/demo_fit_check.py" "$OUT/demo_fit.blend" "$BUILD_DIR/python" SQUAD 0.05 4 \
+  ${fit_targets//,/ } | quiet_blender
 
 section "Written under ${OUT#$ROOT/}/"
 for f in "$OUT"/demo_*.blend "$OUT"/report.json; do echo "  $(basename "$f")"; done

@@ -1,5 +1,5 @@
-"""Batch baking from the command line: bake (and optionally compare) the rotations in a .blend file
-without Blender's UI.
+"""Batch baking and fitting from the command line: bake (and optionally compare), or fit (`--fit`),
+the rotations in a .blend file without Blender's UI.
 
     blender --background --python addon/quatcurve_blender/cli.py -- [options] IN.blend
     blender --background IN.blend --python addon/quatcurve_blender/cli.py -- [options]
@@ -13,7 +13,7 @@ succeeded. IN.blend is only written with --in-place; the output is saved to a te
 same folder and renamed over the target, so it is either complete or untouched.
 
 This module parses arguments and selects targets by name or glob pattern; the work is done by the
-functions the operators call (bake.bake, compare.compare / save_plots / write_report).
+functions the operators call (bake.bake, compare.compare / save_plots / write_report, fit.fit).
 
 When Blender runs this file as a script (`--python cli.py`) it is not inside its package: the
 add-on's parent folder is put on sys.path and the package is imported (and registered) by name.
@@ -31,7 +31,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, native, targets
+    from . import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -40,7 +40,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, native, targets
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
 
 import bpy
 
@@ -66,6 +66,8 @@ examples:
       --method TCB --tension 0.5 --rotation-mode QUATERNION --in-place
   PYTHONPATH=addon python -m quatcurve_blender.cli --compare --report out/report.json \\
       --output out/baked.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --fit --method SQUAD --tolerance 0.01 \\
+      --objects 'Rig' --output fitted.blend in.blend
 """
 
 
@@ -73,7 +75,9 @@ def build_parser():
     p = Parser(prog=PROG, formatter_class=argparse.RawDescriptionHelpFormatter, epilog=USAGE_EPILOG,
                description="Bake the rotation animation of objects and pose bones in a .blend file with an\n"
                            "orientation-curve method (the quatcurve.bake operator without the UI), optionally\n"
-                           "comparing the methods first (the quatcurve.compare operator).")
+                           "comparing the methods first (the quatcurve.compare operator); or, with --fit,\n"
+                           "shape their own rotation keys so that Blender plays the method (the\n"
+                           "quatcurve.fit operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
                         "blender -b IN.blend --python cli.py -- ...)")
@@ -98,6 +102,16 @@ def build_parser():
     g.add_argument("--no-shortest-path", dest="shortest_path", action="store_false",
                    help="SLERP: keep the keyed quaternions' path instead of the shorter way")
 
+    g = p.add_argument_group("fit", "Instead of baking (the quatcurve.fit operator): the targets' own rotation keys "
+                                    "stay, get fitted Bezier handles and as few generated keys as the tolerance "
+                                    "needs, in their actions. Methods: %s." % ", ".join(fit.METHODS))
+    g.add_argument("--fit", action="store_true",
+                   help="fit instead of bake; uses --method, --tension, --continuity, --bias, "
+                        "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
+    g.add_argument("--no-clamp", dest="clamped", action="store_false",
+                   help="fit with SQUAD, TCB, CATMULL_ROM: the textbook tangents instead of the "
+                        "overshoot-free ones")
+
     g = p.add_argument_group("bake")
     g.add_argument("--rotation-mode", choices=bake.OUTPUT_MODES, default="KEEP", metavar="MODE",
                    help="rotation mode of the baked keys: %s (default KEEP: each target's own mode)"
@@ -105,9 +119,10 @@ def build_parser():
     g.add_argument("--frame-range", type=float, nargs=2, metavar=("START", "END"),
                    help="frames to bake (default: the keyed range of the targets)")
     g.add_argument("--step", type=float, default=1.0, metavar="FRAMES", help="frames between baked keys, at least 1 (default 1)")
-    g.add_argument("--tolerance", type=float, default=0.0, metavar="DEGREES",
-                   help="0 (default): a key every STEP frames; above 0: as few keys as this angular "
-                        "bound allows (key reduction)")
+    g.add_argument("--tolerance", type=float, default=None, metavar="DEGREES",
+                   help="bake: 0 (default): a key every STEP frames; above 0: as few keys as this angular "
+                        "bound allows (key reduction). --fit: largest error of Blender's playback against "
+                        "the method, above 0 (default 0.05)")
     g.add_argument("--no-new-action", dest="new_action", action="store_false",
                    help="replace the rotation curves in the targets' actions (default: bake into a new "
                         "action named after the original, which is kept unchanged)")
@@ -119,8 +134,9 @@ def build_parser():
     g.add_argument("--report", metavar="REPORT.json",
                    help="where the comparison report goes (implies --compare; default: the output file "
                         "with _compare.json instead of .blend)")
-    g.add_argument("--subframes", type=int, default=1, metavar="N",
-                   help="comparison samples per frame (default 1: every frame)")
+    g.add_argument("--subframes", type=int, default=None, metavar="N",
+                   help="comparison samples per frame (default 1: every frame); --fit: points per frame "
+                        "where the tolerance is checked (default 4)")
     g.add_argument("--all-euler-orders", action="store_true",
                    help="compare Blender's Euler mode in all six orders (default: the target's order)")
     g.add_argument("--compare-keys", dest="key_interpolation", choices=compare.KEY_INTERPOLATIONS,
@@ -129,8 +145,8 @@ def build_parser():
                         "Blender's auto-clamped default)")
 
     g = p.add_argument_group("output", "One of them is required.")
-    g.add_argument("--output", metavar="OUT.blend", help="the baked file (IN.blend is not changed)")
-    g.add_argument("--in-place", action="store_true", help="overwrite IN.blend with the baked file")
+    g.add_argument("--output", metavar="OUT.blend", help="the baked (fitted) file (IN.blend is not changed)")
+    g.add_argument("--in-place", action="store_true", help="overwrite IN.blend with the baked (fitted) file")
     return p
 
 
@@ -147,6 +163,8 @@ def split_patterns(values):
 
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
+    if args.tolerance is None:
+        args.tolerance = 0.0
     frame_range = tuple(args.frame_range) if args.frame_range else (None, None)
     settings = bake_ops.settings_from(args, frame_range)
     try:
@@ -158,7 +176,38 @@ def bake_settings(args):
     return settings
 
 
+# Bake and compare options that mean nothing to a fit (argparse defaults: what is not given).
+NOT_FOR_FIT = (("rotation_mode", "KEEP", "--rotation-mode"), ("frame_range", None, "--frame-range"),
+               ("step", 1.0, "--step"), ("new_action", True, "--no-new-action"), ("compare", False, "--compare"),
+               ("report", None, "--report"), ("all_euler_orders", False, "--all-euler-orders"),
+               ("key_interpolation", "BEZIER", "--compare-keys"))
+
+
+def fit_settings(args):
+    """FitSettings from the arguments (the operator's defaults where not given), checked by fit's own
+    check; bake-only options and methods fit does not have are a UsageError."""
+    given = [flag for name, default, flag in NOT_FOR_FIT if getattr(args, name) != default]
+    if given:
+        raise UsageError("%s: not an option of --fit (it fits the keys in their own actions and modes)"
+                         % ", ".join(given))
+    if args.method not in fit.METHODS:
+        raise UsageError("--method %s cannot be fitted (--fit methods: %s)" % (args.method, ", ".join(fit.METHODS)))
+    defaults = fit.FitSettings()
+    settings = fit.FitSettings(
+        method=args.method, tension=args.tension, continuity=args.continuity, bias=args.bias,
+        shortest_path=args.shortest_path, clamped=args.clamped,
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        fit.check_settings(settings)
+    except fit.FitError as error:
+        raise UsageError(str(error)) from None
+    return settings
+
+
 def compare_settings(args):
+    if args.subframes is None:
+        args.subframes = 1
     settings = compare.CompareSettings(subframes=args.subframes, all_euler_orders=args.all_euler_orders,
                                        key_interpolation=args.key_interpolation, tension=args.tension,
                                        continuity=args.continuity, bias=args.bias)
@@ -339,6 +388,10 @@ def save_atomically(path):
 # ---- main -------------------------------------------------------------------------------------------
 
 def run(args):
+    if args.fit:
+        return run_fit(args)
+    if not args.clamped:
+        raise UsageError("--no-clamp is an option of --fit")
     settings = bake_settings(args)
     want_compare = args.compare or args.report is not None
     comparing = compare_settings(args) if want_compare else None
@@ -383,6 +436,40 @@ def bake_and_save(args, settings, comparing, source, output, report_file):
         path, pngs = compare.write_report(report, report_file)
         print("compare: %s; wrote %s and %d plot%s" % (report.summary(), path, len(pngs),
                                                         "" if len(pngs) == 1 else "s"))
+    return EXIT_OK
+
+
+def run_fit(args):
+    """--fit: the same checks and output handling as a bake; the work is fit.fit."""
+    settings = fit_settings(args)
+    source = input_path(args)
+    output = output_path(args, source)
+    native.require()
+    open_input(source)
+    registered = register_addon()
+    try:
+        return fit_and_save(args, settings, source, output)
+    finally:
+        if registered:
+            addon.unregister()
+
+
+def fit_and_save(args, settings, source, output):
+    scene = bpy.context.scene
+    chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
+    result = fit.fit(chosen, settings)
+    scene.frame_set(scene.frame_current)  # re-evaluate with the fitted curves, as the operator does
+    if hasattr(scene, "quatcurve_fit"):
+        scene.quatcurve_fit.last_summary = result.summary()
+        scene.quatcurve_fit.last_lines = "\n".join(result.lines())
+    print("quatcurve %s (Blender %s): fit %s, tolerance %g°, %d subframes, %s → %s" % (
+        native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+        settings.subframes, os.path.basename(source), "in place" if args.in_place else output))
+    for line in result.lines():
+        print("  " + line)
+    print("total: " + result.summary())
+    save_atomically(output)
+    print("saved %s" % output)
     return EXIT_OK
 
 

@@ -3,7 +3,7 @@ the tests: the binary (`blender --background --python cli.py -- …`) or, for a 
 (`python -m quatcurve_blender.cli …` with addon/ on PYTHONPATH).
 
 Each launch costs about a second, so the cases are few: --help, a bake with --compare, an in-place
-bake of chosen bones, and one launch per bad argument."""
+bake of chosen bones, a fit (--fit) and a fit that fails, and one launch per bad argument."""
 
 import hashlib
 import json
@@ -19,7 +19,7 @@ import pytest
 from mathutils import Quaternion
 
 from compare_helpers import load_png, schema_errors
-from quatcurve_blender import cli, compare, fcurves, plot
+from quatcurve_blender import cli, compare, fcurves, fit, native, plot
 
 ADDON_DIR = os.path.dirname(os.path.dirname(os.path.abspath(cli.__file__)))
 CLI = os.path.join(ADDON_DIR, "quatcurve_blender", "cli.py")
@@ -188,6 +188,88 @@ def test_in_place_bakes_only_the_chosen_bones(addon, source_blend, tmp_path):
     assert not fcurves.active_action(bpy.data.objects["Turn"]).name.endswith("_squad")
 
 
+def fit_keys_of(owner):
+    """Per rotation channel of the owner's mode: (frames, values, types) of every key."""
+    prop, count = fcurves.rotation_property(owner.rotation_mode)
+    channels = fcurves.Channels.of(owner.id_data)
+    out = []
+    for curve in channels.find_all(owner.path_from_id(prop), count):
+        frames, values = fcurves.read_keys(curve)
+        out.append((frames, values, fcurves.read_key_types(curve)))
+    return out
+
+
+def rotation_angles(a, b):
+    """Angle (rad) between rotations row by row, sign-invariant; 2·atan2(|a − b|, |a + b|) keeps the
+    precision near 0 that arccos of a float32 dot product loses (~0.04°)."""
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=1, keepdims=True)
+    b = np.where(np.sum(a * b, axis=1, keepdims=True) < 0, -b, b)
+    return 2 * np.arctan2(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
+
+
+def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, tmp_path):
+    """--fit SQUAD on Quat and the rig's bones (Turn not chosen): the animator's keys stay, generated
+    keys are marked, fit records are stored, and Blender plays SQUAD within the tolerance at every
+    quarter frame; Turn and the input file are unchanged."""
+    before = digest(source_blend)
+    out = tmp_path / "fitted.blend"
+    proc = run_cli(["--fit", "--method", "SQUAD", "--tolerance", "0.02", "--objects", "Quat,Rig", "--output", out,
+                    source_blend])
+    assert proc.returncode == 0, proc.stderr
+    assert not error_lines(proc) and "Traceback" not in proc.stderr
+    lines = proc.stdout.splitlines()
+    assert any("fit SQUAD, tolerance 0.02°, 4 subframes" in line for line in lines), proc.stdout
+    for name, count in (("Quat", 2), ("Rig/B0", 3), ("Rig/B1", 3)):
+        assert any(line.strip().startswith("%s: QUATERNION, %d animator keys + " % (name, count)) for line in lines), \
+            proc.stdout
+    assert any(line.startswith("total: Fitted 3 targets with SQUAD") for line in lines), proc.stdout
+    assert digest(source_blend) == before
+
+    open_blend(out)
+    scene, qc = bpy.context.scene, native.require()
+    turn = bpy.data.objects["Turn"]
+    assert [len(f) for f, _, _ in fit_keys_of(turn)] == [2, 2, 2]  # not chosen: untouched
+    times = np.arange(4, 21 * 4 + 1) / 4.0
+    for owner, name in ((bpy.data.objects["Quat"], "Quat"), (bpy.data.objects["Rig"].pose.bones["B0"], "Rig/B0"),
+                        (bpy.data.objects["Rig"].pose.bones["B1"], "Rig/B1")):
+        keys = fit_keys_of(owner)
+        mine = [(f[t != fit.KEY_TYPE_GENERATED], v[t != fit.KEY_TYPE_GENERATED]) for f, v, t in keys]
+        frames = mine[0][0]
+        assert all(np.array_equal(f, frames) for f, _ in mine), name
+        values = np.stack([v for _, v in mine], axis=1).astype(np.float64)
+        action = fcurves.active_action(owner.id_data)
+        assert fit.find_record(action, fit.targets.Target(owner.id_data, owner.name if owner != owner.id_data
+                                                              else None)).method == "SQUAD"
+        want = qc.Curve(frames, values, "SQUAD").sample(times[times <= frames[-1]])
+        got = []
+        for t in times[times <= frames[-1]]:
+            scene.frame_set(int(math.floor(t)), subframe=float(t - math.floor(t)))
+            got.append(tuple(owner.rotation_quaternion.normalized()))
+        err = np.degrees(rotation_angles(np.array(got), want)).max()
+        assert err <= 0.02 + 1e-3, "%s: %.5f°" % (name, err)
+
+
+def test_fit_that_fails_exits_1_and_saves_nothing(addon, tmp_path):
+    """An axis-angle target cannot be fitted: status 1, one line naming it, no output file."""
+    source = tmp_path / "axis.blend"
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    obj = bpy.data.objects.new("Axis", None)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.rotation_mode = "AXIS_ANGLE"
+    for frame, angle in ((1, 0.0), (11, 2.0)):
+        obj.rotation_axis_angle = (angle, 0, 0, 1)
+        obj.keyframe_insert("rotation_axis_angle", frame=frame)
+    bpy.ops.wm.save_as_mainfile(filepath=str(source), copy=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    out = tmp_path / "out.blend"
+    proc = run_cli(["--fit", "--output", out, source])
+    assert proc.returncode == 1, (proc.stdout, proc.stderr)
+    errors = error_lines(proc)
+    assert len(errors) == 1 and "Axis: rotation mode AXIS_ANGLE cannot be fitted yet" in errors[0], proc.stderr
+    assert not out.exists()
+
+
 BAD_ARGUMENTS = [
     # (id, arguments with {IN} {OUT} {TMP}, exit status, words in the message)
     ("missing-input", ["--output", "{OUT}", "{TMP}/missing.blend"], 2, "no such file"),
@@ -199,6 +281,10 @@ BAD_ARGUMENTS = [
     ("output-is-input", ["--output", "{IN}", "{IN}"], 2, "--in-place"),
     # Not writable: refused up front for a normal user; root passes the access check, so Blender's
     # save fails (/proc takes no files) — a failure, status 1.
+    ("fit-method", ["--fit", "--method", "EULER", "--output", "{OUT}", "{IN}"], 2, "cannot be fitted"),
+    ("fit-tolerance", ["--fit", "--tolerance", "0", "--output", "{OUT}", "{IN}"], 2, "must be a finite angle above 0"),
+    ("fit-bake-option", ["--fit", "--step", "2", "--rotation-mode", "XYZ", "--output", "{OUT}", "{IN}"], 2,
+     "--rotation-mode, --step: not an option of --fit"),
     ("output-unwritable", ["--output", "/proc/quatcurve-cli-test.blend", "{IN}"], (1, 2), "writ"),
 ]
 

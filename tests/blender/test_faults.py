@@ -323,3 +323,96 @@ def test_native_module_missing(cube, monkeypatch):
     monkeypatch.setattr(native, "module", None)
     monkeypatch.setattr(native, "UNAVAILABLE_REASON", "simulated: the compiled module is missing")
     refused("quatcurve is unavailable: simulated: the compiled module is missing")
+
+
+# ---- fit (quatcurve.fit, fit.fit): the same bad inputs, refused before anything is written -----------
+
+def fit_records():
+    """Every action's fit and ease records (the fit writes them with the keys)."""
+    return {a.name: ([(r.slot, r.owner_path, r.method, r.signature) for r in getattr(a, "quatcurve_fits", ())],
+                     [(e.owner_path, e.frame) for e in getattr(a, "quatcurve_eases", ())]) for a in bpy.data.actions}
+
+
+def fit_refused(match, settings=None):
+    """The fit is refused with a message matching `match` — through the operator (RuntimeError in
+    background mode), or through fit.fit with `settings` (FitError) — and the file (keys, handles,
+    key types, records) is unchanged."""
+    from quatcurve_blender import fit, targets
+    before = whole_state(), fit_records()
+    if settings is None:
+        with pytest.raises(RuntimeError, match=match) as error:
+            bpy.ops.quatcurve.fit(method="SQUAD", tolerance=0.05)
+    else:
+        with pytest.raises(fit.FitError, match=match) as error:
+            fit.fit(targets.gather_targets(bpy.context, verb="fit"), settings)
+    print("[fault] fit refused: %s" % str(error.value).strip())
+    assert (whole_state(), fit_records()) == before, "a refused fit changed the file"
+
+
+def test_fit_nan_key(cube):
+    set_keys(rotation_fcurve(cube, 1), [(1, 0.0), (11, math.nan)])
+    fit_refused(r"Cube: rotation_euler\[1\] is nan at frame 11")
+
+
+def test_fit_nan_key_on_a_pose_bone(scene):
+    rig = add_rig()
+    bone = rig.pose.bones["B1"]
+    key(bone, "rotation_quaternion", [(1, (1, 0, 0, 0)), (5, (0, 1, 0, 0))])
+    set_keys(rotation_fcurve(bone, 2, "rotation_quaternion"), [(1, 0.0), (5, math.nan)])
+    select_bones(rig, {"B1"})
+    fit_refused(r"Rig/B1: rotation_quaternion\[2\] is nan at frame 5")
+
+
+def test_fit_two_keys_on_one_frame(cube):
+    set_keys(rotation_fcurve(cube, 2), [(1, 0.0), (11, 0.5), (11, 1.5), (21, 1.0)])
+    fit_refused(r"Cube: rotation_euler\[2\] has two different keys on frame 11 \(0\.5 and 1\.5\)")
+
+
+def test_fit_library_linked_object(scene, tmp_path):
+    select_objects(_library_object(tmp_path))
+    fit_refused("Linked: the object is library-linked and cannot be changed")
+
+
+def test_fit_library_override(scene, tmp_path):
+    override = _library_object(tmp_path).override_create(remap_local_usages=True)
+    select_objects(override)
+    fit_refused("Linked: the object is override-protected and cannot be changed")
+
+
+def test_fit_library_linked_action(scene, tmp_path):
+    """Fit always works in place: a linked action is refused (a bake could write a new action)."""
+    source = add_empty("Source", "XYZ")
+    key(source, "rotation_euler", [(1, (0, 0, 0)), (11, (0, 0, 90))], degrees=True)
+    action = fcurves.active_action(source)
+    action.name = "LibAction"
+    library_file = str(tmp_path / "actions.blend")
+    bpy.data.libraries.write(library_file, {action}, fake_user=True)
+    bpy.data.objects.remove(source)
+    bpy.data.actions.remove(action)
+    with bpy.data.libraries.load(library_file, link=True) as (data_from, data_to):
+        data_to.actions = ["LibAction"]
+    obj = add_empty("Cube", "XYZ")
+    fcurves.assign_action(obj, data_to.actions[0])
+    if fcurves.SLOTTED and obj.animation_data.action_slot is None:
+        obj.animation_data.action_slot = data_to.actions[0].slots[0]
+    select_objects(obj)
+    fit_refused("Cube: action 'LibAction' is library-linked and cannot be changed in place")
+
+
+def test_fit_driver_on_rotation(cube):
+    cube.driver_add("rotation_euler", 2).driver.expression = "0.5"
+    fit_refused(r"Cube: rotation_euler\[2\] is driven by a driver")
+
+
+@pytest.mark.parametrize("tolerance", [0.0, -1.0, math.nan], ids=["zero", "negative", "nan"])
+def test_fit_tolerance_not_above_zero(cube, tolerance):
+    """The operator's tolerance property has a minimum above 0; fit.fit itself refuses the rest."""
+    from quatcurve_blender import fit
+    fit_refused(r"tolerance .*°: must be a finite angle above 0", fit.FitSettings(tolerance=tolerance))
+
+
+def test_fit_axis_angle(scene):
+    obj = add_empty("Cube", "AXIS_ANGLE")
+    key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (11, (2, 0, 0, 1))])
+    select_objects(obj)
+    fit_refused("Cube: rotation mode AXIS_ANGLE cannot be fitted yet")

@@ -1,7 +1,8 @@
 """Nothing is lost to undo, cancel or memory (issue 8).
 
 - Undo: in a Blender with a window (Debian's Blender under Xvfb), a bake then ed.undo restores the
-  file exactly — into a new action and in place (sessions/undo_session.py).
+  file exactly — into a new action and in place — and so does a fit, and a refit of a fitted file,
+  fit records included (sessions/undo_session.py).
 - Cancel: a modal bake cancelled half way leaves no new action and no changed curve — driven through
   the operator's modal path in background mode (every Blender), and end to end in a window with a
   simulated Esc key press (sessions/cancel_session.py).
@@ -52,14 +53,32 @@ def windowed(script, verdict_path, *flags, timeout=300):
     return verdict
 
 
-def test_undo_after_a_bake_restores_the_file_exactly(tmp_path):
-    verdict = windowed("undo_session.py", tmp_path / "undo.json")
+@pytest.fixture(scope="module")
+def undo_verdict(tmp_path_factory):
+    """One windowed undo session serves the bake and the fit tests."""
+    return windowed("undo_session.py", tmp_path_factory.mktemp("undo") / "undo.json")
+
+
+def test_undo_after_a_bake_restores_the_file_exactly(undo_verdict):
+    verdict = undo_verdict
     assert len(verdict["rounds"]) == 2
     for r in verdict["rounds"]:
         assert r["result"] == ["FINISHED"], r
         assert r["bake_changed_file"], "the bake changed nothing, so undo proves nothing: %s" % r
         assert r["restored"], "ed.undo after %s left differences: %s" % (r["bake"], r["differences"])
     assert verdict["rounds"][0]["new_actions"], "the new-action bake created no action"
+
+
+def test_undo_after_a_fit_restores_the_file_and_the_records(undo_verdict):
+    """Same session: fit then ed.undo (and a refit then ed.undo) restores every action's digest and
+    the fit records exactly."""
+    verdict = undo_verdict
+    assert [r["fit"] for r in verdict["fit_rounds"]] == ["fit", "refit"]
+    for r in verdict["fit_rounds"]:
+        assert r["result"] == ["FINISHED"], r
+        assert r["fit_changed_file"], "the fit changed nothing, so undo proves nothing: %s" % r
+        assert any(r["records_after_fit"].values()), "the fit stored no record: %s" % r
+        assert r["restored"], "ed.undo after %s left differences: %s" % (r["fit"], r["differences"])
 
 
 def test_escape_half_way_through_a_modal_bake_in_a_window(tmp_path):

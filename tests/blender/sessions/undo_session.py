@@ -1,12 +1,15 @@
-"""Undo after a bake, in a Blender with a window (run under Xvfb by tests/blender/test_session.py):
+"""Undo after a bake and after a fit, in a Blender with a window (run under Xvfb by
+tests/blender/test_session.py):
 
     xvfb-run -a blender --factory-startup --python tests/blender/sessions/undo_session.py -- VERDICT.json
 
 A timer (the window must exist first) builds a scene — an object with Euler rotation keys in a
 group and location keys — pushes an undo step and records the file state; then, twice (into a new
 action, and in place), bakes through the operator with an undo push (as a button press does),
-checks that the bake changed the file, runs ed.undo and compares the state with the recording. The
-verdict goes to VERDICT.json; Blender then quits."""
+checks that the bake changed the file, runs ed.undo and compares the state with the recording. Then
+the fit ("fit_rounds"): a fit of the original keys, undone; and a refit of a fitted file (another
+method and tolerance), undone back to the first fit — keys, handles, key types and the fit records
+on the action. The verdict goes to VERDICT.json; Blender then quits."""
 
 import json
 import math
@@ -31,6 +34,8 @@ def state():
     bones), the current rotation values at frame 5."""
     bpy.context.scene.frame_set(5)
     out = {"actions": {a.name: [fcurves.action_digest(a), a.use_fake_user] for a in bpy.data.actions}}
+    out["fit records"] = {a.name: [[r.slot, r.owner_path, r.method, round(r.tolerance, 6), r.signature, r.key_frames]
+                                   for r in a.quatcurve_fits] for a in bpy.data.actions}
     for obj in bpy.data.objects:
         action = fcurves.active_action(obj)
         bones = [[pb.name, pb.rotation_mode, [round(v, 6) for v in pb.rotation_quaternion]]
@@ -86,6 +91,24 @@ def run():
                     "restored": after == before,
                     "differences": {k: [before.get(k), after.get(k)] for k in set(before) | set(after)
                                     if before.get(k) != after.get(k)}})
+            verdict["fit_rounds"] = []
+            # 1: the original keys fitted, undone. 2: a fitted file refitted (another method and
+            # tolerance), undone back to the first fit.
+            for name, first, kwargs in (("fit", None, dict(method="SQUAD", tolerance=0.01)),
+                                        ("refit", dict(method="SLERP", tolerance=0.05),
+                                         dict(method="TCB", tension=0.5, tolerance=0.01))):
+                if first is not None:
+                    bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **first)
+                start = state()
+                result = bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **kwargs)
+                fitted = state()
+                bpy.ops.ed.undo()
+                after = state()
+                verdict["fit_rounds"].append({
+                    "fit": name, "result": sorted(result), "fit_changed_file": fitted != start,
+                    "records_after_fit": fitted["fit records"], "restored": after == start,
+                    "differences": {k: [start.get(k), after.get(k)] for k in set(start) | set(after)
+                                    if start.get(k) != after.get(k)}})
         verdict["ok"] = True
     except Exception:  # noqa: BLE001 — the verdict carries it
         verdict["error"] = traceback.format_exc()
