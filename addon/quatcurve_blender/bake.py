@@ -260,7 +260,8 @@ def prepare(found, settings):
     try:
         for target in found:
             targets.check_editable(target, settings.new_action)
-        sources = [targets.read_rotation_keys(t) for t in found]
+        with fcurves.read_cache():
+            sources = [targets.read_rotation_keys(t) for t in found]
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))

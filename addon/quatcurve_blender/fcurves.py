@@ -285,13 +285,42 @@ def key_count(fcurve):
     return len(fcurve.keyframe_points)
 
 
+# (F-curve pointer, key count) → (frames, values), inside read_cache() only.
+_read_cache = None
+
+
+@contextlib.contextmanager
+def read_cache():
+    """Within the block read_keys reads each F-curve from Blender once (reading a task's targets
+    asks for the same keys up to four times: frames, jumps, evaluation); the arrays it returns are
+    then read-only. Nothing may change keys inside the block. Main thread only, like all bpy use."""
+    global _read_cache
+    outer = _read_cache
+    if outer is None:
+        _read_cache = {}
+    try:
+        yield
+    finally:
+        if outer is None:
+            _read_cache = None
+
+
 def read_keys(fcurve):
     """(frames, values), float64 arrays of the F-curve's keys in stored order (sorted after update)."""
     n = len(fcurve.keyframe_points)
+    cache = _read_cache
+    if cache is not None:
+        key = (fcurve.as_pointer(), n)
+        if key in cache:
+            return cache[key]
     co = np.empty(2 * n, dtype=np.float32)
     fcurve.keyframe_points.foreach_get("co", co)
     co = co.astype(np.float64)
-    return co[0::2], co[1::2]
+    keys = co[0::2], co[1::2]
+    if cache is not None:
+        co.flags.writeable = False
+        cache[key] = keys
+    return keys
 
 
 def read_handles(fcurve):
@@ -308,7 +337,7 @@ def key_frames(fcurves):
     parts = [read_keys(f)[0] for f in fcurves if f is not None]
     if not parts:
         return np.empty(0)
-    first = np.ascontiguousarray(parts[0])
+    first = np.array(parts[0])  # a copy: read_keys may hand out read-only (cached) arrays
     if ((len(first) < 2 or (first[1:] > first[:-1]).all())
             and all(len(p) == len(first) and np.array_equal(p, first) for p in parts[1:])):
         return first  # the usual case, channels keyed together in order: np.unique's own answer
@@ -328,7 +357,7 @@ def evaluate(fcurve, frames):
         key_f, key_v = read_keys(fcurve)
         increasing = len(key_f) < 2 or bool((key_f[1:] > key_f[:-1]).all())
         if increasing and frames.shape == key_f.shape and np.array_equal(frames, key_f):
-            return key_v  # exactly the key frames (a dense curve read at its own keys)
+            return key_v.copy()  # exactly the key frames (a dense curve read at its own keys)
         if not increasing:
             order = np.argsort(key_f, kind="stable")
             key_f, key_v = key_f[order], key_v[order]

@@ -237,7 +237,7 @@ def reduce(found, settings):
     # already read (the native reducer runs without the GIL).
     items, pending = [], []
     threads = thread_count()
-    with ThreadPoolExecutor(max_workers=threads) if threads > 1 else _Inline() as pool:
+    with ThreadPoolExecutor(max_workers=threads) if threads > 1 else _Inline() as pool, fcurves.read_cache():
         try:
             for target in found:
                 items.append(read_target(target))
