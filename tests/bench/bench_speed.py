@@ -4,6 +4,7 @@
     ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_speed.py
     ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_speed.py
     … -- --repeat 5 --profile     (more runs; cProfile of one bake and one reduce, by own time)
+    … -- --threads 1              (worker threads of bake and reduce; default one per core)
 
 Everything on one rig (tests/blender/rigs.py): 100 bones keyed (quaternions) every 10 frames over
 10,000 frames. Each measurement runs `--repeat` times (default 3), interleaved, and the best counts:
@@ -41,7 +42,7 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import fcurves, native  # noqa: E402
+from quatcurve_blender import fcurves, native, reduce  # noqa: E402
 import rigs  # noqa: E402
 
 BONES = 100
@@ -53,7 +54,8 @@ CLIPS = ("mocapbank.bvh", "freebvh.bvh")
 def options():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     repeat = int(argv[argv.index("--repeat") + 1]) if "--repeat" in argv else 3
-    return repeat, "--profile" in argv
+    threads = int(argv[argv.index("--threads") + 1]) if "--threads" in argv else None
+    return repeat, "--profile" in argv, threads
 
 
 def clear_scene():
@@ -155,7 +157,6 @@ def mocap_key_counts():
     channel) of each shared clip's quaternion bones, the samples made hemisphere-continuous as
     reduce.reduce_values does."""
     import bvh  # tests/python: the BVH reader the Python benchmarks use
-    from quatcurve_blender import reduce
     out = {}
     for name in CLIPS:
         path = bvh.mocap_path(name)
@@ -182,7 +183,8 @@ def profile(label, call, top=25):
 
 
 def main():
-    repeat, want_profile = options()
+    repeat, want_profile, threads = options()
+    reduce.THREADS = threads
     quatcurve_blender.register()
     clear_scene()
     rig = rigs.build_rig("Rig", LAST_FRAME, 1, BONES, KEY_EVERY)
@@ -212,8 +214,10 @@ def main():
     nla_ratio = (BONES * n / bake_s) / (theirs_bf / theirs_s)
     mocap = mocap_key_counts()
 
-    print("Blender %s, quatcurve %s; %d bones x %s frames, SQUAD -> QUATERNION, %s keys; best of %d"
-          % (bpy.app.version_string, native.require().__version__, BONES, f"{n:,}", f"{keys:,}", repeat))
+    print("Blender %s, quatcurve %s; %d bones x %s frames, SQUAD -> QUATERNION, %s keys; best of %d; %s"
+          % (bpy.app.version_string, native.require().__version__, BONES, f"{n:,}", f"{keys:,}", repeat,
+             "%d worker thread%s" % (reduce.thread_count(), "" if reduce.thread_count() == 1 else "s")
+             if hasattr(reduce, "thread_count") else "no worker threads"))
     print("  %-34s %9s   %s" % ("stage", "seconds", "runs"))
     rows = (("bake (quatcurve.bake)", bake_s, bakes), ("limit (add + foreach_set co, ipo)", limit_s, limits),
             ("reduce (0.1 deg, BEZIER per channel)", reduce_s, reduces),
