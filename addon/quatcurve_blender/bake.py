@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fcurves, native, path_rule, targets, write
+from .reduce import parallel_map
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
 
@@ -175,11 +176,34 @@ class BakePlan:
             yield self.computed / len(self.items)
 
     def compute(self):
-        for _ in self.compute_steps():
-            pass
+        """Computes every target left: Blender's data read here, on the main thread, then the native
+        work (curve, sampling, channels, reduction) on worker threads (reduce.parallel_map); the
+        results do not depend on the thread count."""
+        begin = time.perf_counter()
+        todo = self.items[self.computed:]
+        references = [self._reference(item) for item in todo]
+        parallel_map(lambda job: self._compute_native(*job), list(zip(todo, references)))
+        self.computed = len(self.items)
+        self.seconds += time.perf_counter() - begin
         return self
 
     def _compute(self, item):
+        self._compute_native(item, self._reference(item))
+
+    def _reference(self, item):
+        """What output_values needs from Blender for `item` (read on the main thread), or None."""
+        source = item.source
+        if source.mode == item.output_mode and source.is_euler:
+            # The keyed angles, linear between keys: a cheap guide to the branch, not output math.
+            return np.column_stack([np.interp(self.frames, source.frames, source.values[:, i])
+                                    for i in range(3)])
+        if source.mode == item.output_mode:
+            return source.evaluate(self.frames[:1])[0]
+        return None
+
+    def _compute_native(self, item, reference):
+        """The curve through the item's keys, sampled, as output channel values (and reduced): no
+        Blender data is touched, so it may run on a worker thread."""
         settings, source = self.settings, item.source
         try:
             curve = source.curve(settings.method, **settings.curve_options())
@@ -188,13 +212,6 @@ class BakePlan:
         except ValueError as error:
             raise BakeError("%s: %s" % (item.target.name, error)) from error
         item.notes += ["path rule: " + b.text() for b in broken]
-        reference = None
-        if source.mode == item.output_mode and source.is_euler:
-            # The keyed angles, linear between keys: a cheap guide to the branch, not output math.
-            reference = np.column_stack([np.interp(self.frames, source.frames, source.values[:, i])
-                                         for i in range(3)])
-        elif source.mode == item.output_mode:
-            reference = source.evaluate(self.frames[:1])[0]
         item.frames = self.frames
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
@@ -245,7 +262,8 @@ def prepare(found, settings):
     try:
         for target in found:
             targets.check_editable(target, settings.new_action)
-        sources = [targets.read_rotation_keys(t) for t in found]
+        with fcurves.read_cache():
+            sources = [targets.read_rotation_keys(t) for t in found]
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))

@@ -285,13 +285,42 @@ def key_count(fcurve):
     return len(fcurve.keyframe_points)
 
 
+# (F-curve pointer, key count) → (frames, values), inside read_cache() only.
+_read_cache = None
+
+
+@contextlib.contextmanager
+def read_cache():
+    """Within the block read_keys reads each F-curve from Blender once (reading a task's targets
+    asks for the same keys up to four times: frames, jumps, evaluation); the arrays it returns are
+    then read-only. Nothing may change keys inside the block. Main thread only, like all bpy use."""
+    global _read_cache
+    outer = _read_cache
+    if outer is None:
+        _read_cache = {}
+    try:
+        yield
+    finally:
+        if outer is None:
+            _read_cache = None
+
+
 def read_keys(fcurve):
     """(frames, values), float64 arrays of the F-curve's keys in stored order (sorted after update)."""
     n = len(fcurve.keyframe_points)
+    cache = _read_cache
+    if cache is not None:
+        key = (fcurve.as_pointer(), n)
+        if key in cache:
+            return cache[key]
     co = np.empty(2 * n, dtype=np.float32)
     fcurve.keyframe_points.foreach_get("co", co)
     co = co.astype(np.float64)
-    return co[0::2], co[1::2]
+    keys = co[0::2], co[1::2]
+    if cache is not None:
+        co.flags.writeable = False
+        cache[key] = keys
+    return keys
 
 
 def read_handles(fcurve):
@@ -306,7 +335,13 @@ def read_handles(fcurve):
 def key_frames(fcurves):
     """Sorted union of the key frames of the given F-curves (None entries are skipped)."""
     parts = [read_keys(f)[0] for f in fcurves if f is not None]
-    return np.unique(np.concatenate(parts)) if parts else np.empty(0)
+    if not parts:
+        return np.empty(0)
+    first = np.array(parts[0])  # a copy: read_keys may hand out read-only (cached) arrays
+    if ((len(first) < 2 or (first[1:] > first[:-1]).all())
+            and all(len(p) == len(first) and np.array_equal(p, first) for p in parts[1:])):
+        return first  # the usual case, channels keyed together in order: np.unique's own answer
+    return np.unique(np.concatenate(parts))
 
 
 def evaluate(fcurve, frames):
@@ -320,12 +355,16 @@ def evaluate(fcurve, frames):
     todo = np.ones(frames.shape, dtype=bool)
     if len(fcurve.modifiers) == 0 and len(fcurve.keyframe_points):
         key_f, key_v = read_keys(fcurve)
-        order = np.argsort(key_f, kind="stable")
-        key_f, key_v = key_f[order], key_v[order]
+        increasing = len(key_f) < 2 or bool((key_f[1:] > key_f[:-1]).all())
+        if increasing and frames.shape == key_f.shape and np.array_equal(frames, key_f):
+            return key_v.copy()  # exactly the key frames (a dense curve read at its own keys)
+        if not increasing:
+            order = np.argsort(key_f, kind="stable")
+            key_f, key_v = key_f[order], key_v[order]
         where = np.clip(np.searchsorted(key_f, frames), 0, len(key_f) - 1)
         hit = key_f[where] == frames
         # Duplicate key frames: Blender's search may land on either; leave those to evaluate().
-        if len(key_f) > 1:
+        if not increasing:
             dup = np.zeros(len(key_f), dtype=bool)
             same = key_f[1:] == key_f[:-1]
             dup[1:] |= same
@@ -403,27 +442,47 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     return fcurve
 
 
+# Whether bulk foreach_set / foreach_get work on a Keyframe enum property in this Blender, learnt
+# from the first use (prop → bool): Blender 3.4 ignores both on handle types, 4.x and 5.x take them.
+# Knowing it spares every later call the bulk attempt and the read-back check.
+_BULK_ENUM = {}
+
+
 def _set_free_handles(points, n):
     """Handle types FREE on every key. In bulk where Blender supports it (4.x, 5.x); Blender 3.4
     ignores foreach_set on handle types, so there it falls back to one assignment per key (only the
     key-reduction path writes handles, and it writes few keys)."""
+    if not n:
+        return
     free = _enum_value(bpy.types.Keyframe, "handle_left_type", "FREE")
-    buf = np.full(n, free, dtype=np.int32)
-    points.foreach_set("handle_left_type", buf)
-    points.foreach_set("handle_right_type", buf)
-    if n and not (_get_enum(points, "handle_right_type", n) == free).all():
-        for point in points:
-            point.handle_left_type = point.handle_right_type = "FREE"
+    if _BULK_ENUM.get("handle_left_type", True):
+        buf = np.full(n, free, dtype=np.int32)
+        points.foreach_set("handle_left_type", buf)
+        points.foreach_set("handle_right_type", buf)
+        if "handle_left_type" in _BULK_ENUM:
+            return
+        works = bool((_get_enum(points, "handle_right_type", n) == free).all()
+                     and (_get_enum(points, "handle_left_type", n) == free).all())
+        _BULK_ENUM["handle_left_type"] = works
+        if works:
+            return
+    for point in points:
+        point.handle_left_type = point.handle_right_type = "FREE"
 
 
 def _get_enum(points, prop, n):
     """Enum values of every key (as ints); Blender 3.4's foreach_get leaves handle-type buffers
-    untouched, so a buffer still holding the -1 fill is read key by key."""
+    untouched, so a buffer still holding the -1 fill is read key by key (and from then on directly)."""
     buf = np.full(n, -1, dtype=np.int32)
-    points.foreach_get(prop, buf)
-    if n and (buf == -1).any():
-        items = bpy.types.Keyframe.bl_rna.properties[prop].enum_items
-        buf[:] = [items[getattr(point, prop)].value for point in points]
+    if _BULK_ENUM.get("get " + prop, True):
+        points.foreach_get(prop, buf)
+        if not n or not (buf == -1).any():
+            if n:
+                _BULK_ENUM["get " + prop] = True
+            return buf
+        _BULK_ENUM["get " + prop] = False
+    items = bpy.types.Keyframe.bl_rna.properties[prop].enum_items
+    buf[:] = [items[getattr(point, prop)].value for point in points]
     return buf
 
 

@@ -23,7 +23,9 @@ The bake calls `reduce_values` (imported by bake.py) when its tolerance is above
 """
 
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,6 +34,30 @@ from . import fcurves, native, targets, write
 from .targets import TargetError
 
 INTERPOLATIONS = ("LINEAR", "BEZIER")
+
+# Worker threads for the native work per target (the reducer and channel conversion release the
+# GIL); None: one per core. Results do not depend on it: every target is computed on its own.
+THREADS = None
+
+
+def thread_count():
+    """Worker threads for per-target native work: THREADS, or QUATCURVE_THREADS, or the cores."""
+    if THREADS is not None:
+        return max(1, int(THREADS))
+    env = os.environ.get("QUATCURVE_THREADS", "")
+    return max(1, int(env)) if env.isdigit() else (os.cpu_count() or 1)
+
+
+def parallel_map(fn, items):
+    """[fn(item) for item in items], on thread_count() worker threads when that is more than one.
+    fn must not touch Blender data (only the main thread may). Results come back in order; the first
+    item (in order) whose call raised re-raises its exception, as the plain loop would."""
+    items = list(items)
+    threads = min(thread_count(), len(items))
+    if threads <= 1:
+        return [fn(item) for item in items]
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        return list(pool.map(fn, items))
 
 
 class ReduceError(TargetError, ValueError):
@@ -146,6 +172,25 @@ class ReduceResult:
                 for t in self.targets]
 
 
+class _Inline:
+    """A one-thread stand-in for ThreadPoolExecutor: submit runs the call at once."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def submit(self, fn, *args):
+        from concurrent.futures import Future
+        future = Future()
+        try:
+            future.set_result(fn(*args))
+        except BaseException as error:  # re-raised by result(), in order, like the pool's
+            future.set_exception(error)
+        return future
+
+
 def read_target(target):
     """TargetReduce of `target` in its current rotation mode (sampled, not yet reduced)."""
     try:
@@ -179,14 +224,30 @@ def reduce(found, settings):
             targets.check_editable(target, settings.new_action)
         except TargetError as error:
             raise ReduceError(str(error)) from error
-    items = [read_target(t) for t in found]
     tol = math.radians(settings.tolerance)
-    for item in items:
+
+    def reduce_item(item):
         try:
-            item.reduced = reduce_values(item.frames, item.values, item.mode, tol,
-                                         settings.interpolation, settings.synchronized)
+            return reduce_values(item.frames, item.values, item.mode, tol, settings.interpolation,
+                                 settings.synchronized)
         except ReduceError as error:
             raise ReduceError("%s: %s" % (item.target.name, error)) from error
+
+    # Blender is read on this thread, target after target, while worker threads reduce the targets
+    # already read (the native reducer runs without the GIL).
+    items, pending = [], []
+    threads = thread_count()
+    with ThreadPoolExecutor(max_workers=threads) if threads > 1 else _Inline() as pool, fcurves.read_cache():
+        try:
+            for target in found:
+                items.append(read_target(target))
+                pending.append(pool.submit(reduce_item, items[-1]))
+            for item, future in zip(items, pending):
+                item.reduced = future.result()
+        except BaseException:
+            for future in pending:
+                future.cancel()
+            raise
 
     writes = [write.RotationWrite(item.target, item.mode, item.reduced.keys, item.reduced.interpolation,
                                   replace=(item.prop,)) for item in items]

@@ -55,8 +55,11 @@ void bind_channels(py::module_& m) {
                                           std::to_string(c) + "), got " + shape_string(ref.array));
                 rows = ref.batch_shape.empty() ? 1 : ref.count;
             }
-            const std::vector<double> v =
-                quats_to_channels(qs, mode, rows ? ref.data() : nullptr, rows, branch);
+            std::vector<double> v;
+            {
+                py::gil_scoped_release release;  // the bake converts targets on several threads
+                v = quats_to_channels(qs, mode, rows ? ref.data() : nullptr, rows, branch);
+            }
             DArray out(std::vector<py::ssize_t>{static_cast<py::ssize_t>(q.count), c});
             std::copy(v.begin(), v.end(), out.mutable_data());
             return out;

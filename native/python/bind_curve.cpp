@@ -100,6 +100,8 @@ void bind_curve(py::module_& m) {
                  const Batch q = key_rows(quats, 4, "quats");
                  std::vector<Quat> keys(q.count);
                  for (std::size_t i = 0; i < q.count; ++i) keys[i] = from_wxyz(q.data() + 4 * i);
+                 // Building the tangents is most of a bake's native work: let other targets' threads run.
+                 py::gil_scoped_release release;
                  return Curve(std::move(t), keys, meth, std::move(options));
              }),
              py::arg("times"), py::arg("quats"), py::arg("method") = "SLERP")
@@ -115,6 +117,7 @@ void bind_curve(py::module_& m) {
                 std::vector<Vec3> keys(a.count);
                 for (std::size_t i = 0; i < a.count; ++i)
                     keys[i] = Vec3(a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]);
+                py::gil_scoped_release release;
                 return Curve::from_euler(std::move(t), keys, ord, meth, std::move(options));
             },
             py::arg("times"), py::arg("angles"), py::arg("order") = "XYZ", py::arg("method") = "SLERP",

@@ -215,9 +215,12 @@ std::vector<double> whole_frame_samples(const std::vector<double>& key_frames) {
     if (key_frames.empty()) return {};
     const double first = std::ceil(key_frames.front()), last = std::floor(key_frames.back());
     const std::size_t count = last >= first ? frame_count(last - first, "key_frames") : 0;
-    std::vector<double> out(key_frames);
-    for (std::size_t m = 0; m < count; ++m) out.push_back(first + static_cast<double>(m));
-    std::sort(out.begin(), out.end());
+    // Both lists are sorted already: one linear merge (a dense curve's keys are its whole frames).
+    std::vector<double> whole(count);
+    for (std::size_t m = 0; m < count; ++m) whole[m] = first + static_cast<double>(m);
+    std::vector<double> out(key_frames.size() + count);
+    out.erase(std::merge(key_frames.begin(), key_frames.end(), whole.begin(), whole.end(), out.begin()),
+              out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
 }

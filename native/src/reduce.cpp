@@ -42,7 +42,11 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         verify_angle - std::min(kFitMarginAbs, kFitMarginRel * verify_angle);
     const double verify_tan2 = tan2_half(verify_angle);
 
-    auto run = [&](bool sync) {
+    // `beat`: a per-channel run gives up (returns false) as soon as its keys cannot come out fewer
+    // than `beat` — verification only ever adds keys, and every channel keeps at least the forced
+    // samples (the first and last included) — so the result is the one a full run would lose with.
+    // (When the synchronized result keeps only the forced keys, no per-channel run starts at all.)
+    auto run = [&](bool sync, std::size_t beat, ReducedKeys& out) {
         State s = empty_state(p);
         Fitter fitter(p, ipo, s);
         std::vector<std::vector<int>> groups;
@@ -69,13 +73,18 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
             // first channel (w for quaternions, the least costly in angle near identity) goes first.
             static const double kQuatShare[4] = {0.6, 0.75, 0.9, 1.0};
             static const double kEulerShare[3] = {0.7, 0.85, 1.0};
+            std::size_t forced = 0;
+            for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
+            std::size_t chosen = 0;
+            if (forced * static_cast<std::size_t>(C) >= beat) return false;
             for (int c = 0; c < C; ++c) {
                 groups.push_back({c});
                 const double share = C == 4 ? kQuatShare[c] : kEulerShare[c];
                 s.keys[c] = select_keys(p, fitter, &c, 1, tan2_half(share * fit_angle));
+                chosen += s.keys[c].size();
+                if (chosen + forced * static_cast<std::size_t>(C - 1 - c) >= beat) return false;
             }
         }
-        ReducedKeys out;
         out.interpolation = ipo;
         out.synchronized = sync;
         out.channels = verify_and_repair(p, s, fitter, ipo, verify_tan2, tan2_half(fit_angle),
@@ -86,17 +95,13 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
             for (int c = 1; c < C; ++c) same = same && s.keys[c] == s.keys[0];
             out.synchronized = same;
         }
-        return out;
+        return true;
     };
 
-    ReducedKeys best = run(true);
-    // Per channel can only drop keys the synchronized result inserted: none inserted (the forced
-    // keys alone meet the bound, the common case of a fit through an animator's keys), no second run.
-    std::size_t forced = 0;
-    for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
-    const bool only_forced = best.key_count() == forced * static_cast<std::size_t>(C);
-    if (!synchronized && p.n > 2 && tolerance > 0.0 && !only_forced) {
-        ReducedKeys per_channel = run(false);
+    ReducedKeys best;
+    run(true, kNone, best);
+    ReducedKeys per_channel;
+    if (!synchronized && p.n > 2 && tolerance > 0.0 && run(false, best.key_count(), per_channel)) {
         // Fewer keys wins, unless it misses a bound the synchronized result meets (a segment that
         // no candidate sample can split: forced keys closer than min_gap to the failing sample).
         const bool meets = per_channel.max_error <= std::max(tolerance, best.max_error);

@@ -21,9 +21,14 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         return fitter.fit(i, j, chans, nc, limit, false);
     };
     std::size_t i = 0, last_len = 2;
+    std::size_t end = 0;  // the range's end: the first forced key after i
     while (i < n - 1) {
-        std::size_t end = i + 1;  // the range's end: the next forced key
-        while (!p.is_forced(end)) ++end;
+        // Found again only once i reaches it: no forced key lies between i and end (i never passes
+        // end), so rescanning from i + 1 each time — quadratic in the samples — would find the same.
+        if (end <= i) {
+            end = i + 1;
+            while (!p.is_forced(end)) ++end;
+        }
         std::size_t good = i + 1, bad = kNone;  // good: feasible (committed unless i + 1)
         const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), end - i);
         std::size_t step = std::max<std::size_t>(1, last_len / 4);

@@ -1,0 +1,239 @@
+"""Benchmark: bake and reduce against the physical limit of writing keys, in the Blender running it.
+
+    blender --background --factory-startup --python tests/bench/bench_speed.py
+    ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_speed.py
+    ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_speed.py
+    … -- --repeat 5 --profile     (more runs; cProfile of one bake and one reduce, by own time)
+    … -- --threads 1              (worker threads of bake and reduce; default one per core)
+
+Everything on one rig (tests/blender/rigs.py): 100 bones keyed (quaternions) every 10 frames over
+10,000 frames. Each measurement runs `--repeat` times (default 3), interleaved, and the best counts:
+the machine is shared, so only ratios measured in the same run mean anything.
+
+- bake:   bpy.ops.quatcurve.bake, SQUAD, every frame, QUATERNION output (1,000,100 bone-frames,
+          4,000,400 LINEAR keys), from the rig's original action, into a new action.
+- limit:  the same number of LINEAR keys written the plainest bulk way, arrays prepared beforehand:
+          on a fresh action of the same rig, per bone four new F-curves (in the bone's group, as a
+          bake puts them) and per F-curve keyframe_points.add(n), foreach_set('co'),
+          foreach_set('interpolation'). A bake cannot write its keys faster than this.
+- nla.bake: Blender's own bake (pose, visual keying, selected bones) of the same kind of rig over
+          300 frames; the ratio is ours over theirs in bone-frames per second.
+- reduce: bpy.ops.quatcurve.reduce (0.1°, BEZIER, per channel) of the baked action (reads the dense
+          keys, reduces them natively, writes the reduced keys into a new action).
+- mocap:  key counts of the same reduction (native, as the operator calls it) on the shared clips
+          ../shared/data/mocap/mocapbank.bvh and freebvh.bvh (skipped when missing).
+Targets (issue #15): bake ≤ 1.2 × limit; reduce ≤ bake. Not a timed test: it only prints.
+"""
+
+import cProfile
+import io
+import math
+import os
+import pstats
+import sys
+import time
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+
+import quatcurve_blender  # noqa: E402
+from quatcurve_blender import fcurves, native, reduce  # noqa: E402
+import rigs  # noqa: E402
+
+BONES = 100
+LAST_FRAME = 10_000
+KEY_EVERY = 10
+CLIPS = ("mocapbank.bvh", "freebvh.bvh")
+
+
+def options():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    repeat = int(argv[argv.index("--repeat") + 1]) if "--repeat" in argv else 3
+    threads = int(argv[argv.index("--threads") + 1]) if "--threads" in argv else None
+    return repeat, "--profile" in argv, threads
+
+
+def clear_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def play(rig, action):
+    fcurves.assign_action(rig, action)
+
+
+def drop(action):
+    if action is not None and action.name in bpy.data.actions:
+        fcurves.remove_action(action)
+
+
+def timed(call):
+    begin = time.perf_counter()
+    result = call()
+    return time.perf_counter() - begin, result
+
+
+def run_bake(rig, original):
+    play(rig, original)
+    seconds, result = timed(lambda: bpy.ops.quatcurve.bake(method="SQUAD", rotation_mode="QUATERNION", step=1))
+    assert result == {"FINISHED"}, result
+    keys = bpy.context.scene.quatcurve.last_keys
+    return seconds, keys, fcurves.active_action(rig)
+
+
+def run_reduce(rig, baked):
+    play(rig, baked)
+    seconds, result = timed(lambda: bpy.ops.quatcurve.reduce(tolerance=0.1, interpolation="BEZIER",
+                                                             synchronized=False))
+    assert result == {"FINISHED"}, result
+    reduced = fcurves.active_action(rig)
+    keys = sum(fcurves.key_count(f) for f in fcurves.all_fcurves(reduced)
+               if f.data_path.endswith("rotation_quaternion"))
+    play(rig, baked)
+    drop(reduced)
+    return seconds, keys
+
+
+def limit_arrays(n_curves, n):
+    """Per F-curve the (frame, value) float32 pairs and the LINEAR interpolation codes, made before
+    the clock starts (values: a smooth unit-quaternion-like path, not that it matters to Blender)."""
+    frames = np.arange(n, dtype=np.float32)
+    kind = bpy.types.Keyframe.bl_rna.properties["interpolation"].enum_items["LINEAR"].value
+    dtype = np.int8 if bpy.app.version < (4, 0, 0) else np.uint8
+    ipo = np.full(n, kind, dtype=dtype)
+    out = []
+    for c in range(n_curves):
+        co = np.empty((n, 2), dtype=np.float32)
+        co[:, 0] = frames
+        co[:, 1] = np.cos(frames * 1e-3 + c)
+        out.append(co.ravel())
+    return out, ipo
+
+
+def run_limit(rig, arrays, ipo, n):
+    """The plainest bulk write of the same keys on fresh F-curves of the rig (see the docstring)."""
+    previous = fcurves.active_action(rig)
+    action = fcurves.new_action(rig, "Limit")
+    channels = fcurves.Channels.of(rig, action, create=True)
+    bag = channels.action if not fcurves.SLOTTED else channels._bag
+    paths = [(pb.path_from_id("rotation_quaternion"), pb.name) for pb in rig.pose.bones]
+    begin = time.perf_counter()
+    a = 0
+    for path, group in paths:
+        if fcurves.SLOTTED:
+            grp = bag.groups.new(group)
+        for i in range(4):
+            if fcurves.SLOTTED:
+                fcurve = bag.fcurves.new(path, index=i)
+                fcurve.group = grp
+            else:
+                fcurve = bag.fcurves.new(path, index=i, action_group=group)
+            points = fcurve.keyframe_points
+            points.add(n)
+            points.foreach_set("co", arrays[a])
+            points.foreach_set("interpolation", ipo)
+            a += 1
+    seconds = time.perf_counter() - begin
+    play(rig, previous)
+    drop(action)
+    return seconds
+
+
+def run_nla_bake():
+    clear_scene()
+    rigs.build_rig("Theirs", 300, 2, BONES, KEY_EVERY)
+    bpy.context.view_layer.update()
+    seconds, _ = timed(lambda: bpy.ops.nla.bake(frame_start=0, frame_end=299, step=1, only_selected=True,
+                                                visual_keying=True, bake_types={"POSE"}))
+    return seconds, BONES * 300
+
+
+def mocap_key_counts():
+    """{clip: (rotation keys, reduced keys, seconds)} of the native reduction at 0.1° (BEZIER, per
+    channel) of each shared clip's quaternion bones, the samples made hemisphere-continuous as
+    reduce.reduce_values does."""
+    import bvh  # tests/python: the BVH reader the Python benchmarks use
+    out = {}
+    for name in CLIPS:
+        path = bvh.mocap_path(name)
+        if not os.path.exists(path):
+            continue
+        clip = bvh.read_bvh(path)
+        times = np.arange(1, clip.frames + 1, dtype=float)
+        quats = [clip.quaternions(j) for j in clip.rotating_joints()]
+        begin = time.perf_counter()
+        kept = sum(reduce.reduce_values(times, q, "QUATERNION", math.radians(0.1)).key_count for q in quats)
+        out[name] = (4 * len(quats) * clip.frames, kept, time.perf_counter() - begin)
+    return out
+
+
+def profile(label, call, top=25):
+    prof = cProfile.Profile()
+    prof.enable()
+    call()
+    prof.disable()
+    text = io.StringIO()
+    pstats.Stats(prof, stream=text).sort_stats("tottime").print_stats(top)
+    print("---- profile: %s (by own time)" % label)
+    print("\n".join(line for line in text.getvalue().splitlines() if line.strip())[:6000])
+
+
+def main():
+    repeat, want_profile, threads = options()
+    reduce.THREADS = threads
+    quatcurve_blender.register()
+    clear_scene()
+    rig = rigs.build_rig("Rig", LAST_FRAME, 1, BONES, KEY_EVERY)
+    bpy.context.view_layer.update()  # the rig's own first evaluation is not the bake's cost
+    original = fcurves.active_action(rig)
+    original.use_fake_user = True
+    n = LAST_FRAME + 1
+    arrays, ipo = limit_arrays(4 * BONES, n)
+    bakes, limits, reduces = [], [], []
+    baked, keys = None, 0
+    for _ in range(repeat):
+        drop(baked)
+        seconds, keys, baked = run_bake(rig, original)
+        bakes.append(seconds)
+        limits.append(run_limit(rig, arrays, ipo, n))
+        seconds, reduced_keys = run_reduce(rig, baked)
+        reduces.append(seconds)
+    assert keys == 4 * BONES * n, keys
+    if want_profile:
+        drop(baked)
+        profile("bake", lambda: run_bake(rig, original))
+        baked = fcurves.active_action(rig)
+        profile("reduce", lambda: run_reduce(rig, baked))
+    del arrays
+    bake_s, limit_s, reduce_s = min(bakes), min(limits), min(reduces)
+    theirs_s, theirs_bf = run_nla_bake()
+    nla_ratio = (BONES * n / bake_s) / (theirs_bf / theirs_s)
+    mocap = mocap_key_counts()
+
+    print("Blender %s, quatcurve %s; %d bones x %s frames, SQUAD -> QUATERNION, %s keys; best of %d; %s"
+          % (bpy.app.version_string, native.require().__version__, BONES, f"{n:,}", f"{keys:,}", repeat,
+             "%d worker thread%s" % (reduce.thread_count(), "" if reduce.thread_count() == 1 else "s")
+             if hasattr(reduce, "thread_count") else "no worker threads"))
+    print("  %-34s %9s   %s" % ("stage", "seconds", "runs"))
+    rows = (("bake (quatcurve.bake)", bake_s, bakes), ("limit (add + foreach_set co, ipo)", limit_s, limits),
+            ("reduce (0.1 deg, BEZIER per channel)", reduce_s, reduces),
+            ("nla.bake, %d bones x 300 frames" % BONES, theirs_s, [theirs_s]))
+    for name, best, runs in rows:
+        print("  %-34s %9.3f   %s" % (name, best, " ".join("%.3f" % r for r in runs)))
+    print("  bake / limit:         %.2f   (target <= 1.2)" % (bake_s / limit_s))
+    print("  bake vs nla.bake:     %.0fx  (bone-frames per second)" % nla_ratio)
+    print("  reduce / bake:        %.2f   (target <= 1.0); %s keys -> %s"
+          % (reduce_s / bake_s, f"{keys:,}", f"{reduced_keys:,}"))
+    for name, (total, kept, seconds) in mocap.items():
+        print("  mocap %-15s %s rotation keys -> %s at 0.1 deg (%.2f %%), %.2f s"
+              % (name, f"{total:,}", f"{kept:,}", 100.0 * kept / total, seconds))
+    if not mocap:
+        print("  mocap: ../shared/data/mocap not found, key counts skipped")
+    quatcurve_blender.unregister()
+
+
+main()
