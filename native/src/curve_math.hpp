@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "numbers.hpp"
 #include "quatcurve/types.hpp"
 
 namespace quatcurve::detail {
@@ -30,8 +31,8 @@ namespace quatcurve::detail {
 #define QUATCURVE_EXPECTS(cond, what) ((void)0)
 #endif
 
-constexpr double kPi = 3.141592653589793238462643383279502884;
-constexpr double kTwoPi = 2.0 * kPi;
+using numbers::kPi;
+using numbers::kTwoPi;
 
 // ---- quaternion kernels (plain double arithmetic, no calls into GLM's generic code) ------------------
 struct Q4 {

@@ -20,6 +20,7 @@
 #include <limits>
 #include <vector>
 
+#include "numbers.hpp"
 #include "quatcurve/euler.hpp"
 #include "quatcurve/quat.hpp"
 #include "quatcurve/reduce.hpp"
@@ -47,7 +48,7 @@ constexpr int kReweightIterationsSingle = 2;
 // A fit whose worst sample is above this multiple of the limit (in tan²(θ/2), i.e. twice the angle)
 // is rejected without reweighting.
 constexpr double kHopeless = 4.0;
-constexpr double kPi = 3.14159265358979323846;
+using numbers::kPi;
 // The rotation ignores a quaternion's scale, so the fit may let the 4-vector's norm drift — a cubic
 // with varying norm bends the normalized path more freely, which saves many keys. It is kept free
 // unless the norm would fall below kMinNormRatio of the sample's (checked at the samples and
