@@ -35,6 +35,7 @@ import bpy
 import numpy as np
 
 from . import fcurves, native, targets
+from .reduce import parallel_map
 from .targets import TargetError
 
 METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
@@ -174,6 +175,7 @@ class AnimatorKeys:
     values: np.ndarray
     types: np.ndarray
     selected: np.ndarray
+    name: str = ""   # the target's name, read on the main thread (planning may run on a worker)
 
     @property
     def is_euler(self):
@@ -262,7 +264,8 @@ def read_animator_keys(target):
         if (~own).any():  # this channel has no key of its own there: Blender's evaluation
             values[~own, c] = fcurves.evaluate(curves[c], frames[~own])
     types[types < 0] = KEY_TYPE_KEYFRAME
-    return AnimatorKeys(target, mode, prop, path, action, list(curves), frames, values, types, selected)
+    return AnimatorKeys(target, mode, prop, path, action, list(curves), frames, values, types, selected,
+                        target.name)
 
 
 # ---- the fit ------------------------------------------------------------------------------------------
@@ -325,10 +328,10 @@ def curve_of(keys, settings, ease_in=None, ease_out=None):
         if (norms == 0).any():
             k = int(np.flatnonzero(norms == 0)[0])
             raise FitError("%s: the quaternion is zero at frame %s (no rotation defined)"
-                           % (keys.target.name, targets.num(keys.frames[k])))
+                           % (keys.name, targets.num(keys.frames[k])))
         curve = qc.Curve(keys.frames, keys.values, method=settings.method, **options)
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.target.name, e)) from None
+        raise FitError("%s: %s" % (keys.name, e)) from None
     # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
     at_keys = curve.sample(keys.frames)
     signs = np.where(np.sum(at_keys * keys.values, axis=1) < 0, -1.0, 1.0)
@@ -369,7 +372,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         fitted = qc.fit_keys(t, values, forced, math.radians(settings.tolerance), mode=mode,
                              interpolation="BEZIER", synchronized=False, min_gap=MIN_KEY_GAP)
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.target.name, e)) from None
+        raise FitError("%s: %s" % (keys.name, e)) from None
     channels, generated = [], 0
     for ch in fitted.channels:
         types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
@@ -379,7 +382,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.target.name, curve, keys.frames))
+                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames))
 
 
 def write_plan(plan):
@@ -430,16 +433,21 @@ def record_frames(record):
     return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
 
 
-def plan_refit(keys, settings, record=None):
-    """plan_target with the target's eases; keys moved in time since `record` (as many as then)
-    keep their ease (fit and live mode)."""
+def refit_eases(keys, record=None):
+    """The (ease_in, ease_out) of the target's keys from the action's records; keys moved in time
+    since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
     ease_in, ease_out = key_eases(keys.action, keys.target, keys.frames)
     if record is not None and record.key_frames:
         old = record_frames(record)
         if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
             o_in, o_out = key_eases(keys.action, keys.target, old)
             ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
-    return plan_target(keys, settings, ease_in, ease_out)
+    return ease_in, ease_out
+
+
+def plan_refit(keys, settings, record=None):
+    """plan_target with the target's eases (fit and live mode)."""
+    return plan_target(keys, settings, *refit_eases(keys, record))
 
 
 # ---- the task -------------------------------------------------------------------------------------------
@@ -491,20 +499,25 @@ def fit(found, settings, only_changed=False):
     check_settings(settings)
     start = time.perf_counter()
     result = FitResult(settings)
-    plans = []
+    # Blender is read on the main thread; the planning (native curve, sampling, fit_keys without the
+    # GIL) runs on worker threads over targets (reduce.parallel_map: same results on any count).
+    work = []
     for target in found:
         keys = read_animator_keys(target)
         record = find_record(keys.action, target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        plan = plan_refit(keys, settings, record)
+        work.append((keys, refit_eases(keys, record)))
+    planned = parallel_map(lambda item: plan_target(item[0], settings, *item[1]), work)
+    plans = []
+    for (keys, _), plan in zip(work, planned):
         if plan is None:
-            result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), 0, 0.0,
+            result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (
                                                    len(keys.frames), "" if len(keys.frames) == 1 else "s")))
             continue
         plans.append(plan)
-        result.targets.append(TargetResult(target.name, keys.mode, len(keys.frames), plan.generated_count,
+        result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), plan.generated_count,
                                            math.degrees(plan.max_error), notes=plan.notes))
     for plan in plans:
         write_plan(plan)

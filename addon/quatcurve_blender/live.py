@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import bpy
 
 from . import fit
+from .reduce import parallel_map
 
 DEBOUNCE = 0.3   # seconds without a key change before Blender 3.4 refits (it cannot see a drag)
 POLL = 0.1       # seconds between checks while a drag runs (4.2+)
@@ -226,6 +227,9 @@ def refit_action(action):
     t0 = time.perf_counter()
     found = fit.fitted_targets(action)
     STATS.add("targets", time.perf_counter() - t0)
+    # Read and compare on the main thread; plan the changed targets on worker threads (native work
+    # without the GIL, reduce.parallel_map); write on the main thread.
+    changed = []
     for target in found:
         t0 = time.perf_counter()
         record = fit.find_record(action, target)
@@ -242,20 +246,30 @@ def refit_action(action):
         STATS.checks += 1
         STATS.add("read", t1 - t0)
         STATS.add("signature", t2 - t1)
-        if same:
-            continue
+        if not same:
+            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, record)))
+
+    def plan(item):
+        _, keys, settings, eases = item
         try:
-            plan = fit.plan_refit(keys, fit.settings_of(record), record)
+            return fit.plan_target(keys, settings, *eases)
         except fit.FitError as error:
-            STATS.errors.append(str(error))
+            return error
+
+    t2 = time.perf_counter()
+    plans = parallel_map(plan, changed)
+    t3 = time.perf_counter()
+    STATS.add("plan", t3 - t2)
+    for (target, _, _, _), result in zip(changed, plans):
+        if isinstance(result, fit.FitError):
+            STATS.errors.append(str(result))
+            continue
+        if result is None:  # fewer than two keys: nothing to fit, the record waits for more
             continue
         t3 = time.perf_counter()
-        STATS.add("plan", t3 - t2)
-        if plan is None:  # fewer than two keys: nothing to fit, the record waits for more
-            continue
         _busy = True
         try:
-            fit.write_plan(plan)
+            fit.write_plan(result)
         finally:
             _busy = False
         STATS.add("write", time.perf_counter() - t3)
