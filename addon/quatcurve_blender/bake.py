@@ -50,13 +50,17 @@ class BakeSettings:
     continuity: float = 0.0           # TCB
     bias: float = 0.0                 # TCB
     shortest_path: bool = True        # SLERP
+    clamped: bool = True              # SQUAD, TCB, CATMULL_ROM: overshoot-free tangents (False: textbook)
 
     def curve_options(self):
         """Keyword options of quatcurve.Curve for this method (only the ones it accepts)."""
         if self.method == "TCB":
-            return {"tension": self.tension, "continuity": self.continuity, "bias": self.bias}
+            return {"tension": self.tension, "continuity": self.continuity, "bias": self.bias,
+                    "clamped": bool(self.clamped)}
         if self.method == "SLERP":
             return {"shortest_path": bool(self.shortest_path)}
+        if self.method in ("SQUAD", "CATMULL_ROM"):
+            return {"clamped": bool(self.clamped)}
         return {}
 
 

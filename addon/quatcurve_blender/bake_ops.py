@@ -56,6 +56,10 @@ def bake_properties():
         "shortest_path": P.BoolProperty(name="Shortest Path", default=True,
                                         description="Slerp: take the shorter way between keys (off: keep the "
                                                     "keyed quaternions' path)"),
+        "clamped": P.BoolProperty(
+            name="No Overshoot", default=True,
+            description="Squad, TCB, Catmull-Rom: tangents clamped so that no segment overshoots its keys and "
+                        "holds stay still; off: the textbook tangents"),
         "rotation_mode": P.EnumProperty(name="Rotation Mode", items=ROTATION_MODE_ITEMS, default="KEEP",
                                         description="Rotation mode of the baked keys (the target's mode is set to it)"),
         "frame_start": P.IntProperty(name="Start", default=1, description="First baked frame"),
@@ -107,7 +111,8 @@ def settings_from(values, frame_range=(None, None)):
     return bake.BakeSettings(
         method=values.method, rotation_mode=values.rotation_mode, frame_start=start, frame_end=end,
         step=values.step, tolerance=values.tolerance, new_action=values.new_action, tension=values.tension,
-        continuity=values.continuity, bias=values.bias, shortest_path=values.shortest_path)
+        continuity=values.continuity, bias=values.bias, shortest_path=values.shortest_path,
+        clamped=getattr(values, "clamped", True))
 
 
 class QUATCURVE_OT_bake(bpy.types.Operator):

@@ -101,6 +101,9 @@ def build_parser():
     g.add_argument("--bias", type=float, default=0.0, metavar="B", help="TCB bias (default 0)")
     g.add_argument("--no-shortest-path", dest="shortest_path", action="store_false",
                    help="SLERP: keep the keyed quaternions' path instead of the shorter way")
+    g.add_argument("--no-clamp", dest="clamped", action="store_false",
+                   help="SQUAD, TCB, CATMULL_ROM (bake and fit): the textbook tangents instead of the "
+                        "overshoot-free ones")
 
     g = p.add_argument_group("fit", "Instead of baking (the quatcurve.fit operator): the targets' own rotation keys "
                                     "stay, get fitted Bezier handles and as few generated keys as the tolerance "
@@ -108,9 +111,6 @@ def build_parser():
     g.add_argument("--fit", action="store_true",
                    help="fit instead of bake; uses --method, --tension, --continuity, --bias, "
                         "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
-    g.add_argument("--no-clamp", dest="clamped", action="store_false",
-                   help="fit with SQUAD, TCB, CATMULL_ROM: the textbook tangents instead of the "
-                        "overshoot-free ones")
 
     g = p.add_argument_group("bake")
     g.add_argument("--rotation-mode", choices=bake.OUTPUT_MODES, default="KEEP", metavar="MODE",
@@ -390,8 +390,6 @@ def save_atomically(path):
 def run(args):
     if args.fit:
         return run_fit(args)
-    if not args.clamped:
-        raise UsageError("--no-clamp is an option of --fit")
     settings = bake_settings(args)
     want_compare = args.compare or args.report is not None
     comparing = compare_settings(args) if want_compare else None

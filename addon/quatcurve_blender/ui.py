@@ -38,6 +38,8 @@ def draw_bake_settings(layout, settings):
         col.prop(settings, "bias")
     elif settings.method == "SLERP":
         col.prop(settings, "shortest_path")
+    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
+        col.prop(settings, "clamped")
     layout.prop(settings, "rotation_mode", text="Output")
     col = layout.column(align=True)
     col.prop(settings, "use_keyed_range")

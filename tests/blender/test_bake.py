@@ -292,3 +292,21 @@ def test_tolerance_goes_through_the_reduction_hook(scene, monkeypatch):
     frames, _ = fcurves.read_keys(fcurves.Channels.of(obj).find("rotation_quaternion", 0))
     np.testing.assert_array_equal(frames, np.arange(1, 22, 2))
     assert settings.last_keys == 44 and "reduced to 44 keys within 0.5°" in settings.last_lines
+
+
+def test_bake_clamped_is_an_option(scene):
+    """SQUAD through a quick move then a long ease (keys at 1, 2, 102; 86° keyed in all): the default
+    clamped tangents keep the path within the path rule; clamped=False bakes the textbook SQUAD,
+    whose long segment wanders further."""
+    keys = [(1, (1, 0, 0, 0)), (2, (0.766, 0.643, 0, 0)), (102, (0.74, 0.64, 0.05, 0.0))]
+    lengths = {}
+    for clamped in (True, False):
+        obj = add_empty("Ease%d" % clamped, "QUATERNION")
+        key(obj, "rotation_quaternion", keys)
+        bake.bake([targets.Target(obj)], bake.BakeSettings(method="SQUAD", clamped=clamped,
+                                                           rotation_mode="QUATERNION"))
+        baked = targets.read_rotation_keys(targets.Target(obj))  # the baked action, a key every frame
+        assert len(baked.frames) == 102
+        lengths[clamped] = float(np.degrees(angles_between(baked.values[1:], baked.values[:-1])).sum())
+    assert lengths[True] <= 1.5 * 86 + 10
+    assert lengths[False] > lengths[True]
