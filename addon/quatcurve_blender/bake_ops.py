@@ -12,7 +12,7 @@ import time
 
 import bpy
 
-from . import bake, native, targets
+from . import bake, native, opsutil, targets
 from .targets import TargetError
 
 METHOD_ITEMS = (
@@ -126,10 +126,7 @@ class QUATCURVE_OT_bake(bpy.types.Operator):
         """Unset properties take the panel's values; an unset frame range means the keyed range
         (or the panel's Start/End when its Keyed Range is off). Returns (start, end) or None."""
         scene_settings = getattr(context.scene, "quatcurve", None)
-        if scene_settings is not None:
-            for name in _BAKE_PROPERTIES:
-                if name not in ("frame_start", "frame_end") and not self.properties.is_property_set(name):
-                    setattr(self, name, getattr(scene_settings, name))
+        opsutil.take_scene_settings(self, scene_settings, _BAKE_PROPERTIES, skip=("frame_start", "frame_end"))
         start_set = self.properties.is_property_set("frame_start")
         end_set = self.properties.is_property_set("frame_end")
         if scene_settings is not None and not scene_settings.use_keyed_range:

@@ -10,7 +10,7 @@ import json
 
 import bpy
 
-from . import compare, native
+from . import compare, native, opsutil
 
 KEY_INTERPOLATION_ITEMS = (
     ("BEZIER", "Bezier (auto-clamped)", "Blender's default for new keys"),
@@ -91,11 +91,7 @@ class QUATCURVE_OT_compare(bpy.types.Operator):
 
     def _settings(self, context):
         """Unset properties take the panel's values."""
-        scene_settings = getattr(context.scene, "quatcurve_compare", None)
-        if scene_settings is not None:
-            for name in _COMPARE_PROPERTIES:
-                if not self.properties.is_property_set(name):
-                    setattr(self, name, getattr(scene_settings, name))
+        opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_compare", None), _COMPARE_PROPERTIES)
         return compare.CompareSettings(subframes=int(self.subframes), all_euler_orders=bool(self.all_euler_orders),
                                        key_interpolation=self.key_interpolation)
 

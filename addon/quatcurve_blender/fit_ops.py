@@ -8,9 +8,8 @@ settings, as for bake and reduce.
 """
 
 import bpy
-import numpy as np
 
-from . import fcurves, fit, live, native, targets
+from . import fcurves, fit, live, native, opsutil, targets
 from .targets import TargetError
 
 METHOD_ITEMS = (
@@ -104,14 +103,7 @@ def draw_settings(layout, settings, context=None, max_lines=6):
     col = layout.column(align=True)
     col.prop(settings, "method", text="")
     col.prop(settings, "tolerance")
-    if settings.method == "TCB":
-        col.prop(settings, "tension")
-        col.prop(settings, "continuity")
-        col.prop(settings, "bias")
-    if settings.method == "SLERP":
-        col.prop(settings, "shortest_path")
-    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
-        col.prop(settings, "clamped")
+    opsutil.draw_method_options(col, settings)
     row = layout.row(align=True)
     row.operator("quatcurve.fit", text="Fit Rotation Keys", icon="IPO_EASE_IN_OUT")
     row.operator("quatcurve.unfit", text="", icon="X")
@@ -151,22 +143,7 @@ class QUATCURVE_OT_fit(bpy.types.Operator):
     __annotations__ = fit_properties()
 
     def execute(self, context):
-        scene_settings = getattr(context.scene, "quatcurve_fit", None)
-        if scene_settings is not None:
-            for name in fit_properties():
-                if not self.properties.is_property_set(name):
-                    setattr(self, name, getattr(scene_settings, name))
-        try:
-            native.require()
-            result = fit.fit(targets.gather_targets(context, verb="fit"), settings_from(self))
-        except (TargetError, RuntimeError) as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        if scene_settings is not None:
-            scene_settings.last_summary = result.summary()
-            scene_settings.last_lines = "\n".join(result.lines())
-        self.report({"INFO"}, result.summary())
-        return {"FINISHED"}
+        return opsutil.run_task(self, context, "quatcurve_fit", fit_properties(), settings_from, fit.fit, "fit")
 
 
 class QUATCURVE_OT_unfit(bpy.types.Operator):
@@ -194,11 +171,7 @@ class QUATCURVE_OT_set_ease(bpy.types.Operator):
     ease_out: bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0)
 
     def execute(self, context):
-        scene_settings = getattr(context.scene, "quatcurve_fit", None)
-        if scene_settings is not None:
-            for name in ("ease_in", "ease_out"):
-                if not self.properties.is_property_set(name):
-                    setattr(self, name, getattr(scene_settings, name))
+        opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("ease_in", "ease_out"))
         try:
             native.require()
             changed = set_ease(targets.gather_targets(context, verb="ease"), self.ease_in, self.ease_out)

@@ -8,8 +8,7 @@ not given by the caller come from the panel's settings.
 
 import bpy
 
-from . import native, reduce, targets
-from .targets import TargetError
+from . import opsutil, reduce
 
 INTERPOLATION_ITEMS = (
     ("BEZIER", "Bezier", "Bezier keys with fitted handles (FREE, broken at keys): the fewest keys"),
@@ -70,24 +69,11 @@ class QUATCURVE_OT_reduce(bpy.types.Operator):
     __annotations__ = reduce_properties()
 
     def execute(self, context):
-        scene_settings = getattr(context.scene, "quatcurve_reduce", None)
-        if scene_settings is not None:
-            for name in reduce_properties():
-                if not self.properties.is_property_set(name):
-                    setattr(self, name, getattr(scene_settings, name))
-        settings = reduce.ReduceSettings(tolerance=self.tolerance, interpolation=self.interpolation,
-                                         synchronized=self.synchronized, new_action=self.new_action)
-        try:
-            native.require()
-            result = reduce.reduce(targets.gather_targets(context, verb="reduce"), settings)
-        except (TargetError, RuntimeError) as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        if scene_settings is not None:
-            scene_settings.last_summary = result.summary()
-            scene_settings.last_lines = "\n".join(result.lines())
-        self.report({"INFO"}, "Reduced " + result.summary())
-        return {"FINISHED"}
+        def settings(op):
+            return reduce.ReduceSettings(tolerance=op.tolerance, interpolation=op.interpolation,
+                                         synchronized=op.synchronized, new_action=op.new_action)
+        return opsutil.run_task(self, context, "quatcurve_reduce", reduce_properties(), settings, reduce.reduce,
+                                "reduce", report_prefix="Reduced ")
 
 
 _classes = (QuatCurveReduceSettings, QUATCURVE_OT_reduce)

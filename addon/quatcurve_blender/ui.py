@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import compare, compare_ops, fit_ops, native, reduce_ops, trails
+from . import compare, compare_ops, fit_ops, native, opsutil, reduce_ops, trails
 
 
 def draw_status(layout):
@@ -32,14 +32,7 @@ def draw_bake_settings(layout, settings):
     """The bake settings of scene.quatcurve (the Bake button uses them)."""
     col = layout.column(align=True)
     col.prop(settings, "method", text="")
-    if settings.method == "TCB":
-        col.prop(settings, "tension")
-        col.prop(settings, "continuity")
-        col.prop(settings, "bias")
-    elif settings.method == "SLERP":
-        col.prop(settings, "shortest_path")
-    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
-        col.prop(settings, "clamped")
+    opsutil.draw_method_options(col, settings)
     layout.prop(settings, "rotation_mode", text="Output")
     col = layout.column(align=True)
     col.prop(settings, "use_keyed_range")
@@ -218,86 +211,86 @@ class QUATCURVE_PT_graph(_SidebarPanel, bpy.types.Panel):
     bl_space_type = "GRAPH_EDITOR"
 
 
-class BakePanel:
-    """Bake: settings, button, last bake."""
-    task = "bake"
-    bl_label = "Bake"
-    bl_options = set()
+def big_button(layout, operator, text, icon):
+    """A task's main button, taller than the settings above it."""
+    row = layout.row()
+    row.scale_y = 1.4
+    row.operator(operator, text=text, icon=icon)
+
+
+class _TaskPanel:
+    """A task's subpanel, shown when its scene settings (scene.<settings>) are registered."""
+    settings = ""
 
     @classmethod
     def poll(cls, context):
-        return getattr(context.scene, "quatcurve", None) is not None
+        return getattr(context.scene, cls.settings, None) is not None
+
+
+class BakePanel(_TaskPanel):
+    """Bake: settings, button, last bake."""
+    task = "bake"
+    settings = "quatcurve"
+    bl_label = "Bake"
+    bl_options = set()
 
     def draw(self, context):
         settings = context.scene.quatcurve
         layout = self.layout
         draw_bake_settings(layout, settings)
-        row = layout.row()
-        row.scale_y = 1.4
-        row.operator("quatcurve.bake", text="Bake", icon="ACTION")
+        big_button(layout, "quatcurve.bake", "Bake", "ACTION")
         draw_last_result(layout, settings)
 
 
-class ReducePanel:
+class ReducePanel(_TaskPanel):
     """Reduce Keys: settings, button, last reduction."""
     task = "reduce"
+    settings = "quatcurve_reduce"
     bl_label = "Reduce Keys"
     bl_options = {"DEFAULT_CLOSED"}
 
-    @classmethod
-    def poll(cls, context):
-        return getattr(context.scene, "quatcurve_reduce", None) is not None
 
     def draw(self, context):
         reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce)
 
 
-class FitPanel:
+class FitPanel(_TaskPanel):
     """Fit: the animator's own keys play a method — settings, Fit / Unmark, Live, ease, last fit."""
     task = "fit"
+    settings = "quatcurve_fit"
     bl_label = "Fit Rotation Keys"
     bl_options = {"DEFAULT_CLOSED"}
 
-    @classmethod
-    def poll(cls, context):
-        return getattr(context.scene, "quatcurve_fit", None) is not None
 
     def draw(self, context):
         fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context)
 
 
-class ComparePanel:
+class ComparePanel(_TaskPanel):
     """Compare: settings, button, the active target's plot, the last table."""
     task = "compare"
+    settings = "quatcurve_compare"
     bl_label = "Compare"
     bl_options = set()
-
-    @classmethod
-    def poll(cls, context):
-        return getattr(context.scene, "quatcurve_compare", None) is not None
 
     def draw(self, context):
         settings = context.scene.quatcurve_compare
         layout = self.layout
         draw_compare_settings(layout, settings)
-        row = layout.row()
-        row.scale_y = 1.4
-        row.operator("quatcurve.compare", text="Compare", icon="GRAPH")
+        big_button(layout, "quatcurve.compare", "Compare", "GRAPH")
         draw_compare_plot(layout, context, settings)
         target = trails.active_target(context)
         draw_compare_table(layout, settings, active=target.name if target is not None else None)
 
 
-class TrailsPanel:
+class TrailsPanel(_TaskPanel):
     """Orientation Trails (3D Viewport): the toggle in the header, settings, what is drawn."""
     task = "trails"
+    settings = "quatcurve_trails"
     bl_label = "Orientation Trails"
     bl_options = set()
     spaces = ("VIEW_3D",)
 
-    @classmethod
-    def poll(cls, context):
-        return getattr(context.scene, "quatcurve_trails", None) is not None
 
     def draw_header(self, context):
         self.layout.prop(context.scene.quatcurve_trails, "show", text="")

@@ -107,6 +107,12 @@ void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::ve
     m.last_q = to_quat(euler_eval(m.euler_axes, angles.back()).q);
 }
 
+// The segment's lerped 4-vector p at t (see LerpSeg).
+inline Q4 lerp_at(const LerpSeg& g, double t) {
+    const double s = (t - g.t0) * g.inv_h, r = (g.t1 - t) * g.inv_h;
+    return {r * g.a.w + s * g.b.w, r * g.a.x + s * g.b.x, r * g.a.y + s * g.b.y, r * g.a.z + s * g.b.z};
+}
+
 // q = p/|p|; below |p|² = kLerpTiny through p's largest component (normalized_small). A zero p
 // (only at the middle of exactly opposite QUAT_COMPONENTS keys) gives (0, 1, 0, 0), as Blender's
 // normalize_qt does.
@@ -115,9 +121,7 @@ void sample_lerp(const Curve::Impl& m, const double* times, std::size_t n, doubl
     drive(
         m.kt, times, n,
         [&](std::size_t i, std::size_t j, double t) {
-            const LerpSeg& g = seg[j];
-            const double s = (t - g.t0) * g.inv_h, r = (g.t1 - t) * g.inv_h;
-            const Q4 p{r * g.a.w + s * g.b.w, r * g.a.x + s * g.b.x, r * g.a.y + s * g.b.y, r * g.a.z + s * g.b.z};
+            const Q4 p = lerp_at(seg[j], t);
             const double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
             if (n2 > kLerpTiny) {
                 const double k = 1.0 / std::sqrt(n2);
@@ -138,8 +142,7 @@ void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, dou
         m.kt, times, n,
         [&](std::size_t i, std::size_t j, double t) {
             const LerpSeg& g = seg[j];
-            const double s = (t - g.t0) * g.inv_h, r = (g.t1 - t) * g.inv_h;
-            Q4 p{r * g.a.w + s * g.b.w, r * g.a.x + s * g.b.x, r * g.a.y + s * g.b.y, r * g.a.z + s * g.b.z};
+            Q4 p = lerp_at(g, t);
             double n2 = p.w * p.w + p.x * p.x + p.y * p.y + p.z * p.z;
             double k = 2.0 * g.inv_h;
             if (!(n2 > kLerpTiny)) {  // p near 0: |p|² = mx²·|p/mx|², c/mx² taken in two steps

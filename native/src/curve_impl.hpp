@@ -240,18 +240,15 @@ BezierSeg make_bezier_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, 
 Q4 bezier_at(const BezierSeg& g, double s);                                                       // curve_catmull_rom.cpp
 void chain_bezier_signs(Curve::Impl& m);                                                          // curve_catmull_rom.cpp
 
-void sample_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_lerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_slerp(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_euler(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_squad(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_squad(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_bezier(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void sample_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
-void velocity_spline(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+// Every family's samplers have the signature of Sampler: (prepared curve, n times, n outputs of
+// 4 (orientation) or 3 (angular velocity) doubles).
+using Sampler = void(const Curve::Impl& m, const double* t, std::size_t n, double* out);
+Sampler sample_lerp, velocity_lerp;      // curve_basic.cpp
+Sampler sample_slerp, velocity_slerp;    // curve_basic.cpp
+Sampler sample_euler, velocity_euler;    // curve_basic.cpp
+Sampler sample_squad, velocity_squad;    // curve_squad.cpp
+Sampler sample_bezier, velocity_bezier;  // curve_catmull_rom.cpp
+Sampler sample_spline, velocity_spline;  // curve_spline.cpp
 
 inline std::vector<double> key_arcs(const Curve::Impl& m) {
     std::vector<double> arcs(m.kseg.empty() ? 0 : static_cast<std::size_t>(m.kseg.back()) + 1, 0.0);

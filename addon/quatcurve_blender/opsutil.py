@@ -1,0 +1,49 @@
+"""Shared by the operator and settings modules (bake_ops, reduce_ops, compare_ops, fit_ops): the
+panel's settings for the properties a caller did not set, and the method-specific settings drawn
+in a panel, and the body of a task operator."""
+
+from . import native, targets
+
+TANGENT_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")  # the methods with the clamped option
+
+
+def take_scene_settings(operator, scene_settings, names, skip=()):
+    """Every property in `names` (but `skip`) that the caller did not set takes the scene
+    settings' value (the panel's), so the operator run from a script and from the panel agree."""
+    if scene_settings is None:
+        return
+    for name in names:
+        if name not in skip and not operator.properties.is_property_set(name):
+            setattr(operator, name, getattr(scene_settings, name))
+
+
+def draw_method_options(col, settings):
+    """The options of settings.method: TCB's tension, continuity, bias; SLERP's shortest path; the
+    No Overshoot (clamped) option of the tangent methods."""
+    if settings.method == "TCB":
+        col.prop(settings, "tension")
+        col.prop(settings, "continuity")
+        col.prop(settings, "bias")
+    elif settings.method == "SLERP":
+        col.prop(settings, "shortest_path")
+    if settings.method in TANGENT_METHODS:
+        col.prop(settings, "clamped")
+
+
+def run_task(operator, context, scene_attr, names, make_settings, task, verb, report_prefix=""):
+    """The body of a task operator (fit, reduce): the panel's settings for unset properties, the task
+    on the selection, errors reported (CANCELLED, nothing changed), the summary and one line per
+    target stored for the panel."""
+    scene_settings = getattr(context.scene, scene_attr, None)
+    take_scene_settings(operator, scene_settings, names)
+    try:
+        native.require()
+        result = task(targets.gather_targets(context, verb=verb), make_settings(operator))
+    except (targets.TargetError, RuntimeError) as error:
+        operator.report({"ERROR"}, str(error))
+        return {"CANCELLED"}
+    if scene_settings is not None:
+        scene_settings.last_summary = result.summary()
+        scene_settings.last_lines = "\n".join(result.lines())
+    operator.report({"INFO"}, report_prefix + result.summary())
+    return {"FINISHED"}
