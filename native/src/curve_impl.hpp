@@ -90,37 +90,6 @@ inline double per_key(const std::vector<double>& v, int key) {
     throw InvalidArgument("times[" + std::to_string(i) + "]: not a finite number");
 }
 
-// Calls run(j, i0, i1) for every maximal run [i0, i1) of consecutive times inside segment j (times
-// sorted or not: an unsorted stretch gives runs of one) and outside(i, before) for the times outside
-// [knots.front(), knots.back()]; non-finite times throw. A run ends at the first time that leaves the
-// segment or steps back (two comparisons per time).
-template <class Run, class Outside>
-inline void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
-                       Outside&& outside) {
-    const std::size_t segments = knots.size() - 1;
-    const double first = knots.front(), last = knots.back();
-    std::size_t hint = 0, i = 0;
-    while (i < n) {
-        const double t = times[i];
-        if (!(t >= first && t <= last)) {
-            if (!std::isfinite(t)) bad_time(i);
-            outside(i, t < first);
-            ++i;
-            continue;
-        }
-        const std::size_t j = locate(knots.data(), segments, t, hint);
-        // times in [t, end) stay in segment j (the last segment includes its end knot)
-        const double end = j + 1 == segments ? last : knots[j + 1];
-        auto inside = [&](std::size_t k) {
-            return times[k] >= t && (j + 1 == segments ? times[k] <= end : times[k] < end);
-        };
-        std::size_t lo = i + 1;
-        while (lo < n && inside(lo) && times[lo] >= times[lo - 1]) ++lo;
-        run(j, i, lo);
-        i = lo;
-    }
-}
-
 // True when times[i] = times[0] + i·dt for all i, to within 64 ulps of the largest |time|: a sampler
 // may then step from sample to sample by a fixed rotation (error ≤ |ω|·that tolerance, re-anchored
 // every kAnchorSteps samples). Sets dt.

@@ -155,28 +155,21 @@ void build_spline(Curve::Impl& m) {
     }
 }
 
-// Sorted times are taken in runs of samples within one segment: the inner loop has no search and no
-// branch, so the x86-64-v3 clone vectorizes it (four samples per AVX2 register).
 QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SplineSeg* seg = m.spline.data();
-    auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
-    drive_runs(m.kt, times, n, [&](std::size_t j, std::size_t i0, std::size_t i1) {
-        const SplineSeg g = seg[j];
-        for (std::size_t i = i0; i < i1; ++i) {
-            const double s = (times[i] - g.t0) * g.inv_h;
+    drive(
+        m.kt, times, n,
+        [&](std::size_t i, std::size_t j, double t) {
+            const SplineSeg& g = seg[j];
+            const double s = (t - g.t0) * g.inv_h;
             const double rx = ((g.c3.x * s + g.c2.x) * s + g.c1.x) * s;
             const double ry = ((g.c3.y * s + g.c2.y) * s + g.c1.y) * s;
             const double rz = ((g.c3.z * s + g.c2.z) * s + g.c1.z) * s;
             double c, k;
             exp_coeffs(rx * rx + ry * ry + rz * rz, c, k);
-            double* o = out + 4 * i;
-            const double x = k * rx, y = k * ry, z = k * rz;
-            o[0] = g.Q.w * c - g.Q.x * x - g.Q.y * y - g.Q.z * z;
-            o[1] = g.Q.w * x + g.Q.x * c + g.Q.y * z - g.Q.z * y;
-            o[2] = g.Q.w * y - g.Q.x * z + g.Q.y * c + g.Q.z * x;
-            o[3] = g.Q.w * z + g.Q.x * y - g.Q.y * x + g.Q.z * c;
-        }
-    }, outside);
+            store(mul(g.Q, {c, k * rx, k * ry, k * rz}), out + 4 * i);
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
 // ω = R(q_i)·J_l(ρ)·ρ'(s)/h.
