@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, native, targets
+from . import fcurves, native, path_rule, targets
 from .reduce import parallel_map
 from .targets import TargetError
 
@@ -302,17 +302,10 @@ class FitPlan:
     notes: list = field(default_factory=list)
 
 
-def path_notes(name, curve, frames):
-    """One note per key segment whose path breaks the path rule (longer than 1.5 × its keyed arc +
-    10°): the target, the frames and the ratio. Clamped methods never do; SPLINE_C2 may."""
-    qc = native.require()
-    notes = []
-    for k, (arc, length) in enumerate(curve.segment_paths()):
-        if length > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK:
-            notes.append("%s: frames %s..%s turn %.1f° for a keyed arc of %.1f° (%.1f×): beyond 1.5 × arc + 10°"
-                         % (name, targets.num(frames[k]), targets.num(frames[k + 1]), math.degrees(length),
-                            math.degrees(arc), length / arc if arc > 0 else float("inf")))
-    return notes
+def path_notes(name, curve, frames, method):
+    """One note per key segment whose path breaks the path rule (path_rule.breaks): the target, the
+    frames and the ratio. Clamped methods never do; SPLINE_C2 may."""
+    return ["path rule: " + b.text() for b in path_rule.breaks(curve, frames, name, method)]
 
 
 def curve_of(keys, settings, ease_in=None, ease_out=None):
@@ -382,7 +375,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames))
+                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method))
 
 
 def write_plan(plan):

@@ -47,13 +47,16 @@ class PathRuleBreak:
 
 def breaks(curve, key_frames, target, method, segment_paths=None):
     """[PathRuleBreak] of `curve` (a quatcurve.Curve through keys at key_frames), one per key segment
-    whose sampled path is longer than the rule allows; [] when it obeys it everywhere. segment_paths:
-    the curve's Curve.segment_paths() when the caller already has them."""
-    qc = native.require()
-    found = []
-    paths = curve.segment_paths() if segment_paths is None else segment_paths
-    for i in (i for i, (arc, path) in enumerate(paths) if path > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK):
-        arc, path = paths[i]
-        found.append(PathRuleBreak(target, method, float(key_frames[i]), float(key_frames[i + 1]),
-                                   float(arc), float(path)))
-    return found
+    whose sampled path is longer than the rule allows; [] when it obeys it everywhere.
+
+    segment_paths: the curve's Curve.segment_paths() when the caller already has them (compare);
+    otherwise Curve.path_rule_breaks() answers, which samples nothing where the construction already
+    settled the rule (SLERP, NLERP, the clamped SQUAD, TCB and CATMULL_ROM)."""
+    if segment_paths is None:
+        rows = [(int(i), arc, path) for i, arc, path in curve.path_rule_breaks()]
+    else:
+        qc = native.require()
+        rows = [(i, arc, path) for i, (arc, path) in enumerate(segment_paths)
+                if path > qc.PATH_RULE_FACTOR * arc + qc.PATH_RULE_SLACK]
+    return [PathRuleBreak(target, method, float(key_frames[i]), float(key_frames[i + 1]), float(arc), float(path))
+            for i, arc, path in rows]

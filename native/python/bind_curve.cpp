@@ -167,6 +167,25 @@ void bind_curve(py::module_& m) {
             py::arg("samples_per_segment") = 64,
             "Per key segment (K-1, 2): the keyed arc and the sampled path length (radians). The path rule: "
             "length <= PATH_RULE_FACTOR * arc + PATH_RULE_SLACK.")
+        .def(
+            "path_rule_breaks",
+            [](const Curve& c) {
+                std::vector<std::pair<std::size_t, SegmentPath>> b;
+                {
+                    py::gil_scoped_release release;
+                    b = c.path_rule_breaks();
+                }
+                DArray a({static_cast<py::ssize_t>(b.size()), py::ssize_t(3)});
+                for (std::size_t i = 0; i < b.size(); ++i) {
+                    a.mutable_data()[3 * i] = static_cast<double>(b[i].first);
+                    a.mutable_data()[3 * i + 1] = b[i].second.arc;
+                    a.mutable_data()[3 * i + 2] = b[i].second.length;
+                }
+                return a;
+            },
+            "(B, 3): key segment index, keyed arc and sampled path length (radians) of every key segment "
+            "whose segment_paths() length breaks the path rule; nothing is sampled where the curve's "
+            "construction settled it (SLERP, NLERP, and the clamped SQUAD, TCB, CATMULL_ROM).")
         .def_property_readonly("times",
                                [](const Curve& c) {
                                    const auto& t = c.times();

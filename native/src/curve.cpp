@@ -466,11 +466,20 @@ void Curve::build() {
                 m.last_q = quats_.back();
             }
             break;
-        case Method::NLERP: detail::build_lerp(m, m.kt, m.kq); break;
-        case Method::SLERP: detail::build_slerp(m); break;
+        case Method::NLERP:  // the great arc between sign-continuous knots: the path is the arc
+            detail::build_lerp(m, m.kt, m.kq);
+            m.path_rule_proven = true;
+            break;
+        case Method::SLERP:
+            detail::build_slerp(m);
+            m.path_rule_proven = true;
+            break;
         case Method::SQUAD:
         case Method::TCB:
-        case Method::CATMULL_ROM: detail::build_tangent_curve(m, method_, options_); break;
+        case Method::CATMULL_ROM:
+            detail::build_tangent_curve(m, method_, options_);
+            m.path_rule_proven = options_.clamped;
+            break;
         case Method::SPLINE_C2: detail::build_spline(m); break;
     }
 }
@@ -554,6 +563,15 @@ std::vector<SegmentPath> Curve::segment_paths(std::size_t samples_per_segment) c
             paths[seg].length += detail::angle_between(q.data() + 4 * k, q.data() + 4 * k + 4);
     }
     return paths;
+}
+
+std::vector<std::pair<std::size_t, SegmentPath>> Curve::path_rule_breaks() const {
+    std::vector<std::pair<std::size_t, SegmentPath>> out;
+    if (impl_->path_rule_proven) return out;
+    const std::vector<SegmentPath> paths = segment_paths();
+    for (std::size_t k = 0; k < paths.size(); ++k)
+        if (!paths[k].obeys_path_rule()) out.emplace_back(k, paths[k]);
+    return out;
 }
 
 std::vector<Quat> Curve::sample(const std::vector<double>& times) const {

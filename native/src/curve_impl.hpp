@@ -177,6 +177,11 @@ struct Curve::Impl {
     std::vector<double> ease_a, ease_b;
 
     Quat first_q, last_q;  // constant extrapolation
+
+    // Set by the builders whose construction already measured every key segment against the path
+    // rule (the clamped tangent methods, curve_tangents.cpp) or whose path is its keyed arc (SLERP,
+    // NLERP): Curve::path_rule_breaks then has nothing left to sample.
+    bool path_rule_proven = false;
 };
 
 namespace detail {

@@ -65,6 +65,13 @@ double check_curve(const Keys& k, Method m, const CurveOptions& o, const std::st
         EXPECT_LE(angle_between(c.sample(std::vector<double>{k.t[i]})[0], k.q[i]), 1e-9) << what << " key " << i;
     const auto L = paths(c);
     const auto segs = c.segment_paths();
+    // path_rule_breaks (which samples nothing where the construction settled the rule) names exactly
+    // the segments whose sampled path breaks it
+    std::vector<std::size_t> broken, named;
+    for (std::size_t i = 0; i < segs.size(); ++i)
+        if (!segs[i].obeys_path_rule()) broken.push_back(i);
+    for (const auto& b : c.path_rule_breaks()) named.push_back(b.first);
+    EXPECT_EQ(named, broken) << what;
     double worst = 0;
     for (std::size_t i = 0; i < L.size(); ++i) {
         const double arc = angle_between(k.q[i], k.q[i + 1]);

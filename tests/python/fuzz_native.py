@@ -1134,7 +1134,7 @@ def build_blender_evaluate(fn, d):
 
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
-CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "sample", "segment_paths", "times"}
+CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "path_rule_breaks", "sample", "segment_paths", "times"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 EASE_OPTIONS = ("ease_in", "ease_out")
@@ -1288,6 +1288,7 @@ def build_curve(method, d: Draw) -> Case:
                 results[name + "_error"] = e
         results["at_keys"] = c.sample(c.times)
         results["paths"] = c.segment_paths()
+        results["breaks"] = c.path_rule_breaks()
         return results
 
     def check(r):
@@ -1309,6 +1310,14 @@ def build_curve(method, d: Draw) -> Case:
         shape_is(paths, (max(kt.size - 1, 0), 2), "segment_paths")
         finite(paths, "segment_paths")
         expect(bool(np.all(paths >= 0)), "segment_paths: negative arc or length")
+        # path_rule_breaks (no sampling where the construction settled it) names exactly the
+        # segments whose sampled path breaks the rule
+        if paths.size:
+            over = np.flatnonzero(paths[:, 1] > qc.PATH_RULE_FACTOR * paths[:, 0] + qc.PATH_RULE_SLACK)
+        else:
+            over = np.zeros(0, dtype=int)
+        named = r["breaks"][:, 0].astype(int)
+        expect(np.array_equal(named, over), f"path_rule_breaks names {named.tolist()}, segment_paths {over.tolist()}")
         if method in CLAMPED_METHODS and kwargs.get("clamped", True) is not False and paths.size:
             excess = paths[:, 1] - (qc.PATH_RULE_FACTOR * paths[:, 0] + qc.PATH_RULE_SLACK)
             expect(excess.max() <= 1e-9, f"segment {int(excess.argmax())} breaks the path rule by {excess.max()!r} rad")

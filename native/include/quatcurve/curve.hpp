@@ -144,6 +144,11 @@ public:
     // of the angles between `samples_per_segment` + 1 equally spaced samples of every knot segment
     // (a lower bound of the true length that converges to it). samples_per_segment ≥ 1.
     std::vector<SegmentPath> segment_paths(std::size_t samples_per_segment = 64) const;
+    // The key segments (index, arc and path) whose segment_paths() length breaks the path rule. Nothing is
+    // sampled where the construction settled it: SLERP and NLERP run along the keyed arc, and the
+    // clamped SQUAD, TCB and CATMULL_ROM measured every key segment against the rule when they
+    // were built (2% inside it, the same 64 samples per knot segment; curve_tangents.cpp).
+    std::vector<std::pair<std::size_t, SegmentPath>> path_rule_breaks() const;
 
     Method method() const { return method_; }
     const CurveOptions& options() const { return options_; }
