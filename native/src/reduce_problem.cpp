@@ -30,6 +30,16 @@ void check_times(const std::vector<double>& times) {
     }
 }
 
+// Rotation angle between the unit quaternions a and b (either sign): angle_between (quat.hpp)
+// without its argument checks and normalization, for the per-sample setup loops.
+double unit_angle(const Quat& a, const Quat& b) {
+    const double sign = a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z < 0.0 ? -1.0 : 1.0;
+    const double dw = a.w - sign * b.w, dx = a.x - sign * b.x, dy = a.y - sign * b.y, dz = a.z - sign * b.z;
+    const double sw = a.w + sign * b.w, sx = a.x + sign * b.x, sy = a.y + sign * b.y, sz = a.z + sign * b.z;
+    return 4.0 * std::atan2(std::sqrt(dw * dw + dx * dx + dy * dy + dz * dz),
+                            std::sqrt(sw * sw + sx * sx + sy * sy + sz * sz));
+}
+
 // Discontinuities between consecutive samples (see Problem::breaks) and, when the between-samples
 // guard will run (`guard`), the step tangents.
 void compute_breaks(Problem& p, bool guard) {
@@ -47,7 +57,7 @@ void compute_breaks(Problem& p, bool guard) {
     }
     p.step_tan.assign(p.n, 0.0);
     for (std::size_t k = 0; guard && k + 1 < p.n; ++k)
-        p.step_tan[k] = std::tan(0.5 * kBetweenStep * angle_between(p.ref[k], p.ref[k + 1]));
+        p.step_tan[k] = std::tan(0.5 * kBetweenStep * unit_angle(p.ref[k], p.ref[k + 1]));
 }
 
 // Slopes for default tangents: central differences inside, one-sided at the ends and next to a
@@ -88,13 +98,14 @@ Problem make_quat_problem(const std::vector<double>& times, const std::vector<Qu
     p.unit.assign(p.n * 4, 0.0);
     p.norm2.assign(p.n, 0.0);
     for (std::size_t k = 0; k < p.n; ++k) {
-        const std::string problem = nonzero_problem(quats[k]);
-        if (!problem.empty())
-            throw InvalidArgument("quats[" + std::to_string(k) + "]: " + problem);
-        p.t[k] = f32(times[k]);
         const Quat& q = quats[k];
-        const double v[4] = {q.w, q.x, q.y, q.z};
         const double len = norm(q);
+        if (!(len >= kMinNorm && len < HUGE_VAL)) {  // NaN too: name what is wrong
+            const std::string problem = nonzero_problem(q);
+            if (!problem.empty()) throw InvalidArgument("quats[" + std::to_string(k) + "]: " + problem);
+        }
+        p.t[k] = f32(times[k]);
+        const double v[4] = {q.w, q.x, q.y, q.z};
         p.ref[k] = Quat(q.w / len, q.x / len, q.y / len, q.z / len);
         const double u[4] = {v[0] / len, v[1] / len, v[2] / len, v[3] / len};
         p.norm2[k] = len * len;
@@ -150,6 +161,7 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
 // tolerance, and never less than 1e-6 rad (float32 rounding of ordinary values is ~1e-7 rad).
 void check_float32_storage(const Problem& p, double tolerance) {
     const double allowed = std::max(tolerance, 1e-6);
+    const double allowed_tan = std::tan(0.5 * allowed);
     const char* name = p.kind == Kind::QUAT ? "quats[" : "angles[";
     for (std::size_t k = 0; k < p.n; ++k) {
         const double* y = p.row(k);
@@ -160,19 +172,14 @@ void check_float32_storage(const Problem& p, double tolerance) {
                 throw InvalidArgument(name + std::to_string(k) + "]: " + std::to_string(y[c]) +
                                       " is beyond float32 range (Blender stores keys as float32)");
         }
-        Quat stored;
-        if (p.kind == Kind::QUAT) {
-            stored = Quat(v[0], v[1], v[2], v[3]);
-            if (!nonzero_problem(stored).empty())
-                throw InvalidArgument(name + std::to_string(k) +
-                                      "]: every component underflows float32 (Blender stores keys as float32)");
-        } else {
-            stored = euler_to_quat(Vec3(v[0], v[1], v[2]), p.order);
-        }
-        const double moved = angle_between(p.ref[k], stored);
-        if (moved > allowed)
+        // float32 components are 0 or at least 1e-45 in size: their squares cannot underflow
+        if (p.kind == Kind::QUAT && !(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] > 0.0))
+            throw InvalidArgument(name + std::to_string(k) +
+                                  "]: every component underflows float32 (Blender stores keys as float32)");
+        const double tan2 = error_tan2(p, k, v);  // the stored key's rotation against the sample's
+        if (!(tan2 <= allowed_tan * allowed_tan))
             throw InvalidArgument(name + std::to_string(k) + "]: storing it as float32 (as Blender does) turns it by " +
-                                  std::to_string(moved) + " rad, more than the tolerance allows");
+                                  std::to_string(angle_of_tan2(tan2)) + " rad, more than the tolerance allows");
     }
 }
 

@@ -257,6 +257,14 @@ TEST(Reduce, BadInputNamesTheArgument) {
     expect_invalid([&] { reduce_keys(t, bad, 0.1); }, "quats[2]: zero-length");
     bad[2] = Quat(1, NAN, 0, 0);
     expect_invalid([&] { reduce_keys(t, bad, 0.1, KeyInterpolation::BEZIER); }, "quats[2]");
+    // Blender stores float32: a quaternion whose every component underflows it, or whose float32
+    // rounding (subnormal, a few bits) turns it by more than the tolerance, is refused
+    bad[2] = Quat(1e-50, 2e-50, 0, 0);
+    expect_invalid([&] { reduce_keys(t, bad, 0.1); }, "quats[2]: every component underflows float32");
+    bad[2] = Quat(3.1e-42, 1.7e-42, 0, 0);
+    expect_invalid([&] { reduce_keys(t, bad, 0.0); }, "quats[2]: storing it as float32 (as Blender does) turns it by");
+    bad[2] = Quat(3.1e-30, 1.7e-30, 0, 0);  // normal float32: stored within 1e-6 rad
+    EXPECT_NO_THROW(reduce_keys(t, bad, 0.0));
     std::vector<Vec3> bad_a = a;
     bad_a[1] = Vec3(0, INFINITY, 0);
     expect_invalid([&] { reduce_keys_euler(t, bad_a, EulerOrder::XYZ, 0.1); }, "angles[1]");
