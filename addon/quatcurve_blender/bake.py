@@ -9,10 +9,13 @@ them (optionally reduced first by reduce.reduce_values).
     result = bake.bake(found, bake.BakeSettings(method="SQUAD", rotation_mode="QUATERNION"))
     print(result.summary())
 
-Everything is read and computed before anything is written (`prepare` → `BakePlan.compute` →
-`BakePlan.write`), so a BakeError or a cancelled bake leaves the file untouched.
+Everything is read before anything is written (`prepare`), then `BakePlan.write` computes and
+writes: into new actions it writes each target while worker threads compute the next ones, and a
+BakeError on the way removes the new actions again; in place it computes everything first. Either
+way a BakeError or a cancelled bake leaves the file untouched.
 """
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -20,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fcurves, native, path_rule, targets, write
-from .reduce import parallel_map
+from .reduce import parallel_imap, parallel_map
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
 
@@ -159,8 +162,8 @@ class BakeResult:
 
 class BakePlan:
     """A validated bake: sources read, frames chosen. `compute_steps()` (or `compute()`) samples the
-    curves target by target without touching Blender data; `write()` then writes everything. Drop the
-    plan to cancel: nothing has changed until write()."""
+    curves target by target without touching Blender data; `write()` computes what is left and writes
+    everything. Drop the plan to cancel: nothing has changed until write()."""
 
     def __init__(self, found, settings, sources, frames, seconds):
         self.settings = settings
@@ -231,29 +234,50 @@ class BakePlan:
                 math.degrees(item.reduced.max_error)))
 
     def write(self):
-        """Writes every computed target (write.write_rotations); returns the BakeResult."""
-        if self.computed < len(self.items):
-            self.compute()
+        """Writes every target (write.write_rotations), computing first what is not computed yet;
+        returns the BakeResult. Into new actions, the targets left are computed on worker threads
+        while the main thread writes the ones done (in order); a failure then removes the new
+        actions again, so the file is untouched either way. In place, everything is computed before
+        anything is written."""
         begin = time.perf_counter()
         settings = self.settings
-        writes = []
-        for item in self.items:
-            if item.reduced is not None:
-                keys, interpolation = item.reduced.keys, item.reduced.interpolation
-            else:
-                keys, interpolation = write.dense_keys(item.frames, item.values), "LINEAR"
-            writes.append(write.RotationWrite(item.target, item.output_mode, keys, interpolation,
-                                              own_action=item.own_action))
+        todo = self.items[self.computed:]
+        if todo and settings.new_action:
+            references = [self._reference(item) for item in todo]  # Blender data: main thread
+
+            def computed(job):
+                self._compute_native(*job)
+                return job[0]
+
+            done = self.items[:self.computed]
+            items = itertools.chain(done, parallel_imap(computed, list(zip(todo, references))))
+        else:
+            if todo:
+                self.compute()
+            items = self.items
+        writes = (self._write_of(item) for item in items)
+        if not settings.new_action:
+            writes = list(writes)
         actions = write.write_rotations(writes, settings.new_action, settings.method.lower())
+        self.computed = len(self.items)
         result = BakeResult(settings.method, float(self.frames[0]), float(self.frames[-1]))
-        for item, written, action in zip(self.items, writes, actions):
-            result.keys_written += written.key_count
+        for item, action in zip(self.items, actions):
+            count = self._write_of(item).key_count
+            result.keys_written += count
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
-                                               len(item.source.frames), written.key_count, action.name,
+                                               len(item.source.frames), count, action.name,
                                                item.source.notes + item.notes))
         self.seconds += time.perf_counter() - begin
         result.seconds = self.seconds
         return result
+
+    @staticmethod
+    def _write_of(item):
+        if item.reduced is not None:
+            keys, interpolation = item.reduced.keys, item.reduced.interpolation
+        else:
+            keys, interpolation = write.dense_keys(item.frames, item.values), "LINEAR"
+        return write.RotationWrite(item.target, item.output_mode, keys, interpolation, own_action=item.own_action)
 
 
 def prepare(found, settings):
@@ -304,4 +328,4 @@ def _keep_shared_actions(plan):
 def bake(found, settings):
     """Bakes `found` (targets.Target) with `settings` synchronously; returns the BakeResult. On
     BakeError nothing has been changed."""
-    return prepare(found, settings).compute().write()
+    return prepare(found, settings).write()

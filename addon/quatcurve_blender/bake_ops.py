@@ -159,8 +159,7 @@ class QUATCURVE_OT_bake(bpy.types.Operator):
     def execute(self, context):
         try:
             plan = self._prepare(context)
-            plan.compute()
-            return self._finish(context, plan)
+            return self._finish(context, plan)  # computes while it writes (BakePlan.write)
         except (TargetError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

@@ -60,6 +60,27 @@ def parallel_map(fn, items):
         return list(pool.map(fn, items))
 
 
+def parallel_imap(fn, items):
+    """Like parallel_map, but yields each result in order as soon as it and those before it are done,
+    so the caller (on the main thread) can use the first results while workers compute the rest. When
+    the caller stops early (an error, a generator closed), the calls not yet started are cancelled."""
+    items = list(items)
+    threads = min(thread_count(), len(items))
+    if threads <= 1:
+        for item in items:
+            yield fn(item)
+        return
+    pool = ThreadPoolExecutor(max_workers=threads)
+    futures = [pool.submit(fn, item) for item in items]
+    try:
+        for future in futures:
+            yield future.result()
+    finally:
+        for future in futures:
+            future.cancel()
+        pool.shutdown(wait=True)
+
+
 class ReduceError(TargetError, ValueError):
     """A reduction that cannot be done; the message names the target and what is wrong. Raised
     before anything is written. A ValueError too, as the bake expects of its reduction."""

@@ -56,27 +56,43 @@ def write_rotations(items, new_action, suffix):
     new_action: each target's action is copied as '<action>_<suffix>' (one copy per action, shared by
     every target playing it), the copy assigned and the original kept with a fake user; otherwise the
     keys replace the rotation curves in place (unless item.own_action). A target with only NLA
-    strips gets a new action '<object>_<suffix>'. Keys go into the group the replaced curves were in."""
+    strips gets a new action '<object>_<suffix>'. Keys go into the group the replaced curves were in.
+
+    items: a list, or with new_action an iterator that computes the writes one by one (the bake
+    overlaps its computing with the writing this way). Until every item is written only actions made
+    here are touched: when the iterator or a write raises, they are removed again (which unassigns
+    the new ones) and the file is as it was."""
+    if not new_action and not isinstance(items, (list, tuple)):
+        raise TypeError("write_rotations: in place, the writes must all be computed first (a list)")
     copies = {}        # original action → its copy
     destination = {}   # ID → the action its targets are written into
-    written = []
-    for item in items:
-        id_data = item.target.id_data
-        if id_data.name_full not in destination:
-            original = fcurves.active_action(id_data)
-            if original is None:  # only NLA strips: the result becomes the active action
-                action = fcurves.new_action(id_data, "%s_%s" % (id_data.name, suffix))
-            elif new_action or item.own_action:
-                if original not in copies:
-                    copies[original] = fcurves.copy_action(original, "%s_%s" % (original.name, suffix))
-                action = copies[original]
-            else:
-                action = original
-            destination[id_data.name_full] = action
-        action = destination[id_data.name_full]
-        _write_keys(fcurves.Channels.of(id_data, action, create=True), item)
-        written.append(action)
-    for item in items:
+    made = []          # actions made here
+    written, done = [], []
+    try:
+        for item in items:
+            id_data = item.target.id_data
+            if id_data.name_full not in destination:
+                original = fcurves.active_action(id_data)
+                if original is None:  # only NLA strips: the result becomes the active action
+                    action = fcurves.new_action(id_data, "%s_%s" % (id_data.name, suffix))
+                    made.append(action)
+                elif new_action or item.own_action:
+                    if original not in copies:
+                        copies[original] = fcurves.copy_action(original, "%s_%s" % (original.name, suffix))
+                        made.append(copies[original])
+                    action = copies[original]
+                else:
+                    action = original
+                destination[id_data.name_full] = action
+            action = destination[id_data.name_full]
+            _write_keys(fcurves.Channels.of(id_data, action, create=True), item)
+            written.append(action)
+            done.append(item)
+    except BaseException:
+        for action in made:
+            fcurves.remove_action(action)
+        raise
+    for item in done:
         id_data = item.target.id_data
         action = destination[id_data.name_full]
         if fcurves.active_action(id_data) != action:
@@ -85,7 +101,7 @@ def write_rotations(items, new_action, suffix):
             item.target.owner.rotation_mode = item.mode
     for original in copies:
         original.use_fake_user = True
-    for id_data in {item.target.id_data.name_full: item.target.id_data for item in items}.values():
+    for id_data in {item.target.id_data.name_full: item.target.id_data for item in done}.values():
         id_data.update_tag(refresh={"TIME"})  # re-evaluate the animation on the next update
     return written
 

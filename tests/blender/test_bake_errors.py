@@ -83,6 +83,34 @@ def test_zero_quaternion_in_the_source(scene):
     refused("Cube: the quaternion is zero at frame 7")
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_target_failing_after_others_were_written_leaves_nothing_behind(scene, monkeypatch, threads):
+    # Into new actions the bake writes each target while the next ones compute: the zero quaternion
+    # of the last target is found (its curve refuses it) after the first ones were written, and the
+    # new actions made so far (copies, and a new one for a target with only NLA strips) are removed.
+    from quatcurve_blender import reduce
+    monkeypatch.setattr(reduce, "THREADS", threads)
+    good = [add_empty("Good%d" % i, "QUATERNION") for i in range(3)]
+    for obj in good:
+        key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 1, 0, 0))])
+    strip_only = add_empty("Good9", "QUATERNION")
+    key(strip_only, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 0, 1, 0))])
+    anim = strip_only.animation_data
+    anim.nla_tracks.new().strips.new("Strip", 1, fcurves.active_action(strip_only))
+    anim.action = None
+    bad = add_empty("Zz", "QUATERNION")
+    key(bad, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 0, 0, 0))])
+    select_objects(*good, strip_only, bad)
+    assert [t.name for t in targets.gather_targets(bpy.context)][-1] == "Zz"
+    from quatcurve_blender import write
+    written = []
+    real = write._write_keys
+    monkeypatch.setattr(write, "_write_keys", lambda channels, item: (written.append(item.target.name),
+                                                                       real(channels, item)))
+    refused("Zz: the quaternion is zero at frame 7")
+    assert written == ["Good0", "Good1", "Good2", "Good9"]  # written, then removed again
+
+
 def test_empty_frame_range(keyed):
     refused(r"frame range 10\.\.5 is empty", frame_start=10, frame_end=5)
 
