@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "curve_impl.hpp"
+#include "curve_simd.hpp"
 
 namespace quatcurve::detail {
 
@@ -161,56 +162,25 @@ void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, dou
         [&](std::size_t i, bool) { store(Vec3(0.0), out + 3 * i); });
 }
 
+// Per run of times in one segment, four samples at a time (curve_simd.hpp): q = A·C + B·K with
+// (C, K) = exp_coeffs(s²θ²) (K·s), ten series terms for every segment (θ ≤ π: the segments are split
+// at π), so no branch depends on the keys. Every sample is evaluated on its own (no recurrence, no
+// drift).
 QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SlerpSeg* seg = m.slerp.data();
-    auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
-    auto emit = [&](const SlerpSeg& g, double c, double k, double* o) {
-        o[0] = g.a.w * c + g.b.w * k;
-        o[1] = g.a.x * c + g.b.x * k;
-        o[2] = g.a.y * c + g.b.y * k;
-        o[3] = g.a.z * c + g.b.z * k;
-    };
-    double dt;
-    if (!uniform_times(times, n, dt)) {
-        drive(
-            m.kt, times, n,
-            [&](std::size_t i, std::size_t j, double t) {
-                const SlerpSeg& g = seg[j];
-                const double s = (t - g.t0) * g.inv_h;
-                double c, k;
-                exp_coeffs(s * s * g.r2, c, k);
-                emit(g, c, k * s, out + 4 * i);
-            },
-            outside);
-        return;
-    }
-    // Uniform times: within a segment the angle advances by dt·θ/h per sample (a rotor step).
-    const std::size_t S = m.slerp.size();
-    const double first = m.kt.front(), last = m.kt.back();
-    std::size_t hint = 0, cur = S;
-    int steps = 0;
-    Rotor rot;
-    for (std::size_t i = 0; i < n; ++i) {
-        const double t = times[i];
-        if (t >= first && t <= last) {
-            const std::size_t j = locate(m.kt.data(), S, t, hint);
+    drive_runs(
+        m.kt, times, n,
+        [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
             const SlerpSeg& g = seg[j];
-            if (j == cur && steps < kAnchorSteps) {
-                rot.step();
-                ++steps;
-            } else {
-                rot.set((t - g.t0) * g.inv_h, g.r2);
-                if (j != cur) rot.set_step(dt * g.inv_h, g.r2);
-                cur = j;
-                steps = 0;
-            }
-            emit(g, rot.C, rot.K, out + 4 * i);
-        } else {
-            if (!std::isfinite(t)) bad_time(i);
-            outside(i, t < first);
-            cur = S;
-        }
-    }
+            QUATCURVE_EXPECTS(g.r2 <= 10.0, "sample_slerp: segments turn at most π");
+            for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+                const V4 s = (t - g.t0) * g.inv_h;
+                V4 c, k;
+                exp_coeffs4<10>(s * s * g.r2, c, k);
+                combine(g.a, g.b, c, k * s, q);
+            });
+        },
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
 void velocity_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

@@ -54,6 +54,7 @@ struct SplineSeg {
     double t0, inv_h;
     Q4 Q;
     Vec3 c1, c2, c3;
+    double bound2;  // (|c1| + |c2| + |c3|)² ≥ |ρ(s)|² on [0, 1]: picks the exp series (exp_terms)
 };
 // Euler angles a0 + s·da (EULER).
 struct EulerSeg {
@@ -63,7 +64,7 @@ struct EulerSeg {
 
 // Index j of the segment with knots[j] ≤ t < knots[j+1] (the last segment for t = knots.back()),
 // for knots[0] ≤ t ≤ knots.back(); `hint` is the previous answer, so sorted times cost O(1) each.
-inline std::size_t locate(const double* knots, std::size_t segments, double t, std::size_t& hint) {
+QUATCURVE_INLINE std::size_t locate(const double* knots, std::size_t segments, double t, std::size_t& hint) {
     QUATCURVE_EXPECTS(segments >= 1 && hint < segments && t >= knots[0] && t <= knots[segments],
                       "locate: a time inside the knots and a hint naming a segment");
     std::size_t j = hint;
@@ -90,40 +91,6 @@ inline double per_key(const std::vector<double>& v, int key) {
     throw InvalidArgument("times[" + std::to_string(i) + "]: not a finite number");
 }
 
-// True when times[i] = times[0] + i·dt for all i, to within 64 ulps of the largest |time|: a sampler
-// may then step from sample to sample by a fixed rotation (error ≤ |ω|·that tolerance, re-anchored
-// every kAnchorSteps samples). Sets dt.
-constexpr int kAnchorSteps = 64;
-inline bool uniform_times(const double* t, std::size_t n, double& dt) {
-    if (n < 8) return false;
-    dt = (t[n - 1] - t[0]) / static_cast<double>(n - 1);
-    if (!(dt > 0.0) || !std::isfinite(dt)) return false;
-    const double tol = 64.0 * 2.220446049250313e-16 * std::fmax(std::fmax(std::fabs(t[0]), std::fabs(t[n - 1])), dt);
-    double err = 0.0;
-    for (std::size_t i = 0; i < n; ++i) err = std::fmax(err, std::fabs(t[i] - (t[0] + static_cast<double>(i) * dt)));
-    return err <= tol;
-}
-
-// A pair (C, K) = (cos φ, sin φ/θ) advanced by a fixed angle δ: (cd, sd) = (cos δ, sin δ/θ),
-// th2sd = θ²·sd. Used for slerps sampled at uniform steps (φ = sθ/2).
-struct Rotor {
-    double C = 1.0, K = 0.0, cd = 1.0, sd = 0.0, th2sd = 0.0;
-    void set(double s, double theta2) {  // φ = sθ/2
-        exp_coeffs(s * s * theta2, C, K);
-        K *= s;
-    }
-    void set_step(double ds, double theta2) {
-        exp_coeffs(ds * ds * theta2, cd, sd);
-        sd *= ds;
-        th2sd = theta2 * sd;
-    }
-    void step() {
-        const double c = C * cd - K * th2sd;
-        K = K * cd + C * sd;
-        C = c;
-    }
-};
-
 // Calls inside(i, j, t) for every time inside [knots.front(), knots.back()] (j its segment) and
 // outside(i, before) for the others; non-finite times throw.
 template <class Inside, class Outside>
@@ -139,6 +106,37 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
         } else {
             if (!std::isfinite(t)) bad_time(i);
             outside(i, t < first);
+        }
+    }
+}
+
+// Calls run(j, i0, i1) for every run of consecutive times [i0, i1) that lie in one knot segment j
+// (knots[j] ≤ t < knots[j+1], the last segment up to knots.back() inclusive) and outside(i, before)
+// for the times outside [knots.front(), knots.back()]; non-finite times throw. Sorted times give one
+// run per segment (one locate each); a run's loop needs no per-sample checks.
+template <class Run, class Outside>
+QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
+                       Outside&& outside) {
+    const std::size_t segments = knots.size() - 1;
+    const double first = knots.front(), last = knots.back();
+    std::size_t hint = 0;
+    for (std::size_t i = 0; i < n;) {
+        const double t = times[i];
+        if (t >= first && t <= last) {
+            const std::size_t j = locate(knots.data(), segments, t, hint);
+            const double lo = knots[j], hi = knots[j + 1];
+            std::size_t end = i + 1;
+            if (j + 1 < segments) {  // NaN ends a run
+                while (end < n && times[end] >= lo && times[end] < hi) ++end;
+            } else {
+                while (end < n && times[end] >= lo && times[end] <= hi) ++end;
+            }
+            run(j, i, end);
+            i = end;
+        } else {
+            if (!std::isfinite(t)) bad_time(i);
+            outside(i, t < first);
+            ++i;
         }
     }
 }

@@ -31,6 +31,12 @@ namespace quatcurve::detail {
 #define QUATCURVE_EXPECTS(cond, what) ((void)0)
 #endif
 
+// Always inlined, also where the optimizer would not: a hot sampler's helpers and lambdas must be
+// compiled inside each of its QUATCURVE_HOT clones (an out-of-line copy is baseline x86-64 code).
+// On a lambda: [&](…) QUATCURVE_LAMBDA_INLINE {…}.
+#define QUATCURVE_INLINE inline __attribute__((always_inline))
+#define QUATCURVE_LAMBDA_INLINE __attribute__((always_inline))
+
 using numbers::kPi;
 using numbers::kTwoPi;
 

@@ -1,8 +1,10 @@
 // SQUAD and TCB: Shoemake's spherical quadrangle through the knots with the knot tangents of
 // curve_tangents.cpp (TCB's ease, like every method's, is the time warp of curve_ease.cpp).
 #include <cmath>
+#include <type_traits>
 
 #include "curve_impl.hpp"
+#include "curve_simd.hpp"
 
 namespace quatcurve::detail {
 
@@ -75,55 +77,49 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
     return g;
 }
 
+// Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
+// lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
+// |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
 QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SquadSeg* seg = m.squad.data();
-    auto outside = [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); };
-    double dt;
-    if (uniform_times(times, n, dt)) {  // the hot loop: A and B advance by rotor steps
-        const std::size_t S = m.squad.size();
-        const double first = m.kt.front(), last = m.kt.back();
-        std::size_t hint = 0, cur = S;
-        int steps = 0;
-        Rotor ra, rb;
-        double s = 0.0, ds = 0.0;
-        for (std::size_t i = 0; i < n; ++i) {
-            const double t = times[i];
-            if (t >= first && t <= last) {
-                const std::size_t j = locate(m.kt.data(), S, t, hint);
-                const SquadSeg& g = seg[j];
-                if (j == cur && steps < kAnchorSteps) {
-                    ra.step();
-                    rb.step();
-                    s += ds;
-                    ++steps;
-                } else {
-                    s = (t - g.t0) * g.inv_h;
-                    ra.set(s, g.r2);
-                    rb.set(s, g.psi2);
-                    if (j != cur) {
-                        ds = dt * g.inv_h;
-                        ra.set_step(ds, g.r2);
-                        rb.set_step(ds, g.psi2);
-                    }
-                    cur = j;
-                    steps = 0;
-                }
-                store(squad_from(g, s, ra.C, ra.K, rb.C, rb.K), out + 4 * i);
-            } else {
-                if (!std::isfinite(t)) bad_time(i);
-                outside(i, t < first);
-                cur = S;
-            }
-        }
-        return;
-    }
-    drive(
+    drive_runs(
         m.kt, times, n,
-        [&](std::size_t i, std::size_t j, double t) {
+        [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
             const SquadSeg& g = seg[j];
-            store(squad_at(g, (t - g.t0) * g.inv_h), out + 4 * i);
+            auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
+                for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+                    const V4 s = (t - g.t0) * g.inv_h;
+                    const V4 s2 = s * s;
+                    V4 c1, k1, c2, k2;
+                    exp_coeffs4<decltype(terms_a)::value>(s2 * g.r2, c1, k1);
+                    exp_coeffs4<decltype(terms_b)::value>(s2 * g.psi2, c2, k2);
+                    QV A, B, X;
+                    combine(g.A, g.BA, c1, k1 * s, A);
+                    combine(g.a, g.Ba, c2, k2 * s, B);
+                    cmul(A, B, X);
+                    const V4 n2 = X.x * X.x + X.y * X.y + X.z * X.z;
+                    const V4 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);  // χ = f·vec(X)
+                    const V4 gf = 2.0 * s * (1.0 - s) * f;
+                    V4 c3, k3;
+                    exp_coeffs4<12>(gf * gf * n2, c3, k3);
+                    k3 *= gf;
+                    mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
+                });
+            };
+            using T8 = std::integral_constant<int, 8>;
+            using T12 = std::integral_constant<int, 12>;
+            const bool a8 = exp_terms(g.r2) == 8, b8 = exp_terms(g.psi2) == 8;
+            if (a8 && b8) {
+                eval(T8(), T8());
+            } else if (a8) {
+                eval(T8(), T12());
+            } else if (b8) {
+                eval(T12(), T8());
+            } else {
+                eval(T12(), T12());
+            }
         },
-        outside);
+        [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
 void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

@@ -1,6 +1,7 @@
 // Tests of the curve engine (native/include/quatcurve/curve.hpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -536,4 +537,61 @@ TEST(Curve, BadInput) {
     EXPECT_THROW(c.angular_velocity(std::vector<double>{inf}), InvalidArgument);
     const Curve one({0}, {q});
     EXPECT_THROW(one.sample(std::vector<double>{nan}), InvalidArgument);
+}
+
+// The samplers work per run of times inside one segment, four at a time (native/src/curve_simd.hpp):
+// a time gives the same rotation alone, inside a sorted batch (full groups, the overlapping last
+// group, runs of 1 to 3) and in a shuffled one; knots, ends, times outside the keys, n = 0 and a
+// non-finite time anywhere in a run keep their meaning.
+TEST(Curve, RunsAgreeWithSingleTimes) {
+    for (const double max_angle : {0.05, 2.0, 3.1}) {
+        const Keys k = random_keys(9, 123, max_angle);
+        std::vector<double> t = {k.t.front() - 5.0, k.t.front(), k.t.back(), k.t.back() + 1.0};
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> u(k.t.front() - 0.5, k.t.back() + 0.5);
+        for (double x : k.t) {  // the knots and their neighbours
+            t.push_back(x);
+            t.push_back(std::nextafter(x, -HUGE_VAL));
+            t.push_back(std::nextafter(x, HUGE_VAL));
+        }
+        for (int i = 0; i < 300; ++i) t.push_back(u(rng));
+        std::vector<double> sorted = t;
+        std::sort(sorted.begin(), sorted.end());
+        for (Method m : {Method::SLERP, Method::SQUAD, Method::TCB, Method::SPLINE_C2}) {
+            for (const bool clamped : {true, false}) {
+                CurveOptions o;
+                if (m == Method::SQUAD) o.clamped = clamped;
+                const Curve c = make(k, m, o);
+                for (const auto* times : {&t, &sorted}) {
+                    const std::vector<Quat> batch = c.sample(*times);
+                    for (std::size_t i = 0; i < times->size(); ++i) {
+                        const Quat one = c.sample(std::vector<double>{(*times)[i]})[0];
+                        ASSERT_LE(angle_between(batch[i], one), 1e-15) << method_name(m) << " t=" << (*times)[i];
+                        ASSERT_NEAR(glm::dot(batch[i], batch[i]), 1.0, 1e-14);
+                    }
+                }
+                // runs of every length 1…9 at each position of a segment
+                for (std::size_t len = 1; len <= 9; ++len) {
+                    std::vector<double> run;
+                    for (std::size_t i = 0; i < len; ++i) run.push_back(k.t[3] + (k.t[4] - k.t[3]) * i / 9.0);
+                    const std::vector<Quat> q = c.sample(run);
+                    for (std::size_t i = 0; i < len; ++i)
+                        ASSERT_LE(angle_between(q[i], c.sample(std::vector<double>{run[i]})[0]), 1e-15);
+                }
+                // ends and outside: the end keys exactly
+                const std::vector<Quat> ends = c.sample(std::vector<double>{k.t.front() - 1, k.t.back() + 1});
+                EXPECT_LE(angle_between(ends[0], k.q.front()), 1e-15);
+                EXPECT_LE(angle_between(ends[1], k.q.back()), 1e-15);
+                c.sample(sorted.data(), 0, nullptr);  // n = 0
+                for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+                    for (std::size_t at : {std::size_t{0}, std::size_t{2}, std::size_t{5}, std::size_t{9}}) {
+                        std::vector<double> run(10);
+                        for (std::size_t i = 0; i < 10; ++i) run[i] = k.t[2] + 0.05 * static_cast<double>(i);
+                        run[at] = bad;
+                        EXPECT_THROW(c.sample(run), InvalidArgument) << method_name(m) << " at " << at;
+                    }
+                }
+            }
+        }
+    }
 }

@@ -1,0 +1,165 @@
+// Private: four samples at a time for the per-segment sampling loops (curve_basic.cpp,
+// curve_squad.cpp, curve_spline.cpp). V4 holds one double per sample (lane k = sample i + k), so
+// the formulas read as their scalar versions in curve_math.hpp; a quaternion of four samples is four
+// V4s (QV, one per component) and is stored as four (w, x, y, z) rows by a 4×4 transpose. GCC and
+// Clang vector extensions: one AVX2 register per V4 in the x86-64-v3 clone of a QUATCURVE_HOT
+// sampler, two SSE2 registers in the baseline one. Every helper is always inlined into its sampler, so
+// no V4 crosses a call (whose ABI would differ between the clones; hence -Wpsabi is silenced here).
+//
+// The polynomial kernels take the term count as a parameter, chosen once per segment from a bound of
+// the segment's angles: lanes never depend on their neighbours, so a time gives the same bits alone
+// or in a batch.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+
+#include "curve_math.hpp"
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"  // for the including sampler file too: its V4 code is inlined
+#endif
+
+namespace quatcurve::detail {
+
+typedef double V4 __attribute__((vector_size(32)));
+using M4 = decltype(V4{} < V4{});  // lane masks of comparisons: all ones or 0
+
+#if defined(__clang__)
+#define QUATCURVE_SHUFFLE(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+#define QUATCURVE_SHUFFLE(a, b, i, j, k, l) __builtin_shuffle(a, b, M4{i, j, k, l})
+#endif
+
+struct QV {
+    V4 w, x, y, z;
+};
+
+QUATCURVE_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
+QUATCURVE_INLINE V4 load4(const double* p) {
+    V4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+QUATCURVE_INLINE V4 sqrt4(const V4& x) { return V4{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])}; }
+// m ? a : b, lane by lane
+QUATCURVE_INLINE V4 select(const M4& m, const V4& a, const V4& b) {
+    return reinterpret_cast<V4>((reinterpret_cast<M4>(a) & m) | (reinterpret_cast<M4>(b) & ~m));
+}
+
+// The quaternions of four samples as rows (w, x, y, z) at out[0..15].
+QUATCURVE_INLINE void store_rows(const QV& q, double* out) {
+    const V4 a = QUATCURVE_SHUFFLE(q.w, q.x, 0, 4, 2, 6);  // w0 x0 w2 x2
+    const V4 b = QUATCURVE_SHUFFLE(q.w, q.x, 1, 5, 3, 7);  // w1 x1 w3 x3
+    const V4 c = QUATCURVE_SHUFFLE(q.y, q.z, 0, 4, 2, 6);  // y0 z0 y2 z2
+    const V4 d = QUATCURVE_SHUFFLE(q.y, q.z, 1, 5, 3, 7);  // y1 z1 y3 z3
+    const V4 r0 = QUATCURVE_SHUFFLE(a, c, 0, 1, 4, 5), r1 = QUATCURVE_SHUFFLE(b, d, 0, 1, 4, 5);
+    const V4 r2 = QUATCURVE_SHUFFLE(a, c, 2, 3, 6, 7), r3 = QUATCURVE_SHUFFLE(b, d, 2, 3, 6, 7);
+    std::memcpy(out, &r0, sizeof r0);
+    std::memcpy(out + 4, &r1, sizeof r1);
+    std::memcpy(out + 8, &r2, sizeof r2);
+    std::memcpy(out + 12, &r3, sizeof r3);
+}
+
+// Hamilton products a·b and conj(a)·b of four pairs.
+QUATCURVE_INLINE void mul(const QV& a, const QV& b, QV& r) {
+    r.w = a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z;
+    r.x = a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y;
+    r.y = a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x;
+    r.z = a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w;
+}
+QUATCURVE_INLINE void cmul(const QV& a, const QV& b, QV& r) {
+    r.w = a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z;
+    r.x = a.w * b.x - a.x * b.w - a.y * b.z + a.z * b.y;
+    r.y = a.w * b.y + a.x * b.z - a.y * b.w - a.z * b.x;
+    r.z = a.w * b.z - a.x * b.y + a.y * b.x - a.z * b.w;
+}
+// a·c + b·k for constant quaternions a, b (a slerp's A·cos φ + B·sin φ/θ).
+QUATCURVE_INLINE void combine(const Q4& a, const Q4& b, const V4& c, const V4& k, QV& r) {
+    r.w = a.w * c + b.w * k;
+    r.x = a.x * c + b.x * k;
+    r.y = a.y * c + b.y * k;
+    r.z = a.z * c + b.z * k;
+}
+
+// exp_coeffs (curve_math.hpp) with N = 8, 10 or 12 series terms for every lane: c = cos(θ/2),
+// k = sin(θ/2)/θ from θ², the series of the quarter angle x = θ/4 in x² summed by Estrin's scheme
+// (pairs, then pairs of pairs: a quarter of Horner's dependency chain, so the groups of a short run
+// overlap in the pipeline). Preconditions: θ² ≤ (2π)² in every lane (N = 12; below 1e-19), ≤ 10
+// for N = 10 (θ ≤ 3.16, x ≤ 0.79: below 4e-21), ≤ 2.56 for N = 8 (below 3e-20).
+// Σ c[i]·y^i, i < N, by Estrin's scheme (y2 = y², y4 = y⁴, y8 = y⁸).
+template <int N>
+QUATCURVE_INLINE void estrin(const double* c, const V4& y, const V4& y2, const V4& y4, const V4& y8, V4& r) {
+    r = (c[0] + c[1] * y) + y2 * (c[2] + c[3] * y) + y4 * ((c[4] + c[5] * y) + y2 * (c[6] + c[7] * y));
+    if constexpr (N == 10) r += y8 * (c[8] + c[9] * y);
+    if constexpr (N == 12) r += y8 * ((c[8] + c[9] * y) + y2 * (c[10] + c[11] * y));
+}
+template <int N>
+QUATCURVE_INLINE void exp_coeffs4(const V4& theta2, V4& c, V4& k) {
+    static_assert(N == 8 || N == 10 || N == 12, "exp_coeffs4: 8, 10 or 12 terms");
+    const V4 y = theta2 * (1.0 / 16.0);
+    const V4 y2 = y * y, y4 = y2 * y2, y8 = y4 * y4;
+    V4 cq, sq;
+    estrin<N>(kTaylorCos, y, y2, y4, y8, cq);  // cos x
+    estrin<N>(kTaylorSinc, y, y2, y4, y8, sq);
+    sq *= 0.25;  // sin x/θ
+    c = cq * cq - theta2 * sq * sq;
+    k = 2.0 * cq * sq;
+}
+// The term count exp_coeffs4 needs for angles up to √bound2; 0 beyond 2π (no polynomial).
+QUATCURVE_INLINE int exp_terms(double bound2) {
+    return bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
+}
+
+// atan2_over_n_any (curve_math.hpp) lane by lane, without branches: each lane takes the same one of
+// the three atan ranges as the scalar version, the selects pick its argument and offset.
+// Preconditions: n ≥ 0, n² + w² ≈ 1.
+QUATCURVE_INLINE V4 atan2_over_n_any4(const V4& n, const V4& w) {
+    const V4 zero = splat(0.0);
+    const V4 aw = select(w < zero, -w, w);
+    const M4 small = n <= 0.66 * aw, big = aw <= 0.66 * n, pos = w >= zero;
+    const V4 num = select(small, n, select(big, aw, n - aw));
+    const V4 den = select(small, aw, select(big, n, n + aw));
+    const V4 x = num / den;
+    const V4 z = x * x;
+    const V4 p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
+                  1.228866684490136173410e2) * z - 6.485021904942025371773e1;
+    const V4 q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
+                  4.853903996359136964868e2) * z + 1.945506571482613964425e2;
+    const V4 ratio = 1.0 + z * p / q;  // atan(x)/x
+    const V4 at = x * ratio;
+    const V4 phi = select(small, at, select(big, 0.5 * kPi - at, 0.25 * kPi + at));  // atan2(n, |w|)
+    // w ≥ 0: φ/n (on the small range P/|w|, finite at n = 0); w < 0: (π − φ)/n, 0 at n = 0 (q = −1).
+    const M4 by_w = small & pos;
+    const V4 r = select(by_w, ratio, select(pos, phi, kPi - phi)) / select(by_w, aw, n);
+    return select(~pos & (n == zero), zero, r);
+}
+
+// Calls f(t, q) for the times [i0, i1) four at a time (q: the four samples' quaternions) and stores
+// q at out + 4·i. A run of four or more ends with a group that overlaps the one before (lanes are
+// independent, so the rows written twice get the same values); a shorter run is padded with its last
+// time and only its own rows are stored.
+template <class F>
+QUATCURVE_INLINE void for_groups(const double* times, std::size_t i0, std::size_t i1, double* out, F&& f) {
+    QV q;
+    if (i1 - i0 >= 4) {
+        std::size_t i = i0;
+        for (; i + 4 <= i1; i += 4) {
+            f(load4(times + i), q);
+            store_rows(q, out + 4 * i);
+        }
+        if (i < i1) {
+            f(load4(times + i1 - 4), q);
+            store_rows(q, out + 4 * (i1 - 4));
+        }
+        return;
+    }
+    double t[4], rows[16];
+    for (std::size_t k = 0; k < 4; ++k) t[k] = times[i0 + k < i1 ? i0 + k : i1 - 1];
+    f(load4(t), q);
+    store_rows(q, rows);
+    for (std::size_t k = 0; i0 + k < i1; ++k) std::memcpy(out + 4 * (i0 + k), rows + 4 * k, 4 * sizeof(double));
+}
+
+}  // namespace quatcurve::detail
