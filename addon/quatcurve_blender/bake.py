@@ -116,7 +116,8 @@ class TargetBake:
     source: targets.RotationKeys
     output_mode: str
     frames: np.ndarray = None
-    values: np.ndarray = None    # (N, 3|4) output channel values
+    values: np.ndarray = None    # (N, 3|4) output channel values (dropped once packed)
+    packed: list = None          # per channel fcurves.PackedKeys of the dense keys (no reduction)
     own_action: bool = False     # in place was asked for, but others play the action: copy it
     reduced: object = None       # reduce_keys' result when tolerance > 0
     notes: list = field(default_factory=list)
@@ -232,6 +233,10 @@ class BakePlan:
             item.notes.append("%s: reduced to %s keys within %s° (max error %.4f°)" % (
                 item.target.name, f"{item.reduced.key_count:,}", num(settings.tolerance),
                 math.degrees(item.reduced.max_error)))
+        else:
+            # Packed here, on the worker, for the main thread's plainest write; the values go.
+            item.packed = write.dense_keys(self.frames, item.values)
+            item.values = None
 
     def write(self):
         """Writes every target (write.write_rotations), computing first what is not computed yet;
@@ -276,7 +281,7 @@ class BakePlan:
         if item.reduced is not None:
             keys, interpolation = item.reduced.keys, item.reduced.interpolation
         else:
-            keys, interpolation = write.dense_keys(item.frames, item.values), "LINEAR"
+            keys, interpolation = item.packed, "LINEAR"
         return write.RotationWrite(item.target, item.output_mode, keys, interpolation, own_action=item.own_action)
 
 

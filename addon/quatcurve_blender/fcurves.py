@@ -185,6 +185,12 @@ class Channels:
         write_keys(fcurve, frames, values, **keys)
         return fcurve
 
+    def write_packed(self, data_path, index, packed, group=None, interpolation="LINEAR"):
+        """A new F-curve on (data_path, index) holding PackedKeys; see `write_packed`."""
+        fcurve = self.new_fcurve(data_path, index, group)
+        write_packed(fcurve, packed, interpolation)
+        return fcurve
+
 
 def nla_strips(id_data):
     """The NLA strips that play on `id_data` (unmuted strips of unmuted tracks, while the NLA is
@@ -401,6 +407,45 @@ def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolati
     return out
 
 
+class PackedKeys:
+    """Keys packed for `foreach_set`, as Blender stores them: co, (2N,) float32 (frame, value) pairs;
+    increasing: whether the frames increase (then no sort is needed). Made by `pack_keys` from plain
+    arrays, touching no Blender data, so worker threads can pack while the main thread writes."""
+
+    __slots__ = ("co", "increasing")
+
+    def __init__(self, frames, values):
+        frames = np.asarray(frames, dtype=np.float64)
+        values = np.asarray(values, dtype=np.float64)
+        n = len(frames)
+        if values.shape != (n,):
+            raise ValueError("values: expected shape (%d,), got %s" % (n, values.shape))
+        co = np.empty((n, 2), dtype=np.float32)
+        co[:, 0], co[:, 1] = frames, values
+        self.co = co.ravel()
+        self.increasing = bool(n < 2 or (frames[1:] > frames[:-1]).all())
+
+    def __len__(self):
+        return len(self.co) // 2
+
+
+def write_packed(fcurve, packed, interpolation="LINEAR"):
+    """Replaces the keys of `fcurve` by PackedKeys, in bulk: the plainest write Blender has
+    (keyframe_points.add, foreach_set of co and interpolation), sorted by update() only when the
+    frames do not increase. For LINEAR and CONSTANT keys (see write_keys on handles)."""
+    points = fcurve.keyframe_points
+    if len(points):
+        points.clear()
+    n = len(packed)
+    points.add(n)
+    points.foreach_set("co", packed.co)
+    kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
+    points.foreach_set("interpolation", np.full(n, kind, dtype=_INTERPOLATION_DTYPE))
+    if not packed.increasing:
+        fcurve.update()
+    return fcurve
+
+
 def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None, handle_right=None,
                with_handles=False):
     """Replaces the keys of `fcurve` by (frames[i], values[i]), in bulk.
@@ -414,20 +459,15 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
 
     Increasing frames skip fcurve.update() (a sort and an automatic-handle pass, the largest cost of
     a dense write); otherwise update() sorts the keys."""
-    frames = np.asarray(frames, dtype=np.float64)
-    values = np.asarray(values, dtype=np.float64)
-    n = len(frames)
-    if values.shape != (n,):
-        raise ValueError("values: expected shape (%d,), got %s" % (n, values.shape))
     if (handle_left is None) != (handle_right is None):
         raise ValueError("handle_left and handle_right go together")
+    packed = PackedKeys(frames, values)
+    n = len(packed)
     points = fcurve.keyframe_points
     if len(points):
         points.clear()
     points.add(n)
-    co = np.empty((n, 2), dtype=np.float32)
-    co[:, 0], co[:, 1] = frames, values
-    points.foreach_set("co", co.ravel())
+    points.foreach_set("co", packed.co)
     kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
     points.foreach_set("interpolation", np.full(n, kind, dtype=_INTERPOLATION_DTYPE))
     if handle_left is not None:
@@ -437,7 +477,7 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     if handle_left is not None:
         points.foreach_set("handle_left", np.asarray(handle_left, dtype=np.float32).reshape(n, 2).ravel())
         points.foreach_set("handle_right", np.asarray(handle_right, dtype=np.float32).reshape(n, 2).ravel())
-    if n > 1 and not (frames[1:] > frames[:-1]).all():
+    if not packed.increasing:
         fcurve.update()
     return fcurve
 

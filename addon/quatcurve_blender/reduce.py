@@ -62,11 +62,13 @@ def parallel_map(fn, items):
 
 def parallel_imap(fn, items):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
-    so the caller (on the main thread) can use the first results while workers compute the rest. When
-    the caller stops early (an error, a generator closed), the calls not yet started are cancelled."""
+    so the caller (on the main thread) can use the first results while workers compute the rest: one
+    worker fewer than thread_count(), since the caller keeps a core busy itself (one thread: no
+    workers, each call made when its result is asked for). When the caller stops early (an error, a
+    generator closed), the calls not yet started are cancelled."""
     items = list(items)
-    threads = min(thread_count(), len(items))
-    if threads <= 1:
+    threads = max(1, min(thread_count() - 1, len(items)))
+    if thread_count() <= 1:
         for item in items:
             yield fn(item)
         return

@@ -19,7 +19,8 @@ class RotationWrite:
     """One target's new rotation keys.
 
     keys: per channel of `mode`, (frames, values, handle_left, handle_right) — handles (K, 2)
-    arrays of (frame, value) for BEZIER keys, None otherwise. replace: the rotation properties whose
+    arrays of (frame, value) for BEZIER keys, None otherwise — or fcurves.PackedKeys (LINEAR or
+    CONSTANT keys packed beforehand, see dense_keys). replace: the rotation properties whose
     F-curves are removed first (all three when the mode changes). own_action: in place was asked
     for, but the action is shared with objects not being written: write into a copy instead."""
     target: object
@@ -31,13 +32,15 @@ class RotationWrite:
 
     @property
     def key_count(self):
-        return sum(len(k[0]) for k in self.keys)
+        return sum(len(k) if isinstance(k, fcurves.PackedKeys) else len(k[0]) for k in self.keys)
 
 
 def dense_keys(frames, values):
-    """RotationWrite.keys for (N,) frames and (N, C) channel values: every frame on every channel."""
+    """RotationWrite.keys for (N,) frames and (N, C) channel values: every frame on every channel,
+    packed as Blender stores them (fcurves.PackedKeys: no Blender data is touched, so a worker thread
+    can pack while the main thread writes)."""
     values = np.asarray(values)
-    return [(frames, values[:, i], None, None) for i in range(values.shape[1])]
+    return [fcurves.PackedKeys(frames, values[:, i]) for i in range(values.shape[1])]
 
 
 def shared_with(target, ids):
@@ -114,6 +117,10 @@ def _write_keys(channels, item):
     group = next((g for g in (channels.group_of(p) for p in paths) if g), None)
     channels.remove(paths, count=4)  # rotation properties have at most 4 channels
     path = target.data_path(fcurves.rotation_property(item.mode)[0])
-    for index, (frames, values, left, right) in enumerate(item.keys):
+    for index, keys in enumerate(item.keys):
+        if isinstance(keys, fcurves.PackedKeys):
+            channels.write_packed(path, index, keys, group=group, interpolation=item.interpolation)
+            continue
+        frames, values, left, right = keys
         channels.write(path, index, frames, values, group=group, interpolation=item.interpolation,
                        handle_left=left, handle_right=right)
