@@ -131,6 +131,17 @@ void check_euler_keys(const std::vector<Vec3>& angles) {
     }
 }
 
+// detail::rotvec_near, except that a rotation within 1e-9 rad of the identity keeps ref's direction:
+// there the principal rotation vector's direction is rounding noise (the end of an exact full turn,
+// 400° → 760° about one axis), which would turn the whole segment about a random axis.
+Vec3 rotvec_near_turn(const Quat& d, const Vec3& ref) {
+    const Vec3 chi0 = detail::rotvec_principal(d);
+    const double rn = std::sqrt(glm::dot(ref, ref));
+    if (std::sqrt(glm::dot(chi0, chi0)) < 1e-9 && rn > 0.0)
+        return (std::nearbyint(rn / kTwoPi) * kTwoPi / rn) * ref + chi0;
+    return detail::rotvec_near(d, ref);
+}
+
 // The relative rotation vector of the axis-angle path (a0, v0) → (a1, v1) — angle and axis linear,
 // the axis normalized as Blender does (a zero axis is the identity) — starting at the rotation q0,
 // followed continuously in steps of at most 0.25 rad of angle and 1/16 of the axis change (the
@@ -146,7 +157,7 @@ Vec3 lift_axis_angle_path(const double* k0, const double* k1, const Quat& q0) {
         for (int c = 0; c < 4; ++c) v[c] = k == steps ? k1[c] : k0[c] + f * (k1[c] - k0[c]);
         const Vec3 axis(v[1], v[2], v[3]);
         const Quat q = glm::dot(axis, axis) > 0.0 ? axis_angle_to_quat(axis, v[0]) : Quat(1.0, 0.0, 0.0, 0.0);
-        r = detail::rotvec_near(detail::qmul(c0, q), r);
+        r = rotvec_near_turn(detail::qmul(c0, q), r);
     }
     return r;
 }
@@ -421,8 +432,11 @@ void Curve::build() {
         const Quat q0 = m.kq.back();
         rotvecs_[i] = r;
         const double theta = glm::length(r);
-        const std::size_t parts =
-            split && theta > kPi * (1.0 + 1e-12) ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0))) : 1;
+        // The count of sub-arcs with 1e-6 of slack: a turn of exactly 360° (three sub-arcs) keyed as
+        // float32 (360.00001°) must not become four, which shapes the tangent methods differently.
+        const std::size_t parts = split && theta > kPi * (1.0 + 1e-12)
+                                      ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0) - 1e-6))
+                                      : 1;
         const double h = times_[i + 1] - times_[i];
         for (std::size_t j = 1; j <= parts; ++j) {
             const double f = static_cast<double>(j) / static_cast<double>(parts);
