@@ -20,10 +20,12 @@ animator who wants to keep an inserted key changes its type to Keyframe.
 
 Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
 keys' signature — what live mode compares) and per key ease in / ease out (`Action.quatcurve_eases`,
-by frame, carried along when keys move). Rotation modes: quaternion and the six Euler orders (turns
-over 180° between Euler keys are kept, as the bake keeps them); axis-angle is refused (the fitter
-has no axis-angle metric yet). Everything is read and computed before anything is written, so an
-error leaves the file untouched; the operator's UNDO flag makes the write one undo step.
+by frame, carried along when keys move). Rotation modes: quaternion, the six Euler orders (turns
+over 180° between Euler keys are kept, as the bake keeps them) and axis-angle (the angle channel's
+turns are kept too: 0° → 720° spins twice, as Blender's own channels do; inserted keys continue the
+animator's angle and axis side, and the axis length may drift between keys, as Blender normalizes
+it). Everything is read and computed before anything is written, so an error leaves the file
+untouched; the operator's UNDO flag makes the write one undo step.
 """
 
 import hashlib
@@ -181,6 +183,10 @@ class AnimatorKeys:
     def is_euler(self):
         return self.mode in fcurves.EULER_ORDERS
 
+    @property
+    def is_axis_angle(self):
+        return self.mode == "AXIS_ANGLE"
+
     def signature(self):
         """A digest of the animator's keys (frames, values, types): live mode refits when it changes."""
         h = hashlib.sha256(("%s %s" % (self.mode, self.path)).encode())
@@ -191,16 +197,13 @@ class AnimatorKeys:
 
 def read_animator_keys(target):
     """AnimatorKeys of `target` in its current rotation mode, from its active action. Raises FitError
-    (naming target, channel and frame) for axis-angle, no active action, no rotation keys, F-curve
-    modifiers, NaN/infinite keys, two different keys on one frame, drivers, protected data."""
+    (naming target, channel and frame) for no active action, no rotation keys, F-curve modifiers,
+    NaN/infinite keys, two different keys on one frame, drivers, protected data."""
     try:
         targets.check_editable(target, new_action=False)
     except TargetError as e:
         raise FitError(str(e)) from None
     mode = target.owner.rotation_mode
-    if mode == "AXIS_ANGLE":
-        raise FitError("%s: rotation mode AXIS_ANGLE cannot be fitted yet (quaternion and Euler modes can: "
-                       "set the rotation mode, e.g. with Blender's Convert Rotation)" % target.name)
     prop, count = fcurves.rotation_property(mode)
     path = target.data_path(prop)
     try:
@@ -310,13 +313,21 @@ def path_notes(name, curve, frames, method):
 
 def curve_of(keys, settings, ease_in=None, ease_out=None):
     """The native curve of the settings' method through the animator's keys, and the key values the
-    fit writes (quaternion signs made to follow the curve)."""
+    fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
+    their turns kept by the curve)."""
     qc = native.require()
     options = curve_options(settings, ease_in, ease_out)
     try:
         if keys.is_euler:
             return qc.Curve.from_euler(keys.frames, keys.values, order=keys.mode, method=settings.method,
                                        **options), keys.values
+        if keys.is_axis_angle:
+            zero = np.flatnonzero(~np.any(keys.values[:, 1:], axis=1))
+            if zero.size:
+                raise FitError("%s: %s[1..3] (the axis) is zero at frame %s: no rotation axis defined"
+                               % (keys.name, keys.prop, targets.num(keys.frames[zero[0]])))
+            return qc.Curve.from_axis_angle(keys.frames, keys.values, method=settings.method,
+                                            **options), keys.values
         norms = np.linalg.norm(keys.values, axis=1)
         if (norms == 0).any():
             k = int(np.flatnonzero(norms == 0)[0])
@@ -349,6 +360,18 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         for k in range(K - 1):
             idx = np.arange(forced[k], forced[k + 1])
             values[idx] = qc.quats_to_channels(q[idx], keys.mode, reference=key_values[k])
+        mode = keys.mode
+    elif keys.is_axis_angle:
+        # Each segment continuous from its left key to its right key as keyed (the angle on the
+        # branch between them, the axis on their side; axis_angle_span). Axis length: the keys'
+        # interpolated along the segment, as for quaternion norms.
+        values = np.empty((len(t), 4))
+        norms = np.linalg.norm(key_values[:, 1:], axis=1)
+        for k in range(K - 1):
+            idx = np.arange(forced[k], forced[k + 1] + 1)
+            values[idx] = qc.axis_angle_span(q[idx], key_values[k], key_values[k + 1])
+        u = (t - keys.frames[seg]) / (keys.frames[seg + 1] - keys.frames[seg])
+        values[:, 1:] *= ((1 - u) * norms[seg] + u * norms[seg + 1])[:, None]
         mode = keys.mode
     else:
         # Sign: the curve's (continuous, reaching every key with the key's sign as written). Scale:

@@ -1,7 +1,8 @@
 """Key reduction in Blender: replace rotation keys by as few keys as an angular bound allows.
 
 Plain functions, no operator state: the `quatcurve.reduce` operator, the bake (tolerance > 0) and
-scripts call the same code. The math is native (`quatcurve.reduce_keys`, `reduce_keys_euler`): it
+scripts call the same code. The math is native (`quatcurve.reduce_keys`, `reduce_keys_euler`,
+`reduce_keys_axis_angle`): it
 chooses the keys and Bezier handles and verifies, by emulating Blender's F-curve evaluation in
 float32, that every sample stays within the tolerance. This module only moves arrays between
 targets (targets.py: reading), the native reducer, and write.py (writing).
@@ -14,8 +15,9 @@ Samples: a target's rotation channels as Blender evaluates them at every whole f
 range and at every key frame — so the reduced keys stay within the tolerance of the original at
 every frame and at every original key. Quaternion samples are made hemisphere-continuous first
 (signs flipped where neighbours disagree: the same rotations, and no forced keys at the flips).
-Rotation modes: quaternion and the six Euler orders (the bound is on the rotation Blender builds);
-axis-angle is refused. F-curves with modifiers are refused (the bound is for the keys alone).
+Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
+builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
+with modifiers are refused (the bound is for the keys alone).
 Everything is read and computed before anything is written, so an error leaves the file untouched.
 
 The bake calls `reduce_values` (imported by bake.py) when its tolerance is above 0, so
@@ -125,9 +127,10 @@ class ReducedChannels:
 
 
 def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", synchronized=False):
-    """Reduces dense channel values (N, 4) of mode 'QUATERNION' or (N, 3) of an Euler order, sampled
-    at `frames`, to ReducedChannels. Quaternions are made hemisphere-continuous first. Raises
-    ReduceError for other modes or input the native reducer refuses."""
+    """Reduces dense channel values (N, 4) of mode 'QUATERNION' or 'AXIS_ANGLE' (angle, x, y, z) or
+    (N, 3) of an Euler order, sampled at `frames`, to ReducedChannels. Quaternions are made
+    hemisphere-continuous first; Euler and axis-angle values are kept as given. Raises ReduceError
+    for other modes or input the native reducer refuses."""
     qc = native.require()
     frames = np.asarray(frames, dtype=np.float64)
     values = np.asarray(values, dtype=np.float64)
@@ -139,9 +142,12 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
         elif mode in fcurves.EULER_ORDERS:
             result = qc.reduce_keys_euler(frames, values, mode, tolerance_rad, interpolation,
                                           synchronized, detailed=True)
+        elif mode == "AXIS_ANGLE":
+            result = qc.reduce_keys_axis_angle(frames, values, tolerance_rad, interpolation,
+                                               synchronized, detailed=True)
         else:
-            raise ReduceError("rotation mode %s: key reduction handles quaternion and Euler rotations "
-                              "(bake to QUATERNION or an Euler order first)" % mode)
+            raise ReduceError("rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
+                              "rotations" % mode)
     except ValueError as error:
         raise ReduceError(str(error)) from error
     bezier = interpolation == "BEZIER"
@@ -220,9 +226,9 @@ def read_target(target):
         source = targets.read_rotation_keys(target)
     except TargetError as error:
         raise ReduceError(str(error)) from error
-    if source.mode not in ("QUATERNION",) + fcurves.EULER_ORDERS:
-        raise ReduceError("%s: rotation mode %s: key reduction handles quaternion and Euler rotations"
-                          % (target.name, source.mode))
+    if source.mode not in ("QUATERNION", "AXIS_ANGLE") + fcurves.EULER_ORDERS:
+        raise ReduceError("%s: rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
+                          "rotations" % (target.name, source.mode))
     for index, fcurve in enumerate(source.fcurves):
         if fcurve is not None and len(fcurve.modifiers):
             raise ReduceError("%s: %s[%d] has F-curve modifiers; the bound holds for keys alone "

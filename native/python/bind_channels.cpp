@@ -75,6 +75,32 @@ void bind_channels(py::module_& m) {
         "along the samples, the first to_euler(order) or to_euler(order, reference)). Zero-length "
         "quats raise ValueError.");
     m.def(
+        "axis_angle_span",
+        [](py::handle quats, py::handle start, py::handle end) {
+            const Batch q = as_batch(quats, {4}, "quats");
+            if (q.batch_shape.size() != 1)
+                throw py::value_error("quats: expected shape (N, 4), got " + shape_string(q.array));
+            const Batch a = as_batch(start, {4}, "start"), b = as_batch(end, {4}, "end");
+            if (!a.batch_shape.empty() || !b.batch_shape.empty())
+                throw py::value_error("start, end: expected one row (4,) each");
+            std::vector<Quat> qs(q.count);
+            for (std::size_t s = 0; s < q.count; ++s) qs[s] = from_wxyz(q.data() + 4 * s);
+            std::vector<double> v;
+            {
+                py::gil_scoped_release release;
+                v = axis_angle_span_channels(qs, a.data(), b.data());
+            }
+            DArray out(std::vector<py::ssize_t>{static_cast<py::ssize_t>(q.count), 4});
+            std::copy(v.begin(), v.end(), out.mutable_data());
+            return out;
+        },
+        py::arg("quats"), py::arg("start"), py::arg("end"),
+        "Axis-angle channels (N, 4) of the samples quats (N, 4) of a path from the key `start` to the "
+        "key `end` (rows (angle, x, y, z)): quats_to_channels(quats, 'AXIS_ANGLE', start) when that "
+        "arrives at `end` as keyed; otherwise the samples from the one nearest the identity on are "
+        "lifted backwards from `end` (near the identity the axis is undefined, and a path passing it "
+        "may come out on the other representation (a, v) = (4 pi k - a, -v)).");
+    m.def(
         "channels_to_quats",
         [](py::handle values, const std::string& mode_name) {
             const RotationMode mode = parse_rotation_mode(mode_name);

@@ -87,7 +87,8 @@ void bind_curve(py::module_& m) {
     py::class_<Curve>(m, "Curve",
                       "Orientation curve through keys (times in frames, quaternions w, x, y, z).\n\n"
                       "Curve(times, quats, method='SLERP', **options); Curve.from_euler(times, angles, "
-                      "order='XYZ', method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
+                      "order='XYZ', method='SLERP', **options); "
+                      "Curve.from_axis_angle(times, values, method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
                       "(SLERP, bool); clamped (SQUAD, TCB, CATMULL_ROM, bool, default True: overshoot-free "
                       "tangents; False: the textbook ones); ease_in, ease_out in [0, 1] (every method, a number or one per "
                       "key: slows into / out of keys, path unchanged); tension, continuity, bias in [-1, 1] (TCB; a "
@@ -123,6 +124,21 @@ void bind_curve(py::module_& m) {
             py::arg("times"), py::arg("angles"), py::arg("order") = "XYZ", py::arg("method") = "SLERP",
             "Keys from Euler angles (radians, (ax, ay, az) in Blender's order semantics); every segment keeps "
             "the turn of its Euler path (spins survive).")
+        .def_static(
+            "from_axis_angle",
+            [](py::handle times, py::handle values, const std::string& method, const py::kwargs& kwargs) {
+                const Method meth = parse_method(method);
+                CurveOptions options = to_options(meth, kwargs);
+                std::vector<double> t = key_times(times);
+                const Batch a = key_rows(values, 4, "values");
+                std::vector<double> keys(a.data(), a.data() + 4 * a.count);
+                py::gil_scoped_release release;
+                return Curve::from_axis_angle(std::move(t), keys, meth, std::move(options));
+            },
+            py::arg("times"), py::arg("values"), py::arg("method") = "SLERP",
+            "Keys from Blender axis-angle channels (K, 4) (angle in radians, axis x, y, z; the axis is "
+            "normalized, a zero axis refused); every segment keeps the turn of its axis-angle path (spins "
+            "over 360° survive).")
         .def(
             "sample",
             [](const Curve& c, py::handle times) {

@@ -63,6 +63,17 @@ std::vector<std::size_t> read_indices(py::handle obj, const char* name) {
     return out;
 }
 
+// (N, 4) axis-angle rows (angle, x, y, z).
+std::vector<Vec4> read_vec4_rows(py::handle obj, std::size_t n) {
+    const Batch a = read_rows(obj, 4, "values", n);
+    std::vector<Vec4> out(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        const double* p = a.data() + 4 * k;
+        out[k] = Vec4(p[0], p[1], p[2], p[3]);
+    }
+    return out;
+}
+
 DArray vector_array(const std::vector<double>& v) {
     DArray out(static_cast<py::ssize_t>(v.size()));
     std::copy(v.begin(), v.end(), out.mutable_data());
@@ -190,6 +201,29 @@ kept as given (pass a filtered, continuous sequence). Returns as reduce_keys, wi
 (X, Y, Z).)doc");
 
     m.def(
+        "reduce_keys_axis_angle",
+        [](py::handle times, py::handle values, double tolerance, const std::string& interpolation,
+           bool synchronized, bool detailed) {
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const std::vector<double> t = read_times(times);
+            const std::vector<Vec4> vs = read_vec4_rows(values, t.size());
+            ReducedKeys r;
+            {
+                py::gil_scoped_release release;
+                r = reduce_keys_axis_angle(t, vs, tolerance, ipo, synchronized);
+            }
+            return linear_or_full(r, synchronized, detailed);
+        },
+        py::arg("times"), py::arg("values"), py::arg("tolerance"), py::arg("interpolation") = "LINEAR",
+        py::arg("synchronized") = true, py::kw_only(), py::arg("detailed") = false,
+        R"doc(Reduce dense axis-angle samples (N, 4) (angle in radians, axis x, y, z as Blender's
+rotation_axis_angle; the axis need not be unit).
+
+The bound is on the rotation Blender builds from the four evaluated channels (the axis normalized; a
+zero axis is no rotation). Values are kept as given (pass continuous channels, e.g. from
+quats_to_channels(..., 'AXIS_ANGLE')). Returns as reduce_keys, with four channels (angle, x, y, z).)doc");
+
+    m.def(
         "fit_keys",
         [](py::handle times, py::handle values, py::handle forced, double tolerance, const std::string& mode,
            const std::string& interpolation, bool synchronized, double min_gap) {
@@ -203,6 +237,10 @@ kept as given (pass a filtered, continuous sequence). Returns as reduce_keys, wi
                 for (std::size_t k = 0; k < t.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
                 py::gil_scoped_release release;
                 r = fit_keys(t, qs, f, tolerance, ipo, synchronized, min_gap);
+            } else if (mode == "AXIS_ANGLE") {
+                const std::vector<Vec4> vs = read_vec4_rows(values, t.size());
+                py::gil_scoped_release release;
+                r = fit_keys_axis_angle(t, vs, f, tolerance, ipo, synchronized, min_gap);
             } else {
                 const EulerOrder ord = parse_euler_order(mode);
                 const Batch a = read_rows(values, 3, "values", t.size());
@@ -219,7 +257,10 @@ kept as given (pass a filtered, continuous sequence). Returns as reduce_keys, wi
         R"doc(Fit keys through given ones: the reducer with forced keys (an animator's own keys).
 
 times: (N,) strictly increasing frames; values: (N, 4) quaternions (w, x, y, z) for mode='QUATERNION',
-or (N, 3) Euler angles (radians about X, Y, Z) for mode = an Euler order ('XYZ', ...); forced: sample
+(N, 3) Euler angles (radians about X, Y, Z) for mode = an Euler order ('XYZ', ...), or (N, 4) Blender
+axis-angle channels (angle in radians, axis x, y, z; the axis normalized as Blender does) for
+mode='AXIS_ANGLE' (pass continuous channels: an angle jump above pi or an axis turning over between
+samples forces keys on both sides); forced: sample
 indices (increasing) that must be keys of every channel, values as given. Keys are inserted between
 them, at samples at least min_gap frames from every forced key, until Blender's evaluation of the
 F-curves stays within `tolerance` (radians) of every sample. Returns a ReducedKeys (per channel:

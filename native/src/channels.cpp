@@ -104,6 +104,32 @@ std::vector<double> axis_angle_channels(std::vector<Quat> q, const double* refer
 
 }  // namespace
 
+std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end) {
+    const std::size_t n = q.size();
+    check_reference(start, 1, 4);
+    check_reference(end, 1, 4);
+    for (std::size_t s = 0; s < n; ++s) check_nonzero(q[s], row_name("quats", s));
+    std::vector<double> fwd = axis_angle_channels(q, start);
+    if (n < 2) return fwd;
+    const double* last = &fwd[4 * (n - 1)];
+    const bool arrives = std::fabs(last[0] - end[0]) < numbers::kPi &&
+                         last[1] * end[1] + last[2] * end[2] + last[3] * end[3] > 0.0;
+    if (arrives) return fwd;
+    // Lifted backwards from `end`, and the samples from the one nearest the identity on (the
+    // smallest |sin(a/2)|, an interior one when there is any) taken from that lift.
+    std::vector<Quat> rev(q.rbegin(), q.rend());
+    const std::vector<double> bwd = axis_angle_channels(rev, end);
+    std::size_t split = n - 1;
+    double nearest = 2.0;
+    for (std::size_t s = 1; s + 1 < n; ++s) {
+        const double d = std::fabs(std::sin(0.5 * fwd[4 * s]));
+        if (d < nearest) nearest = d, split = s;
+    }
+    for (std::size_t s = split; s < n; ++s)
+        for (int c = 0; c < 4; ++c) fwd[4 * s + c] = bwd[4 * (n - 1 - s) + c];
+    return fwd;
+}
+
 RotationMode parse_rotation_mode(const std::string& name) {
     RotationMode mode;
     if (name == "QUATERNION") return mode;

@@ -131,6 +131,37 @@ void check_euler_keys(const std::vector<Vec3>& angles) {
     }
 }
 
+// detail::rotvec_near, except that a rotation within 1e-9 rad of the identity keeps ref's direction:
+// there the principal rotation vector's direction is rounding noise (the end of an exact full turn,
+// 400° → 760° about one axis), which would turn the whole segment about a random axis.
+Vec3 rotvec_near_turn(const Quat& d, const Vec3& ref) {
+    const Vec3 chi0 = detail::rotvec_principal(d);
+    const double rn = std::sqrt(glm::dot(ref, ref));
+    if (std::sqrt(glm::dot(chi0, chi0)) < 1e-9 && rn > 0.0)
+        return (std::nearbyint(rn / kTwoPi) * kTwoPi / rn) * ref + chi0;
+    return detail::rotvec_near(d, ref);
+}
+
+// The relative rotation vector of the axis-angle path (a0, v0) → (a1, v1) — angle and axis linear,
+// the axis normalized as Blender does (a zero axis is the identity) — starting at the rotation q0,
+// followed continuously in steps of at most 0.25 rad of angle and 1/16 of the axis change (the
+// path turns at most |a1 − a0| + 2·∠(v0, v1) ≤ |a1 − a0| + 2π), so whole turns are counted.
+Vec3 lift_axis_angle_path(const double* k0, const double* k1, const Quat& q0) {
+    const double da = k1[0] - k0[0];
+    const std::size_t steps = static_cast<std::size_t>(std::ceil(std::fabs(da) / 0.25)) + 16;
+    const Quat c0 = detail::qconj(q0);
+    Vec3 r(0.0);
+    for (std::size_t k = 1; k <= steps; ++k) {
+        const double f = static_cast<double>(k) / static_cast<double>(steps);
+        double v[4];
+        for (int c = 0; c < 4; ++c) v[c] = k == steps ? k1[c] : k0[c] + f * (k1[c] - k0[c]);
+        const Vec3 axis(v[1], v[2], v[3]);
+        const Quat q = glm::dot(axis, axis) > 0.0 ? axis_angle_to_quat(axis, v[0]) : Quat(1.0, 0.0, 0.0, 0.0);
+        r = rotvec_near_turn(detail::qmul(c0, q), r);
+    }
+    return r;
+}
+
 // Rotation vector of the unit quaternion d on its keyed path: angle 2·atan2(|v|, w) ∈ [0, 2π].
 Vec3 rotvec_keyed(const Quat& d, std::size_t i) {
     const Vec3 v(d.x, d.y, d.z);
@@ -305,12 +336,54 @@ Curve Curve::from_euler(const double* times, const double* angles, std::size_t n
     return from_euler(std::vector<double>(times, times + n), a, order, method, std::move(options));
 }
 
+Curve Curve::from_axis_angle(std::vector<double> times, const std::vector<double>& values, Method method,
+                             CurveOptions options) {
+    if (method == Method::EULER)
+        throw InvalidArgument("method: EULER interpolates Euler angles; build it with Curve::from_euler");
+    Curve c(method, std::move(options));
+    check_times(times, method);
+    const std::size_t K = times.size();
+    if (values.size() != 4 * K)
+        throw InvalidArgument("values: " + std::to_string(values.size() / 4) + " keys for " + std::to_string(K) +
+                              " times");
+    for (std::size_t i = 0; i < K; ++i) {
+        const double* v = &values[4 * i];
+        const std::string name = "values[" + std::to_string(i) + "]";
+        check_finite(v[0], name + " angle");
+        check_finite(Vec3(v[1], v[2], v[3]), name + " axis");
+        check_nonzero(Vec3(v[1], v[2], v[3]), name + " axis");
+        if (std::fabs(v[0]) > kMaxEulerAngle)
+            throw InvalidArgument(name + " angle: " + num(v[0]) + " rad is beyond the supported ±1e6 turns (" +
+                                  num(kMaxEulerAngle) + " rad)");
+        if (i > 0 && std::fabs(v[0] - values[4 * i - 4]) > kMaxEulerTurn)
+            throw InvalidArgument(name + " angle: segment turns " + num(v[0] - values[4 * i - 4]) +
+                                  " rad, more than the supported 10000 turns (" + num(kMaxEulerTurn) +
+                                  " rad) per segment");
+    }
+    c.times_ = std::move(times);
+    c.quats_.resize(K);
+    c.path_rotvecs_.resize(K - 1);
+    for (std::size_t i = 0; i < K; ++i) {
+        const double* v = &values[4 * i];
+        c.quats_[i] = axis_angle_to_quat(Vec3(v[1], v[2], v[3]), v[0]);
+        if (i > 0) {
+            c.path_rotvecs_[i - 1] = lift_axis_angle_path(&values[4 * i - 4], v, c.quats_[i - 1]);
+            // The key's sign on the chain, as for Euler keys (either sign is the same rotation).
+            const Quat reached = detail::qmul(c.quats_[i - 1], detail::qexp(c.path_rotvecs_[i - 1]));
+            if (detail::qdot(c.quats_[i], reached) < 0.0) c.quats_[i] = -c.quats_[i];
+        }
+    }
+    c.raw_ = c.quats_;
+    c.build();
+    return c;
+}
+
 Curve::~Curve() = default;
 Curve::Curve(Curve&&) noexcept = default;
 Curve& Curve::operator=(Curve&&) noexcept = default;
 Curve::Curve(const Curve& o)
     : method_(o.method_), options_(o.options_), times_(o.times_), quats_(o.quats_), raw_(o.raw_),
-      angles_(o.angles_), order_(o.order_), rotvecs_(o.rotvecs_),
+      angles_(o.angles_), order_(o.order_), path_rotvecs_(o.path_rotvecs_), rotvecs_(o.rotvecs_),
       impl_(o.impl_ ? std::make_unique<Impl>(*o.impl_) : nullptr) {}
 Curve& Curve::operator=(const Curve& o) {
     if (this != &o) *this = Curve(o);
@@ -350,7 +423,8 @@ void Curve::build() {
         m.kkey.push_back(key);
         if (seg >= 0) m.kseg.push_back(seg);
     };
-    const bool split = method_ != Method::EULER && !(method_ == Method::QUAT_COMPONENTS && !has_euler_keys());
+    const bool lifted = has_euler_keys() || !path_rotvecs_.empty();
+    const bool split = method_ != Method::EULER && !(method_ == Method::QUAT_COMPONENTS && !lifted);
     // Every segment gets its rotation vector r (angle may exceed π) and its end quaternion on the
     // chain q0·exp(r/2); a segment turning more than π is split along r's own axis into ≤ 2π/3
     // sub-arcs, so every method turns the full amount at the constant rate SLERP promises.
@@ -358,8 +432,11 @@ void Curve::build() {
         const Quat q0 = m.kq.back();
         rotvecs_[i] = r;
         const double theta = glm::length(r);
-        const std::size_t parts =
-            split && theta > kPi * (1.0 + 1e-12) ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0))) : 1;
+        // The count of sub-arcs with 1e-6 of slack: a turn of exactly 360° (three sub-arcs) keyed as
+        // float32 (360.00001°) must not become four, which shapes the tangent methods differently.
+        const std::size_t parts = split && theta > kPi * (1.0 + 1e-12)
+                                      ? static_cast<std::size_t>(std::ceil(theta / (kTwoPi / 3.0) - 1e-6))
+                                      : 1;
         const double h = times_[i + 1] - times_[i];
         for (std::size_t j = 1; j <= parts; ++j) {
             const double f = static_cast<double>(j) / static_cast<double>(parts);
@@ -432,6 +509,7 @@ void Curve::build() {
         // Quaternion keys: the shortest rotation after the hemisphere fix, or on the keyed path
         // (QUAT_COMPONENTS, SLERP with shortest_path = false) the arc as stored, up to 2π, split
         // along its own axis when it exceeds π.
+        // Axis-angle keys: the segment's lifted path (from_axis_angle; the keys' signs follow it).
         const bool keyed = method_ == Method::QUAT_COMPONENTS || (method_ == Method::SLERP && !options_.shortest_path);
         add_knot(times_[0], quats_[0], 0, -1);
         for (std::size_t i = 0; i + 1 < K; ++i) {
@@ -439,7 +517,9 @@ void Curve::build() {
             Quat next = quats_[i + 1];
             Vec3 r;
             const Quat d = detail::qmul(detail::qconj(q0), next);
-            if (!keyed) {
+            if (!path_rotvecs_.empty()) {
+                r = path_rotvecs_[i];
+            } else if (!keyed) {
                 if (detail::qdot(q0, next) < 0.0) next = -next;
                 r = detail::rotvec_principal(d);
             } else if (method_ == Method::QUAT_COMPONENTS && d.w < 0.0 && glm::length(Vec3(d.x, d.y, d.z)) <= 1e-12) {
@@ -458,7 +538,7 @@ void Curve::build() {
     switch (method_) {
         case Method::EULER: detail::build_euler(m, times_, angles_, order_); break;
         case Method::QUAT_COMPONENTS:
-            if (has_euler_keys()) {
+            if (lifted) {
                 detail::build_lerp(m, m.kt, m.kq);
             } else {
                 detail::build_lerp(m, times_, raw_);

@@ -1,7 +1,8 @@
 // Key reduction with a guaranteed angular error bound (see reduce.hpp for the contract): the
 // orchestration. The stages live in their own files (reduce_impl.hpp lists them):
 //
-//   reduce_problem.cpp  the samples in channel space (w, x, y, z or X, Y, Z angles), the reference
+//   reduce_problem.cpp  the samples in channel space (w, x, y, z; X, Y, Z angles; or angle, axis
+//                       x, y, z), the reference
 //                       rotation of every sample and a second-order error metric (angle² ≈ eᵀ·M·e
 //                       for a small channel error e);
 //   reduce_fit.cpp      a Fitter fits one segment [i, j] of a set of channels (LINEAR: the chord;
@@ -70,7 +71,8 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         } else {
             // One channel after the other, each fitted against the already fitted ones (the rest
             // still exact) under a growing share of the tolerance; the last gets all of it. The
-            // first channel (w for quaternions, the least costly in angle near identity) goes first.
+            // first channel (w for quaternions, the least costly in angle near identity; the angle
+            // for axis-angle) goes first.
             static const double kQuatShare[4] = {0.6, 0.75, 0.9, 1.0};
             static const double kEulerShare[3] = {0.7, 0.85, 1.0};
             std::size_t forced = 0;
@@ -123,6 +125,11 @@ ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vecto
     return fit_keys_euler(times, angles, order, {}, tolerance, interpolation, synchronized, 0.0);
 }
 
+ReducedKeys reduce_keys_axis_angle(const std::vector<double>& times, const std::vector<Vec4>& values,
+                                   double tolerance, KeyInterpolation interpolation, bool synchronized) {
+    return fit_keys_axis_angle(times, values, {}, tolerance, interpolation, synchronized, 0.0);
+}
+
 ReducedKeys fit_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
                      const std::vector<std::size_t>& forced, double tolerance, KeyInterpolation interpolation,
                      bool synchronized, double min_gap) {
@@ -137,6 +144,15 @@ ReducedKeys fit_keys_euler(const std::vector<double>& times, const std::vector<V
                            KeyInterpolation interpolation, bool synchronized, double min_gap) {
     check_tolerance(tolerance);
     Problem p = make_euler_problem(times, angles, order);
+    set_forced_keys(p, forced, min_gap);
+    return reduce(p, tolerance, interpolation, synchronized);
+}
+
+ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vector<Vec4>& values,
+                                const std::vector<std::size_t>& forced, double tolerance,
+                                KeyInterpolation interpolation, bool synchronized, double min_gap) {
+    check_tolerance(tolerance);
+    Problem p = make_axis_angle_problem(times, values);
     set_forced_keys(p, forced, min_gap);
     return reduce(p, tolerance, interpolation, synchronized);
 }

@@ -50,9 +50,9 @@ void bernstein(double u, double b[4]) {
     b[3] = u * u * u;
 }
 
-// |f|² ≥ (kMinNormRatio)²·norm2.
-bool norm_ok(const double* f, double norm2) {
-    const double f2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
+// |f|² ≥ (kMinNormRatio)²·norm2: of the quaternion, or of the axis (f[1..3]) for axis-angle.
+bool norm_ok(const Problem& p, const double* f, double norm2) {
+    const double f2 = (p.kind == Kind::QUAT ? f[0] * f[0] : 0.0) + f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
     return f2 >= kMinNormRatio * kMinNormRatio * norm2;
 }
 
@@ -110,11 +110,11 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
                       force ? std::numeric_limits<double>::infinity() : limit) <= limit;
     } else {
         ok = false;
-        double kappa = 4.0;  // quaternion metric: radial direction free
+        double kappa = 4.0;  // quaternion and axis-angle metric: radial direction free
         for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
             if (attempt == 1) {
                 // The norm dipped: refit with radial errors weighted.
-                if (p_.kind != Kind::QUAT || !between_failed_) break;
+                if (p_.kind == Kind::EULER || !between_failed_) break;
                 kappa = 4.0 - kRadialWeight;
             }
             for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
@@ -206,20 +206,44 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
         const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
         const double s11 = w1 * b[1], s12 = w1 * b[2], s22 = w2 * b[2];
         if constexpr (C == 4) {
-            // M = (4·I − κ·ûûᵀ)/|q|², with û·e and 1/|q|² computed once per sample.
-            const double* u = &p_.unit[k * 4];
-            const double inv = 1.0 / p_.norm2[k];
-            const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
-            for (int a = 0; a < NC; ++a) {
-                const double ua = u[ch[a]];
-                const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
-                g[0][a] -= w1 * Me;
-                g[1][a] -= w2 * Me;
-                for (int bb = 0; bb <= a; ++bb) {
-                    const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
-                    A[0][a][bb] += s11 * m;
-                    A[1][a][bb] += s12 * m;
-                    A[2][a][bb] += s22 * m;
+            if (p_.kind == Kind::AXIS_ANGLE) {
+                // Block-diagonal (Problem): angle 1; axis σ·(I − v̂v̂ᵀ) + ρ·v̂v̂ᵀ with σ = spin/|v|² and
+                // ρ = (4 − κ)/|v|² (0 on the first attempt: the axis length is free).
+                const double* u = &p_.unit[k * 4];
+                const double inv = 1.0 / p_.norm2[k];
+                const double sigma = p_.spin[k] * inv, rho = (4.0 - kappa) * inv;
+                const double ue = u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+                for (int a = 0; a < NC; ++a) {
+                    const int ca = ch[a];
+                    const double Me = ca == 0 ? e0[0] : sigma * e0[ca] + (rho - sigma) * u[ca] * ue;
+                    g[0][a] -= w1 * Me;
+                    g[1][a] -= w2 * Me;
+                    for (int bb = 0; bb <= a; ++bb) {
+                        const int cb = ch[bb];
+                        double m;
+                        if (ca == 0 || cb == 0) m = ca == cb ? 1.0 : 0.0;
+                        else m = (ca == cb ? sigma : 0.0) + (rho - sigma) * u[ca] * u[cb];
+                        A[0][a][bb] += s11 * m;
+                        A[1][a][bb] += s12 * m;
+                        A[2][a][bb] += s22 * m;
+                    }
+                }
+            } else {
+                // M = (4·I − κ·ûûᵀ)/|q|², with û·e and 1/|q|² computed once per sample.
+                const double* u = &p_.unit[k * 4];
+                const double inv = 1.0 / p_.norm2[k];
+                const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+                for (int a = 0; a < NC; ++a) {
+                    const double ua = u[ch[a]];
+                    const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
+                    g[0][a] -= w1 * Me;
+                    g[1][a] -= w2 * Me;
+                    for (int bb = 0; bb <= a; ++bb) {
+                        const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
+                        A[0][a][bb] += s11 * m;
+                        A[1][a][bb] += s12 * m;
+                        A[2][a][bb] += s22 * m;
+                    }
                 }
             }
         } else {
@@ -268,7 +292,7 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
 
 // Fitted values of the channels at the interior samples (into buf_), their tan²(θ/2) errors (into
 // err_) and the largest.
-// Between samples the fit is guarded too (quaternion BEZIER and every Euler fit): midway
+// Between samples the fit is guarded too (quaternion BEZIER, every Euler and axis-angle fit): midway
 // between consecutive samples (keys included) the fitted rotation must lie within
 // kBetweenFactor × the fit's angle + kBetweenStep × the step between the two samples of what
 // the dense input shows there (its own LINEAR evaluation: the normalized mean of the
@@ -283,7 +307,10 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
                         const double* p2, double limit, double give_up) {
     const int C = p_.C;
     const bool quat_bezier = p_.kind == Kind::QUAT && ipo_ == KeyInterpolation::BEZIER;
-    const bool guard = quat_bezier || p_.kind == Kind::EULER;
+    // The norm check: a quaternion's (BEZIER: LINEAR cannot dip without a sign flip, a break) or
+    // an axis-angle axis's (any interpolation: two axes 90° apart lerp through 0.71 of their length).
+    const bool norm_check = quat_bezier || p_.kind == Kind::AXIS_ANGLE;
+    const bool guard = quat_bezier || p_.kind != Kind::QUAT;
     between_failed_ = false;
     double worst = 0.0;
     for (std::size_t k = i + 1; k < j; ++k) {
@@ -302,7 +329,7 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
         err_[k] = e;
         worst = std::max(worst, e);
         if (worst > give_up) return worst;  // the caller rejects the fit without looking further
-        if (quat_bezier && !norm_ok(f, p_.norm2[k])) {
+        if (norm_check && !norm_ok(p_, f, p_.norm2[k])) {
             between_failed_ = true;
             return std::numeric_limits<double>::infinity();
         }
@@ -328,12 +355,13 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
             } else {
                 bezier_values(i, j, chans, nc, p1, p2, u, f);
             }
-            if (quat_bezier && !norm_ok(f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
+            if (norm_check && !norm_ok(p_, f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
                 between_failed_ = true;
                 return std::numeric_limits<double>::infinity();
             }
-            const Quat ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
-                                                   : euler_rotation(p_, mean);
+            const Quat ref = p_.kind == Kind::QUAT         ? Quat(mean[0], mean[1], mean[2], mean[3])
+                             : p_.kind == Kind::AXIS_ANGLE ? axis_angle_rotation(mean)
+                                                           : euler_rotation(p_, mean);
             const double denom = 1.0 - tan_fit * p_.step_tan[k];
             const double t = (tan_fit + p_.step_tan[k]) / denom;
             const double between_limit =

@@ -11,8 +11,8 @@
 //   reduce_select.cpp   key choice: greedy farthest feasible end, then key removal;
 //   reduce_verify.cpp   the F-curves of the result, evaluated as Blender does (blender_eval.hpp),
 //                       refitted or split until every sample passes.
-// The small functions used in inner loops (error_tan2, euler_rotation) are inline here, so every
-// stage computes them identically.
+// The small functions used in inner loops (error_tan2, euler_rotation, axis_angle_rotation) are
+// inline here, so every stage computes them identically.
 #pragma once
 
 #include <cmath>
@@ -49,7 +49,8 @@ constexpr int kReweightIterationsSingle = 2;
 // is rejected without reweighting.
 constexpr double kHopeless = 4.0;
 using numbers::kPi;
-// The rotation ignores a quaternion's scale, so the fit may let the 4-vector's norm drift — a cubic
+// The rotation ignores a quaternion's scale (and an axis-angle axis's length), so the fit may let the
+// 4-vector's (the axis's) norm drift — a cubic
 // with varying norm bends the normalized path more freely, which saves many keys. It is kept free
 // unless the norm would fall below kMinNormRatio of the sample's (checked at the samples and
 // midway between them: near zero the direction swings between frames); such fits are redone with
@@ -72,11 +73,11 @@ inline double tan2_half(double angle) {
 
 // ---- the problem -----------------------------------------------------------------------------------
 
-enum class Kind { QUAT, EULER };
+enum class Kind { QUAT, EULER, AXIS_ANGLE };
 
 struct Problem {
     Kind kind = Kind::QUAT;
-    int C = 4;                    // channels
+    int C = 4;                    // channels: w, x, y, z; X, Y, Z angles; or angle, axis x, y, z
     EulerOrder order = EulerOrder::XYZ;
     std::size_t n = 0;
     std::vector<double> t;        // float32 frames (as Blender keys and evaluates them)
@@ -86,13 +87,21 @@ struct Problem {
     //   quaternions: M = (4·I − κ·ûûᵀ)/|q|² with û = q/|q|; κ = 4 projects out the radial direction
     //                (the rotation ignores scale), κ = 4 − kRadialWeight keeps a little of it;
     //   Euler:       M = Gram matrix of the three rotation axes = I except M[first][last] =
-    //                M[last][first] = gimbal[k] = ±sin(middle angle).
-    std::vector<double> unit;     // quaternions: n·4, û
-    std::vector<double> norm2;    // quaternions: |q|² per sample
+    //                M[last][first] = gimbal[k] = ±sin(middle angle);
+    //   axis-angle:  block-diagonal, angle weight 1 and for the axis v (Blender normalizes it)
+    //                (spin[k]/|v|²)·(I − v̂v̂ᵀ) + ρ·v̂v̂ᵀ with spin[k] = 4·sin²(a/2): for unit
+    //                q = (cos a/2, sin(a/2)·v̂), ∂q/∂a = ½(−sin a/2, cos(a/2)·v̂) has length ½ and
+    //                ∂q/∂v·δ = (0, sin(a/2)·(I − v̂v̂ᵀ)δ/|v|) is orthogonal to it (v̂ ⊥ (I − v̂v̂ᵀ)δ),
+    //                and a rotation's angle is twice its unit quaternion's tangent length. The
+    //                radial direction is free (ρ = 0) unless the norm dipped (ρ = kRadialWeight/|v|²);
+    //                at a = 0 (mod 2π) the axis is free altogether.
+    std::vector<double> unit;     // quaternions: n·4, û; axis-angle: n·4, (0, v̂)
+    std::vector<double> norm2;    // quaternions: |q|² per sample; axis-angle: |v|²
+    std::vector<double> spin;     // axis-angle: 4·sin²(a/2) per sample
     std::vector<double> gimbal;   // Euler: the off-diagonal term per sample
     std::vector<double> slope;    // n·C: finite-difference slope (default Bezier tangents)
     // breaks[k]: number of discontinuities between samples 0..k (a quaternion sign flip, an Euler
-    // angle jump above π). A segment may not span one: between the two samples Blender would pass
+    // or axis-angle angle jump above π, an axis-angle axis turning by more than 90°). A segment may not span one: between the two samples Blender would pass
     // through a near-zero quaternion or spin, and a Bezier fit could hide that at the samples.
     std::vector<std::size_t> breaks;
     // step_tan[k] = tan(kBetweenStep/2 × the rotation angle between samples k and k+1), for the
@@ -125,13 +134,25 @@ inline Quat euler_rotation(const Problem& p, const double* a) {
                     axis_quat(p.axis_first, a[p.axis_first]));
 }
 
+// Rotation of axis-angle channels f = (angle, x, y, z) as Blender builds it (axis_angle_to_mat3):
+// the axis normalized; an axis whose squared length is not above 1e-35 (normalize_v3_v3's float
+// threshold) gives the identity.
+inline Quat axis_angle_rotation(const double* f) {
+    const double len2 = f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
+    if (!(len2 > 1e-35)) return Quat(1.0, 0.0, 0.0, 0.0);
+    const double s = std::sin(0.5 * f[0]) / std::sqrt(len2);
+    return Quat(std::cos(0.5 * f[0]), s * f[1], s * f[2], s * f[3]);
+}
+
 // tan²(θ/2) of the rotation angle θ between the rotation r (any nonzero scale) and the channel
-// values f (quaternion: f unnormalized, sign-invariant; Euler: the rotation of angles f). +inf when
-// f is a zero quaternion or the rotations are 180° apart.
+// values f (quaternion: f unnormalized, sign-invariant; Euler: the rotation of angles f; axis-angle:
+// axis_angle_rotation). +inf when f is a zero quaternion or the rotations are 180° apart.
 inline double error_tan2(const Problem& p, const Quat& r, const double* f) {
     Quat q;
     if (p.kind == Kind::QUAT) {
         q = Quat(f[0], f[1], f[2], f[3]);
+    } else if (p.kind == Kind::AXIS_ANGLE) {
+        q = axis_angle_rotation(f);
     } else {
         q = euler_rotation(p, f);
     }
@@ -170,6 +191,10 @@ Problem make_quat_problem(const std::vector<double>& times, const std::vector<Qu
 // The Problem of Euler samples (always guarded); throws InvalidArgument naming times[k] / angles[k].
 Problem make_euler_problem(const std::vector<double>& times, const std::vector<Vec3>& angles,
                            EulerOrder order);
+
+// The Problem of axis-angle samples (angle, x, y, z; always guarded); throws InvalidArgument naming
+// times[k] / values[k] (non-finite, zero-length axis).
+Problem make_axis_angle_problem(const std::vector<double>& times, const std::vector<Vec4>& values);
 
 // Refuses samples whose float32 form (as Blender stores keys) is another rotation.
 void check_float32_storage(const Problem& p, double tolerance);

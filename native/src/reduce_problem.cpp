@@ -50,6 +50,10 @@ void compute_breaks(Problem& p, bool guard) {
         bool jump = false;
         if (p.kind == Kind::QUAT) {
             jump = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0;
+        } else if (p.kind == Kind::AXIS_ANGLE) {
+            // An angle jump (a turn between two samples) or an axis turning over: Blender's lerp of
+            // the axis would pass near zero, where the normalized axis swings.
+            jump = std::fabs(b[0] - a[0]) > kPi || a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0;
         } else {
             for (int c = 0; c < 3; ++c) jump = jump || std::fabs(b[c] - a[c]) > kPi;
         }
@@ -155,14 +159,60 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
     compute_slopes(p);
     return p;
 }
+Problem make_axis_angle_problem(const std::vector<double>& times, const std::vector<Vec4>& values) {
+    check_times(times);
+    if (values.size() != times.size())
+        throw InvalidArgument("values: " + std::to_string(values.size()) + " rows for " +
+                              std::to_string(times.size()) + " times");
+    Problem p;
+    p.kind = Kind::AXIS_ANGLE;
+    p.C = 4;
+    p.n = times.size();
+    p.t.resize(p.n);
+    p.y.resize(p.n * 4);
+    p.ref.resize(p.n);
+    p.unit.assign(p.n * 4, 0.0);
+    p.norm2.assign(p.n, 0.0);
+    p.spin.assign(p.n, 0.0);
+    for (std::size_t k = 0; k < p.n; ++k) {
+        const Vec4& v = values[k];
+        const std::string name = "values[" + std::to_string(k) + "]";
+        std::string problem = finite_problem(v[0]);
+        if (!problem.empty()) throw InvalidArgument(name + " angle: " + problem);
+        const Vec3 axis(v[1], v[2], v[3]);
+        problem = finite_problem(axis);
+        if (problem.empty()) problem = nonzero_problem(axis, "axis");
+        if (!problem.empty()) throw InvalidArgument(name + ": " + problem);
+        const double len2 = glm::dot(axis, axis);
+        if (!(len2 > 1e-30) || !std::isfinite(len2))
+            throw InvalidArgument(name + ": axis length " + std::to_string(std::sqrt(len2)) +
+                                  " is outside what Blender normalizes reliably (1e-15 .. 1e154)");
+        p.t[k] = f32(times[k]);
+        for (int a = 0; a < 4; ++a) p.y[k * 4 + a] = v[a];
+        p.ref[k] = axis_angle_to_quat(axis, v[0]);
+        const double len = std::sqrt(len2);
+        for (int a = 1; a < 4; ++a) p.unit[k * 4 + a] = v[a] / len;
+        p.norm2[k] = len2;
+        const double s = std::sin(0.5 * v[0]);
+        p.spin[k] = 4.0 * s * s;
+    }
+    compute_breaks(p, true);
+    compute_slopes(p);
+    return p;
+}
+
 // Blender keeps key values as float32: a sample whose float32 form is a different rotation (a
 // component beyond ±3.4e38, a quaternion whose components all underflow, an angle too large for
 // float32 to resolve) cannot be kept within any bound, so it is refused up front. Allowed: the
 // tolerance, and never less than 1e-6 rad (float32 rounding of ordinary values is ~1e-7 rad).
 void check_float32_storage(const Problem& p, double tolerance) {
     const double allowed = std::max(tolerance, 1e-6);
+<<<<<<< HEAD
     const double allowed_tan = std::tan(0.5 * allowed);
     const char* name = p.kind == Kind::QUAT ? "quats[" : "angles[";
+=======
+    const char* name = p.kind == Kind::QUAT ? "quats[" : p.kind == Kind::EULER ? "angles[" : "values[";
+>>>>>>> axis-angle-fit
     for (std::size_t k = 0; k < p.n; ++k) {
         const double* y = p.row(k);
         double v[4] = {0.0, 0.0, 0.0, 0.0};
@@ -172,12 +222,31 @@ void check_float32_storage(const Problem& p, double tolerance) {
                 throw InvalidArgument(name + std::to_string(k) + "]: " + std::to_string(y[c]) +
                                       " is beyond float32 range (Blender stores keys as float32)");
         }
+<<<<<<< HEAD
         // float32 components are 0 or at least 1e-45 in size: their squares cannot underflow
         if (p.kind == Kind::QUAT && !(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] > 0.0))
             throw InvalidArgument(name + std::to_string(k) +
                                   "]: every component underflows float32 (Blender stores keys as float32)");
         const double tan2 = error_tan2(p, k, v);  // the stored key's rotation against the sample's
         if (!(tan2 <= allowed_tan * allowed_tan))
+=======
+        Quat stored;
+        if (p.kind == Kind::QUAT) {
+            stored = Quat(v[0], v[1], v[2], v[3]);
+            if (!nonzero_problem(stored).empty())
+                throw InvalidArgument(name + std::to_string(k) +
+                                      "]: every component underflows float32 (Blender stores keys as float32)");
+        } else if (p.kind == Kind::AXIS_ANGLE) {
+            if (!(f32(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]) > 1e-35))
+                throw InvalidArgument(name + std::to_string(k) +
+                                      "]: the axis is too short for float32 (Blender would show no rotation)");
+            stored = axis_angle_rotation(v);
+        } else {
+            stored = euler_to_quat(Vec3(v[0], v[1], v[2]), p.order);
+        }
+        const double moved = angle_between(p.ref[k], stored);
+        if (moved > allowed)
+>>>>>>> axis-angle-fit
             throw InvalidArgument(name + std::to_string(k) + "]: storing it as float32 (as Blender does) turns it by " +
                                   std::to_string(angle_of_tan2(tan2)) + " rad, more than the tolerance allows");
     }

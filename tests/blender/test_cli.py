@@ -251,14 +251,15 @@ def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, 
 
 
 def test_fit_that_fails_exits_1_and_saves_nothing(addon, tmp_path):
-    """An axis-angle target cannot be fitted: status 1, one line naming it, no output file."""
+    """An axis-angle key with a zero axis cannot be fitted: status 1, one line naming the target,
+    channels and frame, no output file."""
     source = tmp_path / "axis.blend"
     bpy.ops.wm.read_factory_settings(use_empty=True)
     obj = bpy.data.objects.new("Axis", None)
     bpy.context.scene.collection.objects.link(obj)
     obj.rotation_mode = "AXIS_ANGLE"
     for frame, angle in ((1, 0.0), (11, 2.0)):
-        obj.rotation_axis_angle = (angle, 0, 0, 1)
+        obj.rotation_axis_angle = (angle, 0, 0, 1 if frame == 1 else 0)
         obj.keyframe_insert("rotation_axis_angle", frame=frame)
     bpy.ops.wm.save_as_mainfile(filepath=str(source), copy=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -266,7 +267,7 @@ def test_fit_that_fails_exits_1_and_saves_nothing(addon, tmp_path):
     proc = run_cli(["--fit", "--output", out, source])
     assert proc.returncode == 1, (proc.stdout, proc.stderr)
     errors = error_lines(proc)
-    assert len(errors) == 1 and "Axis: rotation mode AXIS_ANGLE cannot be fitted yet" in errors[0], proc.stderr
+    assert len(errors) == 1 and "Axis: rotation_axis_angle[1..3] (the axis) is zero at frame 11" in errors[0], proc.stderr
     assert not out.exists()
 
 

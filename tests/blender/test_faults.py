@@ -411,8 +411,10 @@ def test_fit_tolerance_not_above_zero(cube, tolerance):
     fit_refused(r"tolerance .*°: must be a finite angle above 0", fit.FitSettings(tolerance=tolerance))
 
 
-def test_fit_axis_angle(scene):
+def test_fit_axis_angle_zero_axis(scene):
+    """Axis-angle is fitted, but a key whose axis is zero defines no rotation axis: refused, naming
+    the channels and the frame."""
     obj = add_empty("Cube", "AXIS_ANGLE")
-    key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (11, (2, 0, 0, 1))])
+    key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (11, (2, 0, 0, 0)), (21, (3, 0, 0, 1))])
     select_objects(obj)
-    fit_refused("Cube: rotation mode AXIS_ANGLE cannot be fitted yet")
+    fit_refused(r"Cube: rotation_axis_angle\[1\.\.3\] \(the axis\) is zero at frame 11")

@@ -1,8 +1,8 @@
 """quatcurve.fit in every Blender: the animator's keys stay (frames, values, count; quaternion signs may
 flip), generated keys are marked, and Blender's own evaluation — in a fresh process without the
 add-on, from the saved .blend — reproduces the method's native curve within the tolerance at every
-frame and 4 subframes. Objects and pose bones, every method, Euler orders with spins, quaternion
-signs, refits, bad input (nothing changed), fewer than two keys."""
+frame and 4 subframes. Objects and pose bones, every method, Euler orders and axis-angle with spins,
+quaternion signs, refits, bad input (nothing changed), fewer than two keys."""
 import json
 import math
 import os
@@ -60,6 +60,8 @@ def native_curve(method, frames, values, mode, **options):
     qc = native.require()
     if mode == "QUATERNION":
         return qc.Curve(frames, values, method, **options)
+    if mode == "AXIS_ANGLE":
+        return qc.Curve.from_axis_angle(frames, values, method, **options)
     return qc.Curve.from_euler(frames, values, order=mode, method=method, **options)
 
 
@@ -174,6 +176,79 @@ def test_fit_pose_bones_with_mixed_modes(scene, tmp_path):
     assert np.degrees(angles_between(got["Rig/E"], want_e)).max() <= TOL + 1e-4
 
 
+# Axis-angle keys (angle in degrees, axis): a spin of 400° and another of 360° about a tilted,
+# non-unit axis, an axis change, and a turn back through 720° (the identity) with the axis changing.
+AXIS_ANGLE_KEYS = [(1, (0, 0, 0, 2)), (9, (400, 0, 0.3, 1)), (20, (760, 0, 0.3, 1)), (26, (800, 1, 0.2, 0.4)),
+                   (40, (700, 0.5, -0.5, 0.7))]
+BONE_AXIS_ANGLE_KEYS = [(1, (30, 1, 0, 0)), (8, (-300, 1, 0.1, 0)), (20, (90, 0, 1, 0)), (30, (450, 0, 1, 0.2))]
+
+
+def axis_angle_values(keys):
+    return np.array([(math.radians(k[1][0]),) + tuple(k[1][1:]) for k in keys], float)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_fit_axis_angle_object_and_bone_keep_spins(scene, method, tmp_path):
+    """Axis-angle on an object and a pose bone: the animator's keys exactly as they were, generated
+    keys continuous with them (the angle climbs through the spins), and Blender's evaluation in a
+    fresh process within the tolerance of the method's curve (turns kept) at every quarter frame."""
+    obj = add_empty("Axis", "AXIS_ANGLE")
+    key(obj, "rotation_axis_angle", [(f, v) for f, v in zip([k[0] for k in AXIS_ANGLE_KEYS],
+                                                           axis_angle_values(AXIS_ANGLE_KEYS))],
+        interpolation="BEZIER")
+    rig = add_rig("Rig", bones=("A",))
+    bone = rig.pose.bones["A"]
+    bone.rotation_mode = "AXIS_ANGLE"
+    key(bone, "rotation_axis_angle", [(f, v) for f, v in zip([k[0] for k in BONE_AXIS_ANGLE_KEYS],
+                                                            axis_angle_values(BONE_AXIS_ANGLE_KEYS))],
+        interpolation="BEZIER")
+    select_objects(obj, rig)
+    found = [fit.targets.Target(obj), fit.targets.Target(rig, "A")]
+    before = [animator_keys(obj), animator_keys(bone)]
+    result = fit.fit(found, fit.FitSettings(method=method, tolerance=TOL))
+    assert [t.mode for t in result.targets] == ["AXIS_ANGLE", "AXIS_ANGLE"]
+    for owner, old in zip((obj, bone), before):
+        for (f0, v0), (f1, v1) in zip(old, animator_keys(owner)):
+            np.testing.assert_array_equal(f0, f1)
+            np.testing.assert_array_equal(v0, v1)  # axis-angle keys: exactly the animator's values
+        assert fit.find_record(fcurves.active_action(owner.id_data),
+                               fit.targets.Target(owner.id_data, None if owner is obj else "A")) is not None
+    # The object's spin from 400° to 760° is in the angle channel: it climbs the whole turn.
+    scene.frame_set(14)
+    assert math.radians(500) < obj.rotation_axis_angle[0] < math.radians(660)
+    blend = tmp_path / "axis.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    times = check_times(1, 40)
+    got = fresh_blender_quats(blend, [["Axis", None], ["Rig", "A"]], times, tmp_path)
+    for name, keys in (("Axis", AXIS_ANGLE_KEYS), ("Rig/A", BONE_AXIS_ANGLE_KEYS)):
+        frames = np.array([k[0] for k in keys], float)
+        stored = axis_angle_values(keys).astype(np.float32).astype(float)  # the keys as Blender holds them
+        want = native_curve(method, frames, stored, "AXIS_ANGLE").sample(times)
+        err = np.degrees(angles_between(got[name], want))
+        line = [t for t in result.targets if t.name == name][0]
+        assert err.max() <= TOL + 1e-4, "%s: max %.5f° at frame %s (%d generated keys)" % (
+            name, err.max(), times[err.argmax()], line.generated_keys)
+        print("axis-angle %s %s: %d animator + %d generated keys, max error %.5f° (Blender, fresh process)"
+              % (method, name, line.animator_keys, line.generated_keys, err.max()))
+
+
+def test_fit_axis_angle_operator_and_refit(scene):
+    obj = add_empty("Axis", "AXIS_ANGLE")
+    key(obj, "rotation_axis_angle", [(f, v) for f, v in zip([k[0] for k in AXIS_ANGLE_KEYS],
+                                                           axis_angle_values(AXIS_ANGLE_KEYS))],
+        interpolation="BEZIER")
+    select_objects(obj)
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
+    first = rotation_keys(obj)
+    assert "Axis: AXIS_ANGLE, 5 animator keys" in bpy.context.scene.quatcurve_fit.last_lines
+    assert any((t == fit.KEY_TYPE_GENERATED).any() for _, _, t in first)
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
+    for (f0, v0, t0), (f1, v1, t1) in zip(first, rotation_keys(obj)):
+        np.testing.assert_array_equal(f0, f1)
+        np.testing.assert_array_equal(v0, v1)
+        np.testing.assert_array_equal(t0, t1)
+
+
 def test_channels_keyed_separately_take_the_union_of_frames(scene):
     obj = add_empty("Sparse", "XYZ")
     obj.rotation_euler = (0, 0, 0)
@@ -189,7 +264,8 @@ def test_channels_keyed_separately_take_the_union_of_frames(scene):
         np.testing.assert_array_equal(frames, [1, 10, 20])
 
 
-@pytest.mark.parametrize("case", ["nan", "tolerance", "driver", "duplicate", "axis_angle", "modifier"])
+@pytest.mark.parametrize("case", ["nan", "tolerance", "driver", "duplicate", "zero_axis", "axis_angle_nan",
+                                  "modifier"])
 def test_bad_input_is_refused_and_changes_nothing(scene, case):
     obj = add_empty("Bad", "QUATERNION")
     key(obj, "rotation_quaternion", QUAT_KEYS[:3], interpolation="BEZIER")
@@ -210,11 +286,16 @@ def test_bad_input_is_refused_and_changes_nothing(scene, case):
         curve.keyframe_points.add(1)
         curve.keyframe_points[-1].co = (5, 0.25)
         expect = r"rotation_quaternion\[1\] has two different keys on frame 5"
-    elif case == "axis_angle":
+    elif case in ("zero_axis", "axis_angle_nan"):
         obj.rotation_mode = "AXIS_ANGLE"
-        obj.keyframe_insert("rotation_axis_angle", frame=1)
-        obj.keyframe_insert("rotation_axis_angle", frame=9)
-        expect = "AXIS_ANGLE cannot be fitted yet"
+        key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (9, (1, 0, 0, 0) if case == "zero_axis" else (1, 0, 1, 0)),
+                                         (15, (2, 1, 0, 0))], interpolation="BEZIER")
+        if case == "zero_axis":
+            expect = r"Bad: rotation_axis_angle\[1\.\.3\] \(the axis\) is zero at frame 9"
+        else:
+            aa = fcurves.Channels.of(obj).find(obj.path_from_id("rotation_axis_angle"), 2)
+            aa.keyframe_points[1].co[1] = float("nan")
+            expect = r"Bad: rotation_axis_angle\[2\] is nan at frame 9"
     elif case == "modifier":
         curve.modifiers.new("NOISE")
         expect = "F-curve modifiers"

@@ -78,6 +78,8 @@ def test_undo_after_a_fit_restores_the_file_and_the_records(undo_verdict):
         assert r["result"] == ["FINISHED"], r
         assert r["fit_changed_file"], "the fit changed nothing, so undo proves nothing: %s" % r
         assert any(r["records_after_fit"].values()), "the fit stored no record: %s" % r
+        # the axis-angle object (issue 14) is fitted and undone too
+        assert any(recs for name, recs in r["records_after_fit"].items() if name.startswith("Axis")), r
         assert r["restored"], "ed.undo after %s left differences: %s" % (r["fit"], r["differences"])
 
 

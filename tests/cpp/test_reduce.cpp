@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "quatcurve/channels.hpp"
+#include "quatcurve/curve.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/euler.hpp"
 #include "quatcurve/quat.hpp"
@@ -72,6 +74,43 @@ double euler_max_error(const ReducedKeys& r, const std::vector<double>& times,
         worst = std::max(worst, angle_between(euler_to_quat(e, order), euler_to_quat(a[k], order)));
     }
     return worst;
+}
+
+// The rotation Blender builds from axis-angle channels (angle, x, y, z): the axis normalized.
+Quat axis_angle_rotation(double angle, double x, double y, double z) {
+    return axis_angle_to_quat(Vec3(x, y, z), angle);
+}
+
+double axis_angle_max_error(const ReducedKeys& r, const std::vector<double>& times, const std::vector<Vec4>& v) {
+    std::vector<std::vector<double>> vals(4);
+    for (int c = 0; c < 4; ++c) blender_evaluate(r.channels[c], r.interpolation, times, vals[c]);
+    double worst = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k)
+        worst = std::max(worst, angle_between(axis_angle_rotation(vals[0][k], vals[1][k], vals[2][k], vals[3][k]),
+                                              axis_angle_rotation(v[k][0], v[k][1], v[k][2], v[k][3])));
+    return worst;
+}
+
+// A method's curve through axis-angle keys (spins kept), sampled every 1/4 frame as channels
+// continuous from each key to the next (axis_angle_span_channels), the keys exact.
+std::vector<Vec4> axis_angle_samples(const std::vector<double>& key_t, const std::vector<double>& key_v,
+                                     Method method, std::vector<double>& t, std::vector<std::size_t>& forced) {
+    const Curve curve = Curve::from_axis_angle(key_t, key_v, method);
+    t.clear();
+    forced.clear();
+    for (double x = key_t.front(); x <= key_t.back() + 1e-9; x += 0.25) t.push_back(x);
+    for (double k : key_t) forced.push_back(static_cast<std::size_t>(std::lround((k - key_t.front()) * 4)));
+    const std::vector<Quat> q = curve.sample(t);
+    std::vector<Vec4> v(t.size());
+    for (std::size_t a = 0; a + 1 < key_t.size(); ++a) {
+        const std::vector<Quat> span(q.begin() + forced[a], q.begin() + forced[a + 1] + 1);
+        const std::vector<double> ch = axis_angle_span_channels(span, &key_v[4 * a], &key_v[4 * a + 4]);
+        for (std::size_t s = 0; s < span.size(); ++s)
+            v[forced[a] + s] = Vec4(ch[4 * s], ch[4 * s + 1], ch[4 * s + 2], ch[4 * s + 3]);
+    }
+    for (std::size_t a = 0; a < key_t.size(); ++a)
+        v[forced[a]] = Vec4(key_v[4 * a], key_v[4 * a + 1], key_v[4 * a + 2], key_v[4 * a + 3]);
+    return v;
 }
 
 void expect_structure(const ReducedKeys& r, std::size_t n, bool synchronized) {
@@ -346,4 +385,83 @@ TEST(FitKeys, BadForcedKeysAreRefused) {
     } catch (const InvalidArgument& e) {
         EXPECT_NE(std::string(e.what()).find("forced[1]"), std::string::npos) << e.what();
     }
+}
+
+TEST(FitKeys, AxisAngleKeepsForcedKeysAndSpinsWithinTheBound) {
+    // 0 → 400° → 760° about a tilted, non-unit axis (full turns between keys), an axis change, and a
+    // turn back through 720° (the identity) with the axis changing; every fitted method.
+    const std::vector<double> key_t = {1.0, 9.0, 20.0, 26.0, 40.0};
+    const std::vector<double> key_v = {0.0,          0.0, 0.0, 2.0, 400 * kDeg, 0.0, 0.3,  1.0,
+                                       760 * kDeg,   0.0, 0.3, 1.0, 800 * kDeg, 1.0, 0.2,  0.4,
+                                       700 * kDeg,   0.5, -0.5, 0.7};
+    for (Method method : {Method::SLERP, Method::SQUAD, Method::CATMULL_ROM, Method::SPLINE_C2}) {
+        std::vector<double> t;
+        std::vector<std::size_t> forced;
+        const std::vector<Vec4> v = axis_angle_samples(key_t, key_v, method, t, forced);
+        const ReducedKeys r = fit_keys_axis_angle(t, v, forced, 0.05 * kDeg);
+        SCOPED_TRACE(method_name(method));
+        ASSERT_EQ(r.channels.size(), 4u);
+        EXPECT_LE(r.max_error, 0.05 * kDeg);
+        EXPECT_LE(axis_angle_max_error(r, t, v), 0.05 * kDeg - 1e-6);  // the emulator, bit-identical to Blender
+        for (int c = 0; c < 4; ++c) {
+            const ReducedChannel& ch = r.channels[c];
+            for (std::size_t a = 0; a < forced.size(); ++a) {
+                const auto it = std::find(ch.indices.begin(), ch.indices.end(), forced[a]);
+                ASSERT_NE(it, ch.indices.end()) << "channel " << c << " lost forced sample " << forced[a];
+                EXPECT_EQ(ch.values[static_cast<std::size_t>(it - ch.indices.begin())], double(float(key_v[4 * a + c])));
+            }
+            for (std::size_t a = 0; a < ch.frames.size(); ++a) {  // everything float32, as Blender stores it
+                EXPECT_EQ(ch.values[a], double(float(ch.values[a])));
+                EXPECT_EQ(ch.handle_left[2 * a + 1], double(float(ch.handle_left[2 * a + 1])));
+                EXPECT_EQ(ch.handle_right[2 * a + 1], double(float(ch.handle_right[2 * a + 1])));
+            }
+        }
+        // The spin 400° → 760° (one axis) is in the angle channel: Blender's evaluation climbs it.
+        std::vector<double> inside, angle;
+        for (double x = 9.0; x <= 20.0; x += 0.125) inside.push_back(x);
+        blender_evaluate(r.channels[0], r.interpolation, inside, angle);
+        for (std::size_t k = 1; k < angle.size(); ++k) EXPECT_GT(angle[k], angle[k - 1]) << inside[k];
+    }
+}
+
+TEST(Reduce, AxisAngleBoundHoldsOnTheNormalizedAxis) {
+    const std::vector<double> t = frames_of(121);
+    std::vector<Vec4> v(t.size());
+    for (std::size_t k = 0; k < t.size(); ++k) {
+        const double s = t[k] / 120.0;
+        v[k] = Vec4(9.0 * s, 0.4 * std::sin(3 * s), 0.3 + s, 2.0 - 1.5 * s);  // over a full turn, non-unit axis
+    }
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER})
+        for (bool sync : {true, false}) {
+            const ReducedKeys r = reduce_keys_axis_angle(t, v, 0.1 * kDeg, ipo, sync);
+            expect_structure(r, t.size(), sync);
+            EXPECT_LE(r.max_error, 0.1 * kDeg);
+            EXPECT_LE(axis_angle_max_error(r, t, v), 0.1 * kDeg);
+            EXPECT_LT(r.key_count(), 4 * t.size() / 2);
+        }
+    std::vector<Vec4> bad = v;
+    bad[7] = Vec4(1.0, 0.0, 0.0, 0.0);
+    expect_invalid([&] { reduce_keys_axis_angle(t, bad, 0.01); }, "values[7]: zero-length axis");
+    bad[7] = Vec4(NAN, 0.0, 0.0, 1.0);
+    expect_invalid([&] { fit_keys_axis_angle(t, bad, {0}, 0.01); }, "values[7] angle");
+}
+
+TEST(CurveAxisAngle, FullTurnsSurviveFloat32Keys) {
+    // 400° → 760° about one axis is exactly a full turn; the keys as float32 (as Blender holds them)
+    // must give the same curve, not a turn about a rounding-noise axis or another sub-arc count.
+    const std::vector<double> key_t = {1.0, 9.0, 20.0, 26.0};
+    const std::vector<double> key_v = {0.0, 0.0, 0.0, 2.0, 400 * kDeg, 0.0, 0.3, 1.0, 760 * kDeg, 0.0, 0.3, 1.0,
+                                       800 * kDeg, 1.0, 0.2, 0.4};
+    std::vector<double> key_f(key_v.size());
+    for (std::size_t a = 0; a < key_v.size(); ++a) key_f[a] = double(float(key_v[a]));
+    std::vector<double> t;
+    for (double x = 1.0; x <= 26.0; x += 0.25) t.push_back(x);
+    for (Method method : {Method::SLERP, Method::SQUAD, Method::SPLINE_C2}) {
+        const std::vector<Quat> a = Curve::from_axis_angle(key_t, key_v, method).sample(t);
+        const std::vector<Quat> b = Curve::from_axis_angle(key_t, key_f, method).sample(t);
+        for (std::size_t k = 0; k < t.size(); ++k) EXPECT_LT(angle_between(a[k], b[k]), 1e-5) << t[k];
+        const std::vector<SegmentPath> paths = Curve::from_axis_angle(key_t, key_v, method).segment_paths();
+        EXPECT_NEAR(paths[1].arc, 2 * M_PI, 1e-9);
+    }
+    expect_invalid([&] { Curve::from_axis_angle({0.0, 1.0}, {0, 0, 0, 1, 1, 0, 0, 0}); }, "values[1] axis");
 }

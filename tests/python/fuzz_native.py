@@ -41,7 +41,7 @@ import quatcurve as qc
 
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
-EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "fit_keys": 0.5}  # slower targets: fewer examples
+EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -951,8 +951,24 @@ def frames_distinct(frames, what):
                                              f"({f32[np.nonzero(np.diff(f32) <= 0)[0][0]]!r})")
 
 
-def draw_samples(d, euler):
-    """Dense samples for the reducer and the fitter: (t, values, tolerance, must_fail)."""
+def axis_angle_rows(rng, v):
+    """Quaternion-shaped rows (N, 4) as axis-angle channels (angle, axis): the first column scaled to
+    angles over several turns, the axis as drawn (rows whose axis is zero stay zero)."""
+    out = np.array(v, dtype=np.float64, copy=True)
+    if out.size:
+        with np.errstate(all="ignore"):
+            out[:, 0] = out[:, 0] * 7.0
+    return out
+
+
+def zero_axis(v):
+    """Some row of axis-angle channels v has a zero axis (no rotation axis defined)."""
+    return bool(np.size(v)) and bool(np.any(np.all(np.asarray(v)[:, 1:] == 0, axis=1)))
+
+
+def draw_samples(d, euler, axis_angle=False):
+    """Dense samples for the reducer and the fitter: (t, values, tolerance, must_fail); axis_angle:
+    (angle, x, y, z) rows."""
     rng = d.rng
     level = d.level()
     n = d.count(small=300, huge=20_000)
@@ -985,11 +1001,17 @@ def draw_samples(d, euler):
         else:
             tol = d.pick((-1e-9, -1.0, NAN, INF, -INF), "bad_tolerance")
         must_fail = must_fail or f"poisoned {what}"
+    if axis_angle:
+        v = axis_angle_rows(rng, v)
+        if vmode == "spin" and n:
+            v[:, 1:] = [0.0, 0.3, 1.0]
+            v[:, 0] = np.linspace(0, 40 * np.pi, n)
+        must_fail = must_fail or ("zero axis" if zero_axis(v) else "")
     return t, v, tol, must_fail
 
 
-def build_reduce(fn, d, euler):
-    t, v, tol, must_fail = draw_samples(d, euler)
+def build_reduce(fn, d, euler, axis_angle=False):
+    t, v, tol, must_fail = draw_samples(d, euler, axis_angle)
     n, width = len(t), 3 if euler else 4
     interpolation = d.pick(("LINEAR", "BEZIER"), "interpolation")
     synchronized = d.pick((True, False), "synchronized")
@@ -1002,7 +1024,8 @@ def build_reduce(fn, d, euler):
     if d.chance(0.05, "length_mismatch") and n:
         args[1] = v[:-1]
         must_fail = must_fail or "lengths differ"
-    must_fail = maybe_junk(d, args, [(), (width,)], ["times", "angles" if euler else "quats"], must_fail)
+    must_fail = maybe_junk(d, args, [(), (width,)],
+                           ["times", "angles" if euler else "values" if axis_angle else "quats"], must_fail)
     if d.chance(0.04, "junk_tolerance"):
         k = 3 if euler else 2
         args[k], bad = d.pick([("0.1", True), (None, True), (np.float64(0.1), False), (True, False),
@@ -1037,10 +1060,38 @@ def build_reduce(fn, d, euler):
     return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
 
 
+def build_axis_angle_span(fn, d):
+    """axis_angle_span(quats (N, 4), start (4,), end (4,)): channels of the same rotations."""
+    rng = d.rng
+    n = d.count(small=200, huge=20_000, label="samples")
+    q = quats(rng, (n,), d.pick(("calm", "extreme"), "level"))
+    start = np.array([rng.normal(0, 10), *rng.normal(0, 1, 3)])
+    end = np.array([rng.normal(0, 10), *rng.normal(0, 1, 3)])
+    must_fail = ""
+    if d.chance(0.1, "poison") and n:
+        poison(rng, q, "quat", False)
+        must_fail = "poisoned quats"
+    if d.chance(0.05, "bad_end"):
+        end[int(rng.integers(0, 4))] = rng.choice(POISON_VALUES)
+        must_fail = must_fail or ("non-finite end" if not np.all(np.isfinite(end)) else "")
+    args = [q, start, end]
+    must_fail = maybe_junk(d, args, [(4,), (4,), (4,)], ["quats", "start", "end"], must_fail)
+
+    def check(out):
+        shape_is(out, (n, 4), "axis_angle_span")
+        finite(out, "axis_angle_span")
+        if n:
+            err = np_angle(qc.channels_to_quats(out, "AXIS_ANGLE"), q)
+            expect(err.max() < 1e-6, f"axis_angle_span changed a rotation by {err.max()!r} rad")
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+
+
 def build_fit(fn, d):
     """fit_keys: the reducer with forced keys; forced indices stay keys of every channel."""
     euler = d.chance(0.4, "euler")
-    t, v, tol, must_fail = draw_samples(d, euler)
+    axis_angle = not euler and d.chance(0.3, "axis_angle")
+    t, v, tol, must_fail = draw_samples(d, euler, axis_angle)
     n = len(t)
     rng = d.rng
     forced = np.sort(rng.choice(n, size=min(n, int(rng.integers(0, 8))), replace=False)) if n else np.zeros(0, int)
@@ -1063,13 +1114,13 @@ def build_fit(fn, d):
     min_gap = d.pick((0.0, 0.01, 0.3, -1.0, NAN), "min_gap")
     if not min_gap >= 0:
         must_fail = must_fail or f"min_gap {min_gap!r}"
-    mode = d.pick(ORDERS, "order") if euler else "QUATERNION"
+    mode = d.pick(ORDERS, "order") if euler else "AXIS_ANGLE" if axis_angle else "QUATERNION"
     kwargs = {"mode": mode, "interpolation": d.pick(("LINEAR", "BEZIER"), "interpolation"),
               "synchronized": d.pick((True, False), "synchronized"), "min_gap": min_gap}
 
     def check(out):
         expect(type(out).__name__ == "ReducedKeys", f"result {type(out).__name__}")
-        expect(len(out.channels) == (3 if euler else 4), f"{len(out.channels)} channels")
+        expect(len(out.channels) == (3 if euler else 4), f"{len(out.channels)} channels")  # axis-angle: 4
         finite(out.max_error, "max_error")
         if min_gap == 0.0:
             expect(out.max_error <= max(tol, 1e-6), f"max_error {out.max_error!r} above tolerance {tol!r}")
@@ -1134,7 +1185,8 @@ def build_blender_evaluate(fn, d):
 
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
-CURVE_MEMBERS = {"angular_velocity", "from_euler", "method", "options", "quats", "path_rule_breaks", "sample", "segment_paths", "times"}
+CURVE_MEMBERS = {"angular_velocity", "from_axis_angle", "from_euler", "method", "options", "quats", "path_rule_breaks",
+                 "sample", "segment_paths", "times"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 EASE_OPTIONS = ("ease_in", "ease_out")
@@ -1197,6 +1249,7 @@ def build_curve(method, d: Draw) -> Case:
     tmode = d.pick(TIME_MODES, "time_mode")
     times = increasing_times(rng, k, tmode)
     from_euler = method == "EULER" or d.chance(0.35, "from_euler")
+    from_axis_angle = not from_euler and d.chance(0.3, "from_axis_angle")
     kmode = d.pick(("random", "antipodal", "same", "half_turn", "near", "extreme", "spin"), "key_mode")
     if from_euler:
         keys = angles(rng, (k,), "extreme" if kmode == "extreme" else "calm")
@@ -1219,6 +1272,11 @@ def build_curve(method, d: Draw) -> Case:
             elif kmode == "near":
                 keys = np.tile(keys[:1], (k, 1)) + 1e-15 * rng.standard_normal((k, 4))
     must_fail = needs(k >= 1, "no keys")
+    if from_axis_angle:
+        keys = axis_angle_rows(rng, keys)
+        if kmode == "spin" and k:
+            keys[:, 1:] = [0.0, 0.3, 1.0]
+            keys[:, 0] = np.arange(k) * 2 * np.pi  # exact full turns
     if method == "EULER" and not from_euler:
         must_fail = must_fail or "EULER from quaternions"
     if level == "poison" and k:
@@ -1232,8 +1290,10 @@ def build_curve(method, d: Draw) -> Case:
         keys = fill(rng, keys.shape, "wild")
         if not np.all(np.isfinite(keys)):
             must_fail = must_fail or "non-finite keys"
-        elif not from_euler and np.any(np.linalg.norm(keys, axis=1) < 1e-300):
+        elif not from_euler and not from_axis_angle and np.any(np.linalg.norm(keys, axis=1) < 1e-300):
             must_fail = must_fail or "zero key"
+    if from_axis_angle and isinstance(keys, np.ndarray) and keys.ndim == 2 and zero_axis(keys):
+        must_fail = must_fail or "zero axis"
     kwargs, opt_fail = draw_options(d, method, k)
     must_fail = must_fail or opt_fail
     if d.chance(0.05, "mismatch") and k:
@@ -1276,6 +1336,8 @@ def build_curve(method, d: Draw) -> Case:
     def call():
         if from_euler:
             c = cls.from_euler(*args, order=order, method=meth, **kwargs)
+        elif from_axis_angle:
+            c = cls.from_axis_angle(*args, method=meth, **kwargs)
         else:
             c = cls(*args, method=meth, **kwargs)
         results = {"curve": c, "keys_times": c.times, "keys_quats": c.quats, "method": c.method,
@@ -1331,7 +1393,7 @@ def build_curve(method, d: Draw) -> Case:
             shape_is(out, ts.shape + tail, name) if sample_arg is ts else None
             (unit if name == "sample" else finite)(out, name)
 
-    inputs = {"from_euler": from_euler, "times": args[0], "keys": args[1], "order": order, "method": meth,
+    inputs = {"from_euler": from_euler, "from_axis_angle": from_axis_angle, "times": args[0], "keys": args[1], "order": order, "method": meth,
               "options": kwargs, "sample_times": sample_arg}
     return Case(call, max(k, 1) + m, check, must_fail, m * 32, inputs)
 
@@ -1470,6 +1532,8 @@ REGISTRY.update({
     "path_metrics": build_path_metrics,
     "reduce_keys": lambda fn, d: build_reduce(fn, d, euler=False),
     "reduce_keys_euler": lambda fn, d: build_reduce(fn, d, euler=True),
+    "reduce_keys_axis_angle": lambda fn, d: build_reduce(fn, d, euler=False, axis_angle=True),
+    "axis_angle_span": build_axis_angle_span,
     "fit_keys": build_fit,
     "blender_evaluate": build_blender_evaluate,
     "ReducedKeys": _not_constructible,

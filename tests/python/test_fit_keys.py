@@ -58,3 +58,93 @@ def test_euler_mode_and_errors():
         qc.fit_keys(t, a, [0], 0.01)  # QUATERNION mode needs (N, 4)
     with pytest.raises(ValueError, match="min_gap"):
         qc.fit_keys(t, a, [0], 0.01, mode="XYZ", min_gap=-1)
+
+
+def axis_angle_errors(keys, t, values):
+    """Rotation angle between Blender's evaluation of the axis-angle keys (axis normalized) and the
+    rotations of `values` (angle, x, y, z), at `t`."""
+    e = evaluate(keys, t)
+    got = qc.channels_to_quats(e, "AXIS_ANGLE")
+    want = qc.channels_to_quats(values, "AXIS_ANGLE")
+    d = np.abs(np.sum(got * want, axis=1))
+    return 2 * np.arccos(np.minimum(d, 1))
+
+
+def axis_angle_dense(key_t, key_v, method, subframes=4):
+    """The method's curve through axis-angle keys (spins kept), sampled every 1/subframes frame, as
+    axis-angle channels continuous from each segment's left key to its right key (axis_angle_span),
+    keys exact."""
+    t = np.union1d(np.arange(key_t[0], key_t[-1] + 1e-9, 1.0 / subframes), key_t)
+    q = qc.Curve.from_axis_angle(key_t, key_v, method).sample(t)
+    forced = np.searchsorted(t, key_t)
+    values = np.empty((len(t), 4))
+    for k in range(len(key_t) - 1):
+        idx = np.arange(forced[k], forced[k + 1] + 1)
+        values[idx] = qc.axis_angle_span(q[idx], key_v[k], key_v[k + 1])
+    values[forced] = key_v
+    return t, values, forced
+
+
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2"])
+def test_axis_angle_mode(method):
+    # Spins beyond 360° between keys (0 → 400° → 760° about a tilted axis), an axis change, a
+    # non-unit axis (Blender normalizes it) and a key at angle 0 (the axis free there).
+    key_t = np.array([1.0, 9.0, 20.0, 26.0, 40.0])
+    key_v = np.array([[0.0, 0.0, 0.0, 2.0],
+                      [400 * DEG, 0.0, 0.3, 1.0],
+                      [760 * DEG, 0.0, 0.3, 1.0],
+                      [800 * DEG, 1.0, 0.2, 0.4],
+                      [700 * DEG, 0.5, -0.5, 0.7]])
+    t, values, forced = axis_angle_dense(key_t, key_v, method)
+    r = qc.fit_keys(t, values, forced, 0.05 * DEG, mode="AXIS_ANGLE")
+    assert len(r.channels) == 4 and r.max_error <= 0.05 * DEG
+    assert axis_angle_errors(r, t, values).max() <= 0.05 * DEG - 1e-6
+    for c, ch in enumerate(r.channels):
+        pos = np.searchsorted(ch.indices, forced)
+        np.testing.assert_array_equal(ch.indices[pos], forced)
+        np.testing.assert_array_equal(ch.values[pos], key_v[:, c].astype(np.float32))
+    # The spins are in the angle channel: between the 400° and 760° keys (same axis) Blender's
+    # evaluated angle climbs the full turn, no shortcut the shorter way round.
+    inside = (t >= 9.0) & (t <= 20.0)
+    angle = evaluate(r, t[inside])[:, 0]
+    assert np.all(np.diff(angle) > 0) and angle[0] == np.float32(400 * DEG) and angle[-1] == np.float32(760 * DEG)
+
+
+def test_axis_angle_reduce_and_errors():
+    t = np.arange(0.0, 40.0 + 1e-9)
+    q = qc.Curve.from_axis_angle([0, 20, 40], [[0, 0, 0, 1], [7.0, 0, 1, 1], [9.0, 1, 0, 0]], "SQUAD").sample(t)
+    v = qc.quats_to_channels(q, "AXIS_ANGLE", [0, 0, 0, 1])
+    r = qc.reduce_keys_axis_angle(t, v, 0.1 * DEG, "BEZIER", False)
+    assert r.max_error <= 0.1 * DEG and r.key_count < 4 * len(t) / 3
+    assert axis_angle_errors(r, t, v).max() <= 0.1 * DEG
+    lin = qc.reduce_keys_axis_angle(t, v, 0.1 * DEG, detailed=True)
+    assert lin.max_error <= 0.1 * DEG and lin.synchronized
+    bad = v.copy()
+    bad[7, 1:] = 0
+    with pytest.raises(ValueError, match=r"values\[7\]: zero-length axis"):
+        qc.fit_keys(t, bad, [0, 40], 0.01, mode="AXIS_ANGLE")
+    bad[7] = [np.nan, 0, 0, 1]
+    with pytest.raises(ValueError, match=r"values\[7\] angle: "):
+        qc.fit_keys(t, bad, [0, 40], 0.01, mode="AXIS_ANGLE")
+    with pytest.raises(ValueError, match="values: expected shape"):
+        qc.fit_keys(t, v[:, :3], [0], 0.01, mode="AXIS_ANGLE")
+
+
+def test_axis_angle_span_arrives_at_the_keyed_representation():
+    # 800° → 700° crosses 720° (the identity) with the axis turning: the curve passes near the
+    # identity, not through it, so the forward lift comes out at (≈740°, −axis). The span switches to
+    # the backward lift there: it ends at the key as keyed, and the one jump is near the identity.
+    key_v = np.array([[800 * DEG, 1.0, 0.2, 0.4], [700 * DEG, 0.5, -0.5, 0.7]])
+    t = np.linspace(0.0, 10.0, 41)
+    q = qc.Curve.from_axis_angle([0.0, 10.0], key_v, "SLERP").sample(t)
+    fwd = qc.quats_to_channels(q, "AXIS_ANGLE", key_v[0])
+    span = qc.axis_angle_span(q, key_v[0], key_v[1])
+    assert fwd[-1, 1:] @ key_v[1, 1:] < 0  # the other representation (≈740°, −axis)
+    np.testing.assert_allclose(span[-1, 0], key_v[1, 0], atol=1e-9)
+    assert span[-1, 1:] @ key_v[1, 1:] > 0
+    np.testing.assert_allclose(qc.channels_to_quats(span, "AXIS_ANGLE") * np.sign(
+        np.sum(qc.channels_to_quats(span, "AXIS_ANGLE") * q, axis=1))[:, None], q, atol=1e-12)
+    jumps = np.flatnonzero(np.abs(np.diff(span[:, 0])) > 10 * DEG)
+    assert len(jumps) <= 1
+    for j in jumps:
+        assert min(abs(np.sin(span[j, 0] / 2)), abs(np.sin(span[j + 1, 0] / 2))) < 0.2

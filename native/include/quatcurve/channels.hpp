@@ -62,6 +62,16 @@ std::vector<double> quats_to_channels(const std::vector<Quat>& q, const Rotation
                                       const double* reference = nullptr, std::size_t reference_rows = 0,
                                       EulerBranch branch = EulerBranch::continuous);
 
+// AXIS_ANGLE channels of the samples q of a path from the key `start` to the key `end` (channel rows
+// (angle, x, y, z); q[0] is start's rotation and q[n-1] end's): as quats_to_channels with reference
+// `start`, when that arrives at `end` as keyed (angle within π, axis on its side). Otherwise — a path
+// that passes near the identity, where the axis is undefined, comes out on the other representation
+// ((a, v) ≡ (4πk − a, −v)), which no continuous channel path along it avoids — the samples from the
+// one nearest the identity (smallest |sin(a/2)|, an interior one when any) on are lifted backwards
+// from `end`: the one jump sits where every axis gives nearly the same rotation. Throws on
+// zero-length q or non-finite start / end.
+std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end);
+
 // ---- sampling policies --------------------------------------------------------------------------------
 // The frames a bake keys: start, start + step, … while within end (1e-9 of a step of slack), and end
 // itself when the last is more than 1e-6 frames short of it. Throws on non-finite bounds, end < start

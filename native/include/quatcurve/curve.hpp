@@ -131,6 +131,15 @@ public:
     static Curve from_euler(const double* times, const double* angles, std::size_t n,
                             EulerOrder order, Method method, CurveOptions options = {});
 
+    // Keys from axis-angle channels (angle, x, y, z) as Blender keys them: the rotation of `angle`
+    // about the normalized axis (a zero axis is refused). Every segment keeps the turn of its
+    // axis-angle path — the four channels linear between the keys, the axis normalized — followed
+    // continuously as a rotation vector, so 0 → 720° about Z turns twice and 350° → 10° about Z turns
+    // back 340° (as Blender's own channels do); a turn beyond π is split along the segment's rotation
+    // vector. Angles within ±1e6 turns, changing by at most 1e4 turns per segment. values: 4n doubles.
+    static Curve from_axis_angle(std::vector<double> times, const std::vector<double>& values,
+                                 Method method = Method::SLERP, CurveOptions options = {});
+
     // Orientation at each of n times into out (4n doubles, w, x, y, z). Any order of times (sorted
     // times take the fast path); non-finite times throw.
     void sample(const double* times, std::size_t n, double* out_wxyz) const;
@@ -153,8 +162,8 @@ public:
     Method method() const { return method_; }
     const CurveOptions& options() const { return options_; }
     const std::vector<double>& times() const { return times_; }
-    // The keys: normalized input quaternions, or for Euler keys the quaternion of each key with
-    // the sign that follows the Euler path.
+    // The keys: normalized input quaternions, or for Euler (axis-angle) keys the quaternion of each
+    // key with the sign that follows the Euler (axis-angle) path.
     const std::vector<Quat>& quats() const { return quats_; }
     bool has_euler_keys() const { return !angles_.empty(); }
     const std::vector<Vec3>& euler_angles() const { return angles_; }
@@ -181,6 +190,7 @@ private:
     std::vector<Quat> raw_;        // keys as given (QUAT_COMPONENTS lerps these)
     std::vector<Vec3> angles_;     // Euler keys, empty for quaternion keys
     EulerOrder order_ = EulerOrder::XYZ;
+    std::vector<Vec3> path_rotvecs_;  // axis-angle keys: each segment's lifted path, else empty
     std::vector<Vec3> rotvecs_;
     std::unique_ptr<Impl> impl_;
 };

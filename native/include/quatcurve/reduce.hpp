@@ -1,14 +1,16 @@
 // Key reduction with a guaranteed angular error bound.
 //
-// Input: dense samples of a rotation — times (frames, strictly increasing) and either quaternions
-// (w, x, y, z) or Euler angles (about X, Y, Z, radians, Blender order). Output: the keys Blender
-// should store on the rotation F-curves — one F-curve per channel (w, x, y, z or X, Y, Z angle) —
+// Input: dense samples of a rotation — times (frames, strictly increasing) and quaternions
+// (w, x, y, z), Euler angles (about X, Y, Z, radians, Blender order) or axis-angle channels (angle
+// in radians, axis x, y, z). Output: the keys Blender should store on the rotation F-curves — one
+// F-curve per channel (w, x, y, z; X, Y, Z angle; angle, x, y, z) —
 // such that Blender's own evaluation of those keys stays within `tolerance` (radians, geodesic
 // rotation angle, sign-invariant for quaternions) of EVERY input sample:
 //
 //   LINEAR  Blender evaluates each channel linearly between keys (float32), then, for quaternions,
 //           normalizes the 4-vector (no hemisphere fix), for Euler builds the rotation from the
-//           three angles. Keys are input samples, stored as given (rounded to float32).
+//           three angles, for axis-angle the rotation of the angle about the normalized axis (a
+//           zero axis: the identity). Keys are input samples, stored as given (rounded to float32).
 //   BEZIER  Blender's Bezier segment: a cubic in (frame, value) through the two keys with the left
 //           key's right handle and the right key's left handle as inner control points. We place
 //           handle frames at 1/3 and 2/3 of each segment, so the frame is (up to float32 rounding of
@@ -67,7 +69,7 @@ struct ReducedChannel : FCurveKeys {
 struct ReducedKeys {
     KeyInterpolation interpolation = KeyInterpolation::LINEAR;
     bool synchronized = true;              // every channel has the same indices
-    std::vector<ReducedChannel> channels;  // 4 (w, x, y, z) or 3 (angles about X, Y, Z)
+    std::vector<ReducedChannel> channels;  // 4 (w, x, y, z), 3 (angles about X, Y, Z) or 4 (angle, x, y, z)
     double max_error = 0.0;                // largest error over all input samples (radians), emulated
     std::size_t key_count() const;         // sum of keys over channels (Blender's keyframe_points)
 };
@@ -89,6 +91,16 @@ ReducedKeys reduce_keys_euler(const std::vector<double>& times, const std::vecto
                               KeyInterpolation interpolation = KeyInterpolation::LINEAR,
                               bool synchronized = true);
 
+// Reduce axis-angle samples: values[k] = (angle, x, y, z) as Blender's rotation_axis_angle (radians;
+// the axis need not be unit: Blender normalizes it, and the fit may let its length drift). The bound
+// is on the rotation Blender builds from the four evaluated channels. Values are kept as given: pass
+// a continuous sequence (quats_to_channels 'AXIS_ANGLE') — an angle jump above π or an axis turning
+// over between two samples forces keys on both sides. Throws as reduce_keys, and for a non-finite
+// value or a zero-length axis ("values[3]: zero-length axis").
+ReducedKeys reduce_keys_axis_angle(const std::vector<double>& times, const std::vector<Vec4>& values,
+                                   double tolerance, KeyInterpolation interpolation = KeyInterpolation::LINEAR,
+                                   bool synchronized = true);
+
 // ---- fitting with given keys ---------------------------------------------------------------------
 // The same solver with keys the caller fixes: every sample listed in `forced` (indices, strictly
 // increasing) is a key of every channel, with its value as given — an animator's own keys — and
@@ -107,5 +119,9 @@ ReducedKeys fit_keys_euler(const std::vector<double>& times, const std::vector<V
                            const std::vector<std::size_t>& forced, double tolerance,
                            KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false,
                            double min_gap = 0.01);
+ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vector<Vec4>& values,
+                                const std::vector<std::size_t>& forced, double tolerance,
+                                KeyInterpolation interpolation = KeyInterpolation::BEZIER,
+                                bool synchronized = false, double min_gap = 0.01);
 
 }  // namespace quatcurve

@@ -5,7 +5,7 @@
 
 REQUEST: {"targets": [[object, bone or null], ...], "times": [frame, ...]}. OUT: {"quats": {name:
 [[w, x, y, z], ...]}} — the owner's rotation as Blender builds it from its rotation mode, at each
-time (scene.frame_set with the subframe), normalized. Nothing of quatcurve is imported."""
+time (scene.frame_set with the subframe), normalized (axis-angle: from the owner's matrix_basis). Nothing of quatcurve is imported."""
 import json
 import math
 import sys
@@ -35,8 +35,9 @@ for t in request["times"]:
         if mode == "QUATERNION":
             q = Quaternion(owner.rotation_quaternion).normalized()
         elif mode == "AXIS_ANGLE":
-            angle, x, y, z = owner.rotation_axis_angle
-            q = Quaternion((x, y, z), angle)
+            # Blender's own builder (axis_angle_to_mat3: the axis normalized, a zero axis the
+            # identity), through the owner's basis matrix (unit scale in these tests).
+            q = owner.matrix_basis.to_3x3().normalized().to_quaternion()
         else:
             q = Euler(owner.rotation_euler, mode).to_quaternion()
         out[name].append(list(q))

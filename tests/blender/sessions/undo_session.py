@@ -4,7 +4,7 @@ tests/blender/test_session.py):
     xvfb-run -a blender --factory-startup --python tests/blender/sessions/undo_session.py -- VERDICT.json
 
 A timer (the window must exist first) builds a scene — an object with Euler rotation keys in a
-group and location keys — pushes an undo step and records the file state; then, twice (into a new
+group and location keys, and one with axis-angle keys that spin past 360° — pushes an undo step and records the file state; then, twice (into a new
 action, and in place), bakes through the operator with an undo push (as a button press does),
 checks that the bake changed the file, runs ed.undo and compares the state with the recording. Then
 the fit ("fit_rounds"): a fit of the original keys, undone; and a refit of a fitted file (another
@@ -41,7 +41,8 @@ def state():
         bones = [[pb.name, pb.rotation_mode, [round(v, 6) for v in pb.rotation_quaternion]]
                  for pb in obj.pose.bones] if obj.pose else []
         out["object " + obj.name] = [action.name if action else None, obj.rotation_mode,
-                                     [round(v, 6) for v in obj.rotation_euler], bones]
+                                     [round(v, 6) for v in obj.rotation_euler],
+                                     [round(v, 6) for v in obj.rotation_axis_angle], bones]
     return out
 
 
@@ -57,8 +58,14 @@ def build():
         cube.keyframe_insert("rotation_euler", frame=frame, group="Turn")
         cube.location = (frame * 0.1, 0, 0)
         cube.keyframe_insert("location", frame=frame)
+    axis = bpy.data.objects.new("Axis", None)
+    scene.collection.objects.link(axis)
+    axis.rotation_mode = "AXIS_ANGLE"
+    for frame, value in ((1, (0, 0, 0, 1)), (11, (math.radians(400), 0, 0.3, 1)), (21, (math.radians(450), 1, 0, 0))):
+        axis.rotation_axis_angle = value
+        axis.keyframe_insert("rotation_axis_angle", frame=frame)
     for obj in scene.objects:
-        obj.select_set(obj == cube)
+        obj.select_set(obj in (cube, axis))
     bpy.context.view_layer.objects.active = cube
 
 
