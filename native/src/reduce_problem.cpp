@@ -207,12 +207,8 @@ Problem make_axis_angle_problem(const std::vector<double>& times, const std::vec
 // tolerance, and never less than 1e-6 rad (float32 rounding of ordinary values is ~1e-7 rad).
 void check_float32_storage(const Problem& p, double tolerance) {
     const double allowed = std::max(tolerance, 1e-6);
-<<<<<<< HEAD
     const double allowed_tan = std::tan(0.5 * allowed);
-    const char* name = p.kind == Kind::QUAT ? "quats[" : "angles[";
-=======
     const char* name = p.kind == Kind::QUAT ? "quats[" : p.kind == Kind::EULER ? "angles[" : "values[";
->>>>>>> axis-angle-fit
     for (std::size_t k = 0; k < p.n; ++k) {
         const double* y = p.row(k);
         double v[4] = {0.0, 0.0, 0.0, 0.0};
@@ -222,31 +218,15 @@ void check_float32_storage(const Problem& p, double tolerance) {
                 throw InvalidArgument(name + std::to_string(k) + "]: " + std::to_string(y[c]) +
                                       " is beyond float32 range (Blender stores keys as float32)");
         }
-<<<<<<< HEAD
         // float32 components are 0 or at least 1e-45 in size: their squares cannot underflow
         if (p.kind == Kind::QUAT && !(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3] > 0.0))
             throw InvalidArgument(name + std::to_string(k) +
                                   "]: every component underflows float32 (Blender stores keys as float32)");
+        if (p.kind == Kind::AXIS_ANGLE && !(f32(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]) > 1e-35))
+            throw InvalidArgument(name + std::to_string(k) +
+                                  "]: the axis is too short for float32 (Blender would show no rotation)");
         const double tan2 = error_tan2(p, k, v);  // the stored key's rotation against the sample's
         if (!(tan2 <= allowed_tan * allowed_tan))
-=======
-        Quat stored;
-        if (p.kind == Kind::QUAT) {
-            stored = Quat(v[0], v[1], v[2], v[3]);
-            if (!nonzero_problem(stored).empty())
-                throw InvalidArgument(name + std::to_string(k) +
-                                      "]: every component underflows float32 (Blender stores keys as float32)");
-        } else if (p.kind == Kind::AXIS_ANGLE) {
-            if (!(f32(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]) > 1e-35))
-                throw InvalidArgument(name + std::to_string(k) +
-                                      "]: the axis is too short for float32 (Blender would show no rotation)");
-            stored = axis_angle_rotation(v);
-        } else {
-            stored = euler_to_quat(Vec3(v[0], v[1], v[2]), p.order);
-        }
-        const double moved = angle_between(p.ref[k], stored);
-        if (moved > allowed)
->>>>>>> axis-angle-fit
             throw InvalidArgument(name + std::to_string(k) + "]: storing it as float32 (as Blender does) turns it by " +
                                   std::to_string(angle_of_tan2(tan2)) + " rad, more than the tolerance allows");
     }
