@@ -273,22 +273,6 @@ def read_animator_keys(target):
 
 # ---- the fit ------------------------------------------------------------------------------------------
 
-def sample_times(frames, subframes):
-    """Every 1/subframes frame from the first key to the last, and every key frame (sorted, unique;
-    grid points within 1e-6 frames of a key are left to the key)."""
-    lo, hi = frames[0], frames[-1]
-    first, last = math.ceil(lo * subframes - 1e-9), math.floor(hi * subframes + 1e-9)
-    grid = np.arange(first, last + 1, dtype=np.float64) / subframes
-    # Distance to the nearest key by bisection, not a grid × keys table (live mode refits often).
-    if len(frames) > 1:
-        at = np.clip(np.searchsorted(frames, grid), 1, len(frames) - 1)
-        gap = np.minimum(np.abs(grid - frames[at - 1]), np.abs(frames[at] - grid))
-    else:
-        gap = np.abs(grid - frames[0])
-    near = gap < 1e-6
-    return np.union1d(grid[~near], frames)
-
-
 @dataclass(eq=False)
 class FitPlan:
     """What fit writes for one target: per channel (frames, values, handle_left, handle_right, types),
@@ -351,42 +335,11 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
     ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
     ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
     curve, key_values = curve_of(keys, settings, ease_in, ease_out)
-    t = sample_times(keys.frames, int(settings.subframes))
-    forced = np.searchsorted(t, keys.frames)
-    q = curve.sample(t)
-    seg = np.clip(np.searchsorted(keys.frames, t, side="right") - 1, 0, K - 2)
-    if keys.is_euler:
-        values = np.empty((len(t), 3))
-        for k in range(K - 1):
-            idx = np.arange(forced[k], forced[k + 1])
-            values[idx] = qc.quats_to_channels(q[idx], keys.mode, reference=key_values[k])
-        mode = keys.mode
-    elif keys.is_axis_angle:
-        # Each segment continuous from its left key to its right key as keyed (the angle on the
-        # branch between them, the axis on their side; axis_angle_span). Axis length: the keys'
-        # interpolated along the segment, as for quaternion norms.
-        values = np.empty((len(t), 4))
-        norms = np.linalg.norm(key_values[:, 1:], axis=1)
-        for k in range(K - 1):
-            idx = np.arange(forced[k], forced[k + 1] + 1)
-            values[idx] = qc.axis_angle_span(q[idx], key_values[k], key_values[k + 1])
-        u = (t - keys.frames[seg]) / (keys.frames[seg + 1] - keys.frames[seg])
-        values[:, 1:] *= ((1 - u) * norms[seg] + u * norms[seg + 1])[:, None]
-        mode = keys.mode
-    else:
-        # Sign: the curve's (continuous, reaching every key with the key's sign as written). Scale:
-        # the key norms interpolated along each segment, so stored non-unit keys stay as they are
-        # and the channels do not jump in size next to them.
-        reach = np.sum(q[forced] * key_values, axis=1)
-        sign_at = np.where(reach < 0, -1.0, 1.0)
-        norms = np.linalg.norm(key_values, axis=1)
-        u = (t - keys.frames[seg]) / (keys.frames[seg + 1] - keys.frames[seg])
-        values = q * (sign_at[seg] * ((1 - u) * norms[seg] + u * norms[seg + 1]))[:, None]
-        mode = "QUATERNION"
-    values[forced] = key_values
+    # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
     try:
-        fitted = qc.fit_keys(t, values, forced, math.radians(settings.tolerance), mode=mode,
-                             interpolation="BEZIER", synchronized=False, min_gap=MIN_KEY_GAP)
+        t, forced, fitted = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode,
+                                                subframes=int(settings.subframes),
+                                                tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP)
     except ValueError as e:
         raise FitError("%s: %s" % (keys.name, e)) from None
     channels, generated = [], 0

@@ -11,7 +11,10 @@
 
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/channels.hpp"
+#include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
+#include "quatcurve/fit.hpp"
 #include "quatcurve/reduce.hpp"
 
 namespace quatcurve::bindings {
@@ -266,6 +269,35 @@ them, at samples at least min_gap frames from every forced key, until Blender's 
 F-curves stays within `tolerance` (radians) of every sample. Returns a ReducedKeys (per channel:
 indices, frames, values, handle_left/handle_right (K, 2)); max_error is what Blender's evaluation
 reaches (emulated), above `tolerance` only where no key could be inserted.)doc");
+    m.def(
+        "fit_through_keys",
+        [](const Curve& curve, py::handle key_frames, py::handle key_values, const std::string& mode_name,
+           int subframes, double tolerance, double min_gap) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const std::vector<double> kf = read_times(key_frames);
+            const Batch v = read_rows(key_values, static_cast<py::ssize_t>(channel_count(mode)), "key_values", kf.size());
+            const std::vector<double> kv(v.data(), v.data() + v.count * channel_count(mode));
+            KeyFit fit;
+            {
+                py::gil_scoped_release release;
+                fit = fit_through_keys(curve, kf, kv, mode, subframes, tolerance, min_gap);
+            }
+            py::array_t<std::int64_t> forced(static_cast<py::ssize_t>(fit.forced.size()));
+            std::copy(fit.forced.begin(), fit.forced.end(), forced.mutable_data());
+            return py::make_tuple(vector_array(fit.times), forced, std::move(fit.keys));
+        },
+        py::arg("curve"), py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::kw_only(),
+        py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01,
+        R"doc(Fit Blender F-curves through an animator's keys along `curve` (the method through them), in one
+call without the GIL: (times, forced, ReducedKeys).
+
+key_frames: (K,) increasing, K >= 2; key_values: (K, 4|3|4) channel values of `mode` ('QUATERNION', an
+Euler order, 'AXIS_ANGLE') as the fit writes them (quaternion keys with the sign the curve reaches them
+with). times: every 1/subframes frame from the first key to the last and every key; forced: each key's
+index in times. The channel values between keys follow the curve and join the keys as keyed
+(quaternions scaled by the keys' norms, Euler angles continuous from each segment's first key,
+axis-angle by axis_angle_span with the axis length interpolated); fit_keys then inserts as few BEZIER
+keys as `tolerance` (radians) needs, min_gap frames from the keys.)doc");
 }
 
 }  // namespace quatcurve::bindings

@@ -41,7 +41,8 @@ import quatcurve as qc
 
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
-EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5}  # slower targets: fewer examples
+EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
+                 "fit_through_keys": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -1134,6 +1135,69 @@ def build_fit(fn, d):
                 ((t, v, forced, tol), kwargs))
 
 
+def build_fit_through_keys(fn, d):
+    """fit_through_keys: a curve of any method through a few keys of any rotation mode, fitted; the
+    samples are the subframe grid plus the keys, the keys stay keys of every channel with their
+    values (as float32), and bad arguments are refused."""
+    rng = d.rng
+    euler = d.chance(0.35, "euler")
+    axis_angle = not euler and d.chance(0.35, "axis_angle")
+    mode = d.pick(ORDERS, "order") if euler else "AXIS_ANGLE" if axis_angle else "QUATERNION"
+    k = int(rng.integers(2, 12))
+    frames = np.cumsum(rng.uniform(0.05, 30.0, k)) + rng.uniform(-50, 50)
+    if euler:
+        values = rng.uniform(-7, 7, (k, 3))
+    elif axis_angle:
+        values = np.column_stack([rng.uniform(-10, 10, k), rng.normal(size=(k, 3)) * rng.uniform(0.2, 3.0, (k, 1))])
+    else:
+        values = rng.normal(size=(k, 4)) * rng.uniform(0.3, 2.0, (k, 1))
+    method = d.pick(tuple(m for m in qc.METHODS if m != "EULER" or euler), "method")
+    if euler:
+        curve = qc.Curve.from_euler(frames, values, order=mode, method=method)
+    elif axis_angle:
+        curve = qc.Curve.from_axis_angle(frames, values, method=method)
+    else:
+        curve = qc.Curve(frames, values, method=method)
+    if mode == "QUATERNION":  # the sign the curve reaches each key with, as the fit writes them
+        values = values * np.where(np.sum(curve.sample(frames) * values, axis=1) < 0, -1.0, 1.0)[:, None]
+    subframes = d.pick((1, 2, 4, 4, 7, 0, -1), "subframes")
+    tol = d.pick((0.0, 1e-4, 1e-3, 0.01, 0.1, -1.0, NAN), "tolerance")
+    must_fail = needs(subframes >= 1, f"subframes {subframes}") or needs(tol >= 0, f"tolerance {tol!r}")
+    args = [curve, frames, values, mode]
+    form = d.pick(("ok", "ok", "ok", "one_key", "unsorted", "wide", "mode"), "form")
+    if form == "one_key":
+        args[1], args[2] = frames[:1], values[:1]
+        must_fail = must_fail or "one key"
+    elif form == "unsorted":
+        args[1] = frames[::-1].copy()
+        must_fail = must_fail or "key frames not increasing"
+    elif form == "wide":
+        args[2] = np.column_stack([values, values[:, :1]])
+        must_fail = must_fail or "key values of the wrong width"
+    elif form == "mode":
+        args[3] = d.pick(("EULER", "quaternion", ""), "bad_mode")
+        must_fail = must_fail or f"mode {args[3]!r}"
+    kwargs = {"subframes": subframes, "tolerance": tol, "min_gap": 0.01}
+
+    def check(out):
+        times, forced, fitted = out
+        if subframes >= 1:
+            grid = np.arange(math.ceil(frames[0] * subframes - 1e-9), math.floor(frames[-1] * subframes + 1e-9) + 1) / subframes
+            near = np.min(np.abs(grid[:, None] - frames[None, :]), axis=1) < 1e-6
+            expect(np.array_equal(times, np.union1d(grid[~near], frames)), "times are not the grid plus the keys")
+        expect(np.array_equal(times[forced], frames), "forced indices do not point at the keys")
+        expect(len(fitted.channels) == (3 if euler else 4), f"{len(fitted.channels)} channels")
+        finite(fitted.max_error, "max_error")
+        for c, ch in enumerate(fitted.channels):
+            at = np.searchsorted(ch.indices, forced)
+            expect(bool(np.all(ch.indices[np.minimum(at, len(ch.indices) - 1)] == forced)), f"channel {c} lost a key")
+            kept = ch.values[at]
+            expect(np.array_equal(kept.astype(np.float32), values[:, c].astype(np.float32)),
+                   f"channel {c}: a key's value changed")
+
+    return Case(lambda: fn(*args, **kwargs), 100 * k * max(subframes, 1), check, must_fail, 0, (args, kwargs))
+
+
 # ---- Blender's F-curve evaluation, emulated --------------------------------------------------------
 
 def build_blender_evaluate(fn, d):
@@ -1535,6 +1599,7 @@ REGISTRY.update({
     "reduce_keys_axis_angle": lambda fn, d: build_reduce(fn, d, euler=False, axis_angle=True),
     "axis_angle_span": build_axis_angle_span,
     "fit_keys": build_fit,
+    "fit_through_keys": build_fit_through_keys,
     "blender_evaluate": build_blender_evaluate,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
