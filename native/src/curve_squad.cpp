@@ -80,46 +80,63 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
 // lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
 // |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
+namespace {
+
+// Samples i0 … i1 − 1 of `times`, all within segment g, four at a time (curve_simd.hpp).
+QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
+                                        double* out) {
+    auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
+        for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+            const V4 s = (t - g.t0) * g.inv_h;
+            const V4 s2 = s * s;
+            V4 c1, k1, c2, k2;
+            exp_coeffs4<decltype(terms_a)::value>(s2 * g.r2, c1, k1);
+            exp_coeffs4<decltype(terms_b)::value>(s2 * g.psi2, c2, k2);
+            QV A, B, X;
+            combine(g.A, g.BA, c1, k1 * s, A);
+            combine(g.a, g.Ba, c2, k2 * s, B);
+            cmul(A, B, X);
+            const V4 n2 = X.x * X.x + X.y * X.y + X.z * X.z;
+            const V4 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);  // χ = f·vec(X)
+            const V4 gf = 2.0 * s * (1.0 - s) * f;
+            V4 c3, k3;
+            exp_coeffs4<12>(gf * gf * n2, c3, k3);
+            k3 *= gf;
+            mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
+        });
+    };
+    using T8 = std::integral_constant<int, 8>;
+    using T12 = std::integral_constant<int, 12>;
+    const bool a8 = exp_terms(g.r2) == 8, b8 = exp_terms(g.psi2) == 8;
+    if (a8 && b8) {
+        eval(T8(), T8());
+    } else if (a8) {
+        eval(T8(), T12());
+    } else if (b8) {
+        eval(T12(), T8());
+    } else {
+        eval(T12(), T12());
+    }
+}
+
+}  // namespace
+
 QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SquadSeg* seg = m.squad.data();
     drive_runs(
         m.kt, times, n,
         [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
-            const SquadSeg& g = seg[j];
-            auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
-                for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
-                    const V4 s = (t - g.t0) * g.inv_h;
-                    const V4 s2 = s * s;
-                    V4 c1, k1, c2, k2;
-                    exp_coeffs4<decltype(terms_a)::value>(s2 * g.r2, c1, k1);
-                    exp_coeffs4<decltype(terms_b)::value>(s2 * g.psi2, c2, k2);
-                    QV A, B, X;
-                    combine(g.A, g.BA, c1, k1 * s, A);
-                    combine(g.a, g.Ba, c2, k2 * s, B);
-                    cmul(A, B, X);
-                    const V4 n2 = X.x * X.x + X.y * X.y + X.z * X.z;
-                    const V4 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);  // χ = f·vec(X)
-                    const V4 gf = 2.0 * s * (1.0 - s) * f;
-                    V4 c3, k3;
-                    exp_coeffs4<12>(gf * gf * n2, c3, k3);
-                    k3 *= gf;
-                    mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
-                });
-            };
-            using T8 = std::integral_constant<int, 8>;
-            using T12 = std::integral_constant<int, 12>;
-            const bool a8 = exp_terms(g.r2) == 8, b8 = exp_terms(g.psi2) == 8;
-            if (a8 && b8) {
-                eval(T8(), T8());
-            } else if (a8) {
-                eval(T8(), T12());
-            } else if (b8) {
-                eval(T12(), T8());
-            } else {
-                eval(T12(), T12());
-            }
+            squad_segment_run(seg[j], times, i0, i1, out);
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out) {
+    double times[kMaxSegmentSamples + 1];
+    const double h = 1.0 / g.inv_h;
+    for (std::size_t k = 0; k <= samples; ++k)
+        times[k] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
+    squad_segment_run(g, times, 0, samples + 1, out);
 }
 
 void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

@@ -37,6 +37,7 @@
 //    the rule always holds in the end. With even spacing and arcs within a factor 5 of their
 //    neighbours' going the same way, no clamp acts and the curve is the textbook one.
 #include <cmath>
+#include <type_traits>
 
 #include "curve_impl.hpp"
 
@@ -115,9 +116,18 @@ inline double chord_angle(const double* a, const double* b) {
 constexpr int kSamples = 64;
 constexpr int kSearchSamples = 16;
 constexpr double kCoarseShare = 0.9;
+// SQUAD segments are sampled in one batch by the sampler's own four-wide kernel.
 template <class Seg, class At>
 double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
-    double prev[4], cur[4], len = 0.0;
+    static_assert(kSamples <= static_cast<int>(kMaxSegmentSamples));
+    double len = 0.0;
+    if constexpr (std::is_same_v<Seg, SquadSeg>) {
+        double q[4 * (kMaxSegmentSamples + 1)];
+        sample_squad_segment(g, static_cast<std::size_t>(samples), q);
+        for (int k = 0; k < samples; ++k) len += chord_angle(q + 4 * k, q + 4 * k + 4);
+        return len;
+    }
+    double prev[4], cur[4];
     store(at(g, 0.0), prev);
     for (int k = 1; k <= samples; ++k) {
         store(at(g, static_cast<double>(k) / samples), cur);
