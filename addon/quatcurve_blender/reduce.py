@@ -26,6 +26,7 @@ The bake calls `reduce_values` (imported by bake.py) when its tolerance is above
 
 import math
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -40,6 +41,7 @@ INTERPOLATIONS = ("LINEAR", "BEZIER")
 # Worker threads for the native work per target (the reducer and channel conversion release the
 # GIL); None: one per core. Results do not depend on it: every target is computed on its own.
 THREADS = None
+GIL_SWITCH = 0.0002  # seconds: sys.setswitchinterval while parallel_imap's workers run
 
 
 def thread_count():
@@ -64,16 +66,20 @@ def parallel_map(fn, items):
 
 def parallel_imap(fn, items):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
-    so the caller (on the main thread) can use the first results while workers compute the rest: one
-    worker fewer than thread_count(), since the caller keeps a core busy itself (one thread: no
-    workers, each call made when its result is asked for). When the caller stops early (an error, a
-    generator closed), the calls not yet started are cancelled."""
+    so the caller (on the main thread) can use the first results while thread_count() workers compute
+    the rest (one thread: no workers, each call made when its result is asked for). While it runs,
+    the interpreter hands the GIL over every 0.2 ms instead of 5 ms: the caller's Blender calls hold
+    it, and the workers need it briefly between their native calls (measured: a 100-target bake
+    0.69 s → 0.43 s). When the caller stops early (an error, a generator closed), the calls not yet
+    started are cancelled."""
     items = list(items)
-    threads = max(1, min(thread_count() - 1, len(items)))
-    if thread_count() <= 1:
+    threads = min(thread_count(), len(items))
+    if threads <= 1:
         for item in items:
             yield fn(item)
         return
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(min(switch, GIL_SWITCH))
     pool = ThreadPoolExecutor(max_workers=threads)
     futures = [pool.submit(fn, item) for item in items]
     try:
@@ -83,6 +89,7 @@ def parallel_imap(fn, items):
         for future in futures:
             future.cancel()
         pool.shutdown(wait=True)
+        sys.setswitchinterval(switch)
 
 
 class ReduceError(TargetError, ValueError):
