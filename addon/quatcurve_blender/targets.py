@@ -143,12 +143,14 @@ class RotationKeys:
         return channels_to_quats(self.mode, values, self.target.name, self.frames if frames is None else frames)
 
     def curve(self, method, **options):
-        """The native curve of `method` through these keys (Euler keys through Curve.from_euler, so
-        turns beyond 180° between keys survive)."""
+        """The native curve of `method` through these keys (Euler keys through Curve.from_euler and
+        axis-angle keys through Curve.from_axis_angle, so turns beyond 180° between keys survive)."""
         qc = native.require()
         if self.is_euler:
             return qc.Curve.from_euler(self.frames, self.values, order=self.mode, method=method, **options)
         quats = self.quats()  # refuses zero quaternions / axes, naming the frame
+        if self.mode == "AXIS_ANGLE":
+            return qc.Curve.from_axis_angle(self.frames, self.values, method=method, **options)
         if self.mode == "QUATERNION":
             # The stored components as they are: QUAT_COMPONENTS lerps them before normalizing, as
             # Blender does, which differs from lerping normalized keys when they are not unit length.

@@ -125,6 +125,20 @@ def test_axis_angle_output_and_source(scene):
     assert angles_between(evaluated(obj, frames), reference).max() <= TOL
 
 
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD"])
+def test_axis_angle_keys_keep_their_spins(scene, method):
+    # Two axis-angle keys 720° apart about Z turn twice, as Blender plays the channels; the bake keeps
+    # the turns (a curve through the keys' quaternions would see no motion at all).
+    obj = add_empty("Spinner", "AXIS_ANGLE")
+    key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (41, (4 * math.pi, 0, 0, 1))])
+    select_objects(obj)
+    run_bake(method=method, rotation_mode="AXIS_ANGLE", new_action=False)
+    values = evaluated(obj, np.arange(1, 42), "values")
+    assert values[0, 0] == pytest.approx(0.0, abs=1e-6) and values[-1, 0] == pytest.approx(4 * math.pi, abs=1e-4)
+    assert (np.diff(values[:, 0]) > 0).all()  # always forward
+    np.testing.assert_allclose(values[:, 1:], [[0, 0, 1]] * 41, atol=1e-6)
+
+
 def test_keep_with_a_quaternion_source_writes_quaternions(scene):
     obj = add_empty("Cube", "QUATERNION")
     key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (9, Quaternion((0, 0, 1), 2.0))])
