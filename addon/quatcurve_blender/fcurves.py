@@ -511,10 +511,13 @@ def _set_free_handles(points, n):
 
 
 def _get_enum(points, prop, n):
-    """Enum values of every key (as ints); Blender 3.4's foreach_get leaves handle-type buffers
-    untouched, so a buffer still holding the -1 fill is read key by key (and from then on directly)."""
+    """Enum values of every key (as int32). Blender 3.4's foreach_get leaves handle-type buffers
+    untouched, so a buffer still holding the -1 fill is read key by key (and from then on directly);
+    on a library-linked action it fills even `interpolation` with bytes from elsewhere (seen in the
+    fault table's digests), so there every key is read through RNA."""
     buf = np.full(n, -1, dtype=np.int32)
-    if _BULK_ENUM.get("get " + prop, True):
+    linked = bpy.app.version < (4, 0, 0) and points.id_data.library is not None
+    if not linked and _BULK_ENUM.get("get " + prop, True):
         points.foreach_get(prop, buf)
         if not n or not (buf == -1).any():
             if n:
