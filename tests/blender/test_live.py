@@ -187,6 +187,26 @@ def test_location_key_changes_nothing(fitted):
     assert live.STATS.refits == 0 and digest(fitted) == state
 
 
+def test_unchanged_targets_are_not_read_again(fitted, monkeypatch):
+    # The fixture's check read the keys (found fitted, its raw digest kept); later updates that leave
+    # the rotation keys alone cost two bulk reads per channel, not a full read; a change of an
+    # animator key's type is read in full and refits.
+    from quatcurve_blender import fit
+    reads = []
+    real = fit.read_animator_keys
+    monkeypatch.setattr(fit, "read_animator_keys", lambda target: (reads.append(target.name), real(target))[1])
+    for frame in (9, 10, 11):
+        fitted.location = (frame, 2, 3)
+        fitted.keyframe_insert("location", frame=frame)
+        update()
+    assert reads == [] and live.STATS.checks == 3 and live.STATS.refits == 0, (reads, live.STATS)
+    curve = fcurves.Channels.of(fitted).find(fitted.path_from_id("rotation_quaternion"), 0)
+    first = next(p for p in curve.keyframe_points if p.type == "KEYFRAME")
+    first.type = "BREAKDOWN"
+    update()
+    assert live.STATS.refits == 1 and reads == ["Quat"], (reads, live.STATS)
+
+
 def test_live_off_leaves_everything_then_on_catches_up(fitted):
     bpy.context.scene.quatcurve_fit.live = False
     update()
