@@ -199,14 +199,21 @@ inline Vec3 rotvec_near(const Quat& q, const Vec3& ref) {
 // Rotation angle between the unit quaternions a and b (w, x, y, z arrays; either sign), in [0, π]:
 // 4·atan2(|a − b|, |a + b|) with b taken in a's hemisphere, accurate also for tiny angles (where
 // 2·acos(a·b) loses half its digits).
-inline double angle_between(const double* a, const double* b) {
+// |a − b|² and |a + b|² with b taken in a's hemisphere (angle_between, chord angles).
+inline void chord_squares(const double* a, const double* b, double& d2, double& s2) {
     const double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0 ? -1.0 : 1.0;
-    double d2 = 0.0, s2 = 0.0;
+    d2 = 0.0;
+    s2 = 0.0;
     for (int k = 0; k < 4; ++k) {
         const double d = a[k] - sign * b[k], s = a[k] + sign * b[k];
         d2 += d * d;
         s2 += s * s;
     }
+}
+
+inline double angle_between(const double* a, const double* b) {
+    double d2, s2;
+    chord_squares(a, b, d2, s2);
     return 4.0 * std::atan2(std::sqrt(d2), std::sqrt(s2));
 }
 

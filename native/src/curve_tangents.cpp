@@ -98,13 +98,8 @@ double fc_factor(const Curve::Impl& m, const KnotTangents& T, std::size_t j) {
 // angle_between for neighbouring samples of a path: 4·atan(x), x = |a − b|/|a + b| (b in a's
 // hemisphere), atan by its series while x < 1/8 (relative error below 1e-10), else std::atan2.
 inline double chord_angle(const double* a, const double* b) {
-    const double sign = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0 ? -1.0 : 1.0;
-    double d2 = 0.0, s2 = 0.0;
-    for (int k = 0; k < 4; ++k) {
-        const double d = a[k] - sign * b[k], s = a[k] + sign * b[k];
-        d2 += d * d;
-        s2 += s * s;
-    }
+    double d2, s2;
+    chord_squares(a, b, d2, s2);
     if (!(d2 * 64.0 < s2)) return 4.0 * std::atan2(std::sqrt(d2), std::sqrt(s2));
     const double x2 = d2 / s2;
     return 4.0 * std::sqrt(x2) * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 / 9))));

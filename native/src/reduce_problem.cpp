@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "curve_math.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/euler.hpp"
 #include "quatcurve/quat.hpp"
@@ -33,11 +34,30 @@ void check_times(const std::vector<double>& times) {
 // Rotation angle between the unit quaternions a and b (either sign): angle_between (quat.hpp)
 // without its argument checks and normalization, for the per-sample setup loops.
 double unit_angle(const Quat& a, const Quat& b) {
-    const double sign = a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z < 0.0 ? -1.0 : 1.0;
-    const double dw = a.w - sign * b.w, dx = a.x - sign * b.x, dy = a.y - sign * b.y, dz = a.z - sign * b.z;
-    const double sw = a.w + sign * b.w, sx = a.x + sign * b.x, sy = a.y + sign * b.y, sz = a.z + sign * b.z;
-    return 4.0 * std::atan2(std::sqrt(dw * dw + dx * dx + dy * dy + dz * dz),
-                            std::sqrt(sw * sw + sx * sx + sy * sy + sz * sz));
+    const double x[4] = {a.w, a.x, a.y, a.z}, y[4] = {b.w, b.x, b.y, b.z};
+    return detail::angle_between(x, y);
+}
+
+// A problem of `kind` over `times` (checked) with `count` rows of `C` channels (`what`: the rows'
+// argument and noun for the count message): every per-sample array sized, nothing filled yet.
+Problem new_problem(Kind kind, int C, const std::vector<double>& times, std::size_t count, const char* what,
+                    const char* noun) {
+    check_times(times);
+    if (count != times.size())
+        throw InvalidArgument(std::string(what) + ": " + std::to_string(count) + " " + noun + " for " +
+                              std::to_string(times.size()) + " times");
+    Problem p;
+    p.kind = kind;
+    p.C = C;
+    p.n = times.size();
+    p.t.resize(p.n);
+    p.y.resize(p.n * static_cast<std::size_t>(C));
+    p.ref.resize(p.n);
+    if (kind != Kind::EULER) {
+        p.unit.assign(p.n * static_cast<std::size_t>(C), 0.0);
+        p.norm2.assign(p.n, 0.0);
+    }
+    return p;
 }
 
 // Discontinuities between consecutive samples (see Problem::breaks) and, when the between-samples
@@ -88,19 +108,7 @@ void check_tolerance(double tolerance) {
 
 Problem make_quat_problem(const std::vector<double>& times, const std::vector<Quat>& quats,
                           bool guard) {
-    check_times(times);
-    if (quats.size() != times.size())
-        throw InvalidArgument("quats: " + std::to_string(quats.size()) +
-                              " quaternions for " + std::to_string(times.size()) + " times");
-    Problem p;
-    p.kind = Kind::QUAT;
-    p.C = 4;
-    p.n = times.size();
-    p.t.resize(p.n);
-    p.y.resize(p.n * 4);
-    p.ref.resize(p.n);
-    p.unit.assign(p.n * 4, 0.0);
-    p.norm2.assign(p.n, 0.0);
+    Problem p = new_problem(Kind::QUAT, 4, times, quats.size(), "quats", "quaternions");
     for (std::size_t k = 0; k < p.n; ++k) {
         const Quat& q = quats[k];
         const double len = norm(q);
@@ -125,13 +133,7 @@ Problem make_quat_problem(const std::vector<double>& times, const std::vector<Qu
 
 Problem make_euler_problem(const std::vector<double>& times, const std::vector<Vec3>& angles,
                            EulerOrder order) {  // Euler fits are always guarded
-    check_times(times);
-    if (angles.size() != times.size())
-        throw InvalidArgument("angles: " + std::to_string(angles.size()) + " triples for " +
-                              std::to_string(times.size()) + " times");
-    Problem p;
-    p.kind = Kind::EULER;
-    p.C = 3;
+    Problem p = new_problem(Kind::EULER, 3, times, angles.size(), "angles", "triples");
     p.order = order;
     const std::string name = euler_order_name(order);  // "XYZ": X applied first
     p.axis_first = name[0] - 'X';
@@ -139,10 +141,6 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
     p.axis_last = name[2] - 'X';
     // Sign of the triple product e_last · (e_mid × e_first): +1 for cyclic (last, mid, first).
     const int perm = (p.axis_mid - p.axis_last + 3) % 3 == 1 ? 1 : -1;
-    p.n = times.size();
-    p.t.resize(p.n);
-    p.y.resize(p.n * 3);
-    p.ref.resize(p.n);
     p.gimbal.assign(p.n, 0.0);
     for (std::size_t k = 0; k < p.n; ++k) {
         const std::string problem = finite_problem(angles[k]);
@@ -160,19 +158,7 @@ Problem make_euler_problem(const std::vector<double>& times, const std::vector<V
     return p;
 }
 Problem make_axis_angle_problem(const std::vector<double>& times, const std::vector<Vec4>& values) {
-    check_times(times);
-    if (values.size() != times.size())
-        throw InvalidArgument("values: " + std::to_string(values.size()) + " rows for " +
-                              std::to_string(times.size()) + " times");
-    Problem p;
-    p.kind = Kind::AXIS_ANGLE;
-    p.C = 4;
-    p.n = times.size();
-    p.t.resize(p.n);
-    p.y.resize(p.n * 4);
-    p.ref.resize(p.n);
-    p.unit.assign(p.n * 4, 0.0);
-    p.norm2.assign(p.n, 0.0);
+    Problem p = new_problem(Kind::AXIS_ANGLE, 4, times, values.size(), "values", "rows");
     p.spin.assign(p.n, 0.0);
     for (std::size_t k = 0; k < p.n; ++k) {
         const Vec4& v = values[k];
