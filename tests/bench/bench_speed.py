@@ -145,7 +145,12 @@ def run_limit(rig, arrays, ipo, n):
             points.foreach_set("interpolation", ipo)
             a += 1
     seconds = time.perf_counter() - begin
-    bpy.context.view_layer.update()  # what bpy.ops runs after every operator (the bake's too)
+    # foreach_set tags nothing: tag the action (its evaluated copy is made again from the new keys)
+    # and the rig, so that the update bpy.ops runs after every operator evaluates the new keys here
+    # too (the bake assigns its finished action, which tags both)
+    action.update_tag()
+    rig.update_tag(refresh={"TIME"})
+    bpy.context.view_layer.update()
     with_update = time.perf_counter() - created
     play(rig, previous)
     drop(action)
