@@ -464,13 +464,32 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     packed = PackedKeys(frames, values)
     n = len(packed)
     points = fcurve.keyframe_points
-    if len(points):
-        points.clear()
-    points.add(n)
+    old = len(points)
+    # Where handle types can only be set key by key (Blender 3.4), rewriting a keyed F-curve (a refit)
+    # keeps its key slots — FREE already after a fit — and sets only the handle types that are not.
+    reuse = handle_left is not None and old > 0 and _BULK_ENUM.get("handle_left_type") is False
+    if reuse:
+        for _ in range(old - n):
+            points.remove(points[len(points) - 1], fast=True)
+        if n > old:
+            points.add(n - old)
+    else:
+        if old:
+            points.clear()
+        points.add(n)
     points.foreach_set("co", packed.co)
     kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
     points.foreach_set("interpolation", np.full(n, kind, dtype=_INTERPOLATION_DTYPE))
-    if handle_left is not None:
+    if reuse:
+        for point in points:
+            if point.handle_left_type != "FREE":
+                point.handle_left_type = "FREE"
+            if point.handle_right_type != "FREE":
+                point.handle_right_type = "FREE"
+        # foreach_set tags nothing, and with the slots kept no add/clear did: the action's
+        # evaluated copy must be made again, or Blender plays the keys it had
+        fcurve.id_data.update_tag()
+    elif handle_left is not None:
         _set_free_handles(points, n)
     elif with_handles:
         handle_left, handle_right = native.require().segment_handles(frames, values)
