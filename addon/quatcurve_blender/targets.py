@@ -246,6 +246,8 @@ def refuse_drivers(target, prop, count):
 def _refuse_jumps(target, prop, index, fcurve):
     """Two keys on one frame with different values (a jump) cannot be kept with one key per frame."""
     frames, values = fcurves.read_keys(fcurve)
+    if len(frames) < 2 or (frames[1:] > frames[:-1]).all():
+        return  # increasing frames (the usual, sorted case): no two keys share a frame
     order = np.argsort(frames, kind="stable")
     frames, values = frames[order], values[order]
     same = np.flatnonzero(frames[1:] == frames[:-1])
