@@ -116,7 +116,7 @@ class TargetBake:
     source: targets.RotationKeys
     output_mode: str
     frames: np.ndarray = None
-    values: np.ndarray = None    # (N, 3|4) output channel values (dropped once packed)
+    values: np.ndarray = None    # (N, 3|4) output channel values (for the reduction, tolerance > 0)
     packed: list = None          # per channel fcurves.PackedKeys of the dense keys (no reduction)
     own_action: bool = False     # in place was asked for, but others play the action: copy it
     reduced: object = None       # reduce_keys' result when tolerance > 0
@@ -172,6 +172,7 @@ class BakePlan:
         self.items = [TargetBake(t, s, s.mode if settings.rotation_mode == "KEEP" else settings.rotation_mode)
                       for t, s in zip(found, sources)]
         self.seconds = seconds   # working time so far (a modal bake's idle time is not counted)
+        self.increasing = bool(len(frames) < 2 or (frames[1:] > frames[:-1]).all())
         self.computed = 0
 
     def compute_steps(self):
@@ -215,28 +216,33 @@ class BakePlan:
         settings, source = self.settings, item.source
         try:
             curve = source.curve(settings.method, **settings.curve_options())
-            quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
             broken = path_rule.breaks(curve, source.frames, item.target.name, settings.method)
         except ValueError as error:
             raise BakeError("%s: %s" % (item.target.name, error)) from error
         item.notes += ["path rule: " + b.text() for b in broken]
         item.frames = self.frames
+        if settings.tolerance == 0:
+            # Sampled and packed for the main thread's plainest write in one native call: on a worker
+            # thread every step that lets go of the GIL waits to get it back from the main thread,
+            # which holds it while it writes keys.
+            try:
+                keys = curve.sample_keys(self.frames, item.output_mode, reference)
+            except ValueError as error:
+                raise BakeError("%s: the %s curve: %s" % (item.target.name, settings.method, error)) from error
+            item.packed = [fcurves.PackedKeys.from_pairs(rows, self.increasing) for rows in keys]
+            return
+        quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
             raise BakeError("%s: the %s curve gave non-finite values" % (item.target.name, settings.method))
-        if settings.tolerance > 0:
-            try:
-                item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
-                                           math.radians(settings.tolerance))
-            except ValueError as error:
-                raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
-            item.notes.append("%s: reduced to %s keys within %s° (max error %.4f°)" % (
-                item.target.name, f"{item.reduced.key_count:,}", num(settings.tolerance),
-                math.degrees(item.reduced.max_error)))
-        else:
-            # Packed here, on the worker, for the main thread's plainest write; the values go.
-            item.packed = write.dense_keys(self.frames, item.values)
-            item.values = None
+        try:
+            item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
+                                       math.radians(settings.tolerance))
+        except ValueError as error:
+            raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
+        item.notes.append("%s: reduced to %s keys within %s° (max error %.4f°)" % (
+            item.target.name, f"{item.reduced.key_count:,}", num(settings.tolerance),
+            math.degrees(item.reduced.max_error)))
 
     def write(self):
         """Writes every target (write.write_rotations), computing first what is not computed yet;
@@ -254,8 +260,10 @@ class BakePlan:
                 self._compute_native(*job)
                 return job[0]
 
+            # Dense keys: writing them keeps the main thread as busy as the workers.
+            dense = settings.tolerance == 0
             done = self.items[:self.computed]
-            items = itertools.chain(done, parallel_imap(computed, list(zip(todo, references))))
+            items = itertools.chain(done, parallel_imap(computed, list(zip(todo, references)), busy_main=dense))
         else:
             if todo:
                 self.compute()

@@ -425,6 +425,15 @@ class PackedKeys:
         self.co = co.ravel()
         self.increasing = bool(n < 2 or (frames[1:] > frames[:-1]).all())
 
+    @classmethod
+    def from_pairs(cls, pairs, increasing):
+        """PackedKeys of (N, 2) float32 (frame, value) rows packed already (Curve.sample_keys), whose
+        frames increase or not as `increasing` says."""
+        packed = cls.__new__(cls)
+        packed.co = np.ascontiguousarray(pairs, dtype=np.float32).reshape(-1)
+        packed.increasing = bool(increasing)
+        return packed
+
     def __len__(self):
         return len(self.co) // 2
 

@@ -64,7 +64,7 @@ def parallel_map(fn, items):
         return list(pool.map(fn, items))
 
 
-def parallel_imap(fn, items):
+def parallel_imap(fn, items, busy_main=False):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
     so the caller (on the main thread) can use the first results while thread_count() workers compute
     the rest (one thread: no workers, each call made when its result is asked for). `items` may be a
@@ -73,7 +73,8 @@ def parallel_imap(fn, items):
     interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's Blender calls hold
     it, and the workers need it briefly between their native calls (measured: a 100-target bake
     0.69 s → 0.43 s). When the caller stops early (an error, a generator closed), the calls not yet
-    started are cancelled."""
+    started are cancelled. busy_main: the caller keeps the main thread busy while the workers run
+    (the bake writes keys), so one worker fewer runs than thread_count() says."""
     threads = thread_count()
     if hasattr(items, "__len__"):
         threads = min(threads, len(items))
@@ -81,6 +82,8 @@ def parallel_imap(fn, items):
         for item in items:
             yield fn(item)
         return
+    if busy_main:
+        threads -= 1  # the main thread keeps a core for its own work (at least one worker still runs)
     switch = sys.getswitchinterval()
     sys.setswitchinterval(min(switch, GIL_SWITCH))
     pool = ThreadPoolExecutor(max_workers=threads)

@@ -9,7 +9,6 @@ whole write one undo step. F-curves are touched only through fcurves.py.
 
 from dataclasses import dataclass
 
-import numpy as np
 
 from . import fcurves
 
@@ -20,7 +19,7 @@ class RotationWrite:
 
     keys: per channel of `mode`, (frames, values, handle_left, handle_right) — handles (K, 2)
     arrays of (frame, value) for BEZIER keys, None otherwise — or fcurves.PackedKeys (LINEAR or
-    CONSTANT keys packed beforehand, see dense_keys). replace: the rotation properties whose
+    CONSTANT keys packed beforehand: the bake packs them on its workers, Curve.sample_keys). replace: the rotation properties whose
     F-curves are removed first (all three when the mode changes). own_action: in place was asked
     for, but the action is shared with objects not being written: write into a copy instead."""
     target: object
@@ -33,14 +32,6 @@ class RotationWrite:
     @property
     def key_count(self):
         return sum(len(k) if isinstance(k, fcurves.PackedKeys) else len(k[0]) for k in self.keys)
-
-
-def dense_keys(frames, values):
-    """RotationWrite.keys for (N,) frames and (N, C) channel values: every frame on every channel,
-    packed as Blender stores them (fcurves.PackedKeys: no Blender data is touched, so a worker thread
-    can pack while the main thread writes)."""
-    values = np.asarray(values)
-    return [fcurves.PackedKeys(frames, values[:, i]) for i in range(values.shape[1])]
 
 
 def shared_with(target, ids):

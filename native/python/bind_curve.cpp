@@ -7,6 +7,7 @@
 
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
 
@@ -152,6 +153,56 @@ void bind_curve(py::module_& m) {
                 return out;
             },
             py::arg("times"), "Orientations (w, x, y, z) at the given frames, shape times.shape + (4,).")
+        .def(
+            "sample_keys",
+            [](const Curve& c, py::handle frames, const std::string& mode_name, py::object reference) {
+                const RotationMode mode = parse_rotation_mode(mode_name);
+                const std::size_t nc = channel_count(mode);
+                const Batch t = as_batch(frames, {}, "frames");
+                if (t.batch_shape.size() != 1)
+                    throw py::value_error("frames: expected shape (N,), got " + shape_string(t.array));
+                Batch ref;
+                std::size_t rows = 0;
+                if (!reference.is_none()) {
+                    ref = as_batch(reference, {static_cast<py::ssize_t>(nc)}, "reference");
+                    if (ref.batch_shape.size() > 1)
+                        throw py::value_error("reference: expected one row, or one per frame, got " +
+                                              shape_string(ref.array));
+                    rows = ref.batch_shape.empty() ? 1 : ref.count;
+                }
+                const std::size_t n = t.count;
+                py::array_t<float> out(std::vector<py::ssize_t>{static_cast<py::ssize_t>(nc),
+                                                                static_cast<py::ssize_t>(n), 2});
+                float* o = out.mutable_data();
+                bool finite = true;
+                {
+                    // One call, one release of the GIL, for a bake's whole per-target native work
+                    // after the curve: its worker thread then waits for the GIL twice per target,
+                    // not at every step, while the main thread writes keys.
+                    py::gil_scoped_release release;
+                    std::vector<double> wxyz(4 * n);
+                    c.sample(t.data(), n, wxyz.data());
+                    std::vector<Quat> q(n);
+                    for (std::size_t k = 0; k < n; ++k) q[k] = from_wxyz(&wxyz[4 * k]);
+                    const std::vector<double> v = quats_to_channels(q, mode, rows ? ref.data() : nullptr, rows);
+                    for (std::size_t ch = 0; ch < nc; ++ch) {
+                        float* row = o + 2 * n * ch;
+                        for (std::size_t k = 0; k < n; ++k) {
+                            row[2 * k] = static_cast<float>(t.data()[k]);
+                            row[2 * k + 1] = static_cast<float>(v[nc * k + ch]);
+                            finite = finite && std::isfinite(row[2 * k + 1]);
+                        }
+                    }
+                }
+                if (!finite) throw py::value_error("the curve gave non-finite channel values");
+                return out;
+            },
+            py::arg("frames"), py::arg("mode"), py::arg("reference") = py::none(),
+            "The curve sampled at frames (N,) as the F-curve keys of rotation mode `mode`: (C, N, 2) "
+            "float32, per channel the (frame, value) pairs as Blender stores keys "
+            "(keyframe_points.foreach_set('co', keys[c].ravel())); the values are "
+            "quats_to_channels(sample(frames), mode, reference) rounded to float32 (so continuous along "
+            "the frames). Non-finite values (a value beyond float32's range) raise ValueError.")
         .def(
             "angular_velocity",
             [](const Curve& c, py::handle times) {

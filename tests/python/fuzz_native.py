@@ -1250,7 +1250,7 @@ def build_blender_evaluate(fn, d):
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
 CURVE_MEMBERS = {"angular_velocity", "from_axis_angle", "from_euler", "method", "options", "quats", "path_rule_breaks",
-                 "sample", "segment_paths", "times"}
+                 "sample", "sample_keys", "segment_paths", "times"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 EASE_OPTIONS = ("ease_in", "ease_out")
@@ -1396,6 +1396,7 @@ def build_curve(method, d: Draw) -> Case:
         sample_arg, bad = d.pick(junk_values(()), "junk_times")
         sample_fail = sample_fail or ("junk sample times" if bad else "")
     cls = qc.Curve
+    keys_mode = d.pick(("QUATERNION",) + ORDERS + ("AXIS_ANGLE",), "keys_mode")
 
     def call():
         if from_euler:
@@ -1413,6 +1414,8 @@ def build_curve(method, d: Draw) -> Case:
             except (ValueError, TypeError) as e:
                 results[name + "_error"] = e
         results["at_keys"] = c.sample(c.times)
+        # the bake's dense keys at the key times: the channels of the samples, as float32 pairs
+        results["keys_of_mode"] = c.sample_keys(c.times, keys_mode)
         results["paths"] = c.segment_paths()
         results["breaks"] = c.path_rule_breaks()
         return results
@@ -1430,6 +1433,13 @@ def build_curve(method, d: Draw) -> Case:
         err = np_angle(at, r["keys_quats"])
         if err.size:
             expect(err.max() < 1e-6, f"sample at key {int(err.argmax())} is {err.max()!r} rad off the key")
+        pairs = r["keys_of_mode"]
+        channels = qc.quats_to_channels(at, keys_mode).astype(np.float32) if at.size else np.zeros((0, 1))
+        shape_is(pairs, (channels.shape[1] if at.size else pairs.shape[0], kt.size, 2), "sample_keys")
+        if at.size:
+            expect(np.array_equal(pairs[:, :, 0], np.broadcast_to(kt.astype(np.float32), pairs.shape[:2]))
+                   and np.array_equal(pairs[:, :, 1].T, channels),
+                   f"sample_keys({keys_mode}) differs from quats_to_channels(sample) in float32")
         # the path rule: every key segment of a clamped tangent method (the default) turns at most
         # PATH_RULE_FACTOR × its keyed arc + PATH_RULE_SLACK (the clamp keeps a 2% margin)
         paths = r["paths"]

@@ -152,3 +152,33 @@ def test_sampling_policies():
     np.testing.assert_allclose(right, [[5, 2]])
     with pytest.raises(ValueError, match=r"key_frames\[1\]: not increasing"):
         qc.sample_frames([2, 1], 1)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_sample_keys_are_the_sampled_channels_as_blender_keys(mode):
+    """Curve.sample_keys: the bake's dense keys in one call — per channel (frame, value) float32 rows
+    of quats_to_channels(sample(frames), mode, reference)."""
+    rng = np.random.default_rng(5)
+    key_times = np.arange(0.0, 60.0, 10.0)
+    keys = rng.normal(size=(len(key_times), 4))
+    curve = qc.Curve(key_times, keys / np.linalg.norm(keys, axis=1, keepdims=True), method="SQUAD")
+    frames = np.arange(0.0, 50.25, 0.25)
+    reference = qc.quats_to_channels(-curve.sample(frames[:1]), mode)[0]
+    expected = qc.quats_to_channels(curve.sample(frames), mode, reference)
+    got = curve.sample_keys(frames, mode, reference)
+    assert got.dtype == np.float32 and got.shape == (expected.shape[1], len(frames), 2)
+    for c in range(expected.shape[1]):
+        assert np.array_equal(got[c, :, 0], frames.astype(np.float32))
+        assert np.array_equal(got[c, :, 1], expected[:, c].astype(np.float32))
+    plain = curve.sample_keys(frames, mode)
+    assert np.array_equal(plain[:, :, 1].T, qc.quats_to_channels(curve.sample(frames), mode).astype(np.float32))
+
+
+def test_sample_keys_refuses_bad_arguments():
+    curve = qc.Curve([0.0, 10.0], [[1, 0, 0, 0], [0, 1, 0, 0]])
+    with pytest.raises(ValueError, match="rotation mode|mode"):
+        curve.sample_keys([0.0, 1.0], "XYZW")
+    with pytest.raises(ValueError, match="frames"):
+        curve.sample_keys([[0.0, 1.0]], "QUATERNION")
+    with pytest.raises(ValueError, match="reference"):
+        curve.sample_keys([0.0, 1.0], "QUATERNION", [1.0, 0.0, 0.0])
