@@ -44,6 +44,7 @@ import bpy
 import numpy as np
 
 from . import fcurves, native, path_rule, plot, targets
+from .reduce import parallel_imap
 from .targets import TargetError
 
 ENGINE_METHODS = ("SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2", "NLERP")
@@ -331,8 +332,21 @@ def quaternion_keys(keys, key_quats):
 
 # ---- one target --------------------------------------------------------------------------------------
 
-def compare_target(target, settings):
-    """TargetComparison of one target (see the module doc). Raises CompareError."""
+@dataclass(eq=False)
+class _Reading:
+    """What a comparison reads from Blender for one target (read_target, main thread): its keys, the
+    sample frames, and the paths Blender itself plays (its evaluation, scratch Euler and quaternion
+    keys) as (kind, quats, euler order, euler angles)."""
+    target: targets.Target
+    keys: targets.RotationKeys
+    frames: np.ndarray
+    key_quats: np.ndarray
+    current: np.ndarray
+    paths: dict
+
+
+def read_target(target, settings):
+    """The Blender side of a comparison (main thread only): _Reading. Raises CompareError."""
     qc = native.require()
     try:
         keys = targets.read_rotation_keys(target)
@@ -363,7 +377,15 @@ def compare_target(target, settings):
     except TargetError as error:
         raise CompareError(str(error)) from None
     paths[SOURCE_BLENDER_QUATERNION] = ("blender_quaternion", quats, None, None)
+    return _Reading(target, keys, frames, key_quats, current, paths)
 
+
+def measure(reading, settings):
+    """The TargetComparison of a _Reading: the engine methods' curves and every path's metrics. Touches
+    no Blender data (worker threads run it). Raises CompareError."""
+    qc = native.require()
+    target, keys, frames, key_quats = reading.target, reading.keys, reading.frames, reading.key_quats
+    paths = dict(reading.paths)
     methods = [REFERENCE_METHOD] + [m for m in settings.methods if m != REFERENCE_METHOD]
     segment_paths, breaks = {}, []
     for method in methods:
@@ -391,11 +413,16 @@ def compare_target(target, settings):
     comparison.keyed_speed_ratios = keyed_speed_ratios(keys.frames, segment_paths[REFERENCE_METHOD][:, 0], key_quats)
     # How close the motion itself (Blender's evaluation) comes to gimbal lock in each order.
     for order in fcurves.EULER_ORDERS:
-        distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances_from_quats(current, order),
+        distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances_from_quats(reading.current, order),
                                                      tolerance)
         comparison.euler_orders[order] = (float(distance), _compress_frames(where))
     comparison.recommendation = recommend(comparison)
     return comparison
+
+
+def compare_target(target, settings):
+    """TargetComparison of one target (see the module doc). Raises CompareError."""
+    return measure(read_target(target, settings), settings)
 
 
 def _compress_frames(frames, limit=50):
@@ -549,8 +576,10 @@ def compare(found, settings=None):
         raise CompareError("Nothing to compare: no targets")
     begin = time.perf_counter()
     report = CompareReport(settings)
-    for target in found:
-        report.targets.append(compare_target(target, settings))
+    # Blender is read on this thread, target after target, while worker threads measure the targets
+    # already read (the native curves and metrics run without the GIL).
+    readings = (read_target(target, settings) for target in found)
+    report.targets.extend(parallel_imap(lambda reading: measure(reading, settings), readings))
     report.seconds = time.perf_counter() - begin
     return report
 

@@ -128,7 +128,14 @@ void bind_metrics(py::module_& m) {
     m.def(
         "gimbal_distances_from_quats",
         [](py::handle quats, const std::string& order) {
-            return to_array(gimbal_distances(to_quats(quats, "quats"), parse_euler_order(order)));
+            const std::vector<Quat> q = to_quats(quats, "quats");
+            const EulerOrder o = parse_euler_order(order);
+            std::vector<double> d;
+            {
+                py::gil_scoped_release release;
+                d = gimbal_distances(q, o);
+            }
+            return to_array(d);
         },
         py::arg("quats"), py::arg("order"),
         "Distance (radians) from gimbal lock per orientation (N, 4) if it were expressed in Euler `order`.");
@@ -150,9 +157,13 @@ void bind_metrics(py::module_& m) {
            py::object key_quats) {
             const std::vector<Quat> keys =
                 key_quats.is_none() ? std::vector<Quat>{} : to_quats(key_quats, "key_quats");
-            const PathMetrics r = path_metrics(to_doubles(times, "times"), to_quats(quats, "quats"),
-                                               to_doubles(key_times, "key_times"),
-                                               to_quats(reference, "reference"), keys);
+            const std::vector<double> t = to_doubles(times, "times"), kt = to_doubles(key_times, "key_times");
+            const std::vector<Quat> q = to_quats(quats, "quats"), ref = to_quats(reference, "reference");
+            PathMetrics r;
+            {
+                py::gil_scoped_release release;  // compare measures targets on worker threads
+                r = path_metrics(t, q, kt, ref, keys);
+            }
             py::dict d;
             d["deviation"] = to_array(r.deviation);
             d["max_deviation"] = r.max_deviation;
