@@ -67,7 +67,8 @@ def parallel_map(fn, items):
 def parallel_imap(fn, items, busy_main=False):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
     so the caller (on the main thread) can use the first results while thread_count() workers compute
-    the rest (one thread: no workers, each call made when its result is asked for). `items` may be a
+    the rest (one thread: no workers, each call made when its result is asked for, after every item is
+    made). `items` may be a
     generator that reads Blender on the main thread: each item is handed to the workers as soon as it
     is made, and the first result is yielded only after the last item is made. While it runs, the
     interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's Blender calls hold
@@ -79,7 +80,7 @@ def parallel_imap(fn, items, busy_main=False):
     if hasattr(items, "__len__"):
         threads = min(threads, len(items))
     if threads <= 1:
-        for item in items:
+        for item in list(items):  # every item made first, as with workers
             yield fn(item)
         return
     if busy_main:
