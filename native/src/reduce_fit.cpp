@@ -15,8 +15,10 @@ namespace {
 
 // Solves H·x = g (H symmetric positive definite, dim ≤ 8) by Cholesky; H and g are overwritten.
 // A non-positive pivot (degenerate data) is lifted to a tiny positive value, so a solution always
-// comes back; the fit's quality is judged by the error test anyway.
-void solve_spd(double* H, double* g, int dim) {
+// comes back; the fit's quality is judged by the error test anyway. dim is a template argument so
+// that the loops unroll (a fit solves thousands of these small systems).
+template <int dim>
+void solve_spd(double* H, double* g) {
     for (int j = 0; j < dim; ++j) {
         double d = H[j * dim + j];
         for (int k = 0; k < j; ++k) d -= H[j * dim + k] * H[j * dim + k];
@@ -70,6 +72,7 @@ State empty_state(const Problem& p) {
 
 Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s) : p_(p), ipo_(ipo), s_(s) {
     buf_.resize(p.n * p.C);
+    bern_.resize(p.n * 4);
     u_.resize(p.n);
     w_.resize(p.n);
     err_.resize(p.n);
@@ -91,6 +94,8 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             if (r >= 0.0f) u_[k] = r;
         }
     }
+    if (ipo_ == KeyInterpolation::BEZIER)
+        for (std::size_t k = i + 1; k < j; ++k) bernstein(u_[k], &bern_[k * 4]);
     double p1[kMaxChannels] = {}, p2[kMaxChannels] = {};
     bool ok;
     if (ipo_ == KeyInterpolation::LINEAR || j - i < 2) {
@@ -193,8 +198,7 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
     double A[3][NC][NC] = {};
     double g[2][NC] = {};
     for (std::size_t k = i + 1; k < j; ++k) {
-        double b[4];
-        bernstein(u_[k], b);
+        const double* b = &bern_[k * 4];
         const double* yk = &p_.y[k * C];
         double e0[C];
         if (NC == C) {
@@ -233,13 +237,14 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
                 const double* u = &p_.unit[k * 4];
                 const double inv = 1.0 / p_.norm2[k];
                 const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+                double ku[NC];
+                for (int a = 0; a < NC; ++a) ku[a] = kappa * u[ch[a]];
                 for (int a = 0; a < NC; ++a) {
-                    const double ua = u[ch[a]];
-                    const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
+                    const double Me = inv * (4.0 * e0[ch[a]] - ku[a] * ue);
                     g[0][a] -= w1 * Me;
                     g[1][a] -= w2 * Me;
                     for (int bb = 0; bb <= a; ++bb) {
-                        const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
+                        const double m = inv * ((a == bb ? 4.0 : 0.0) - ku[a] * u[ch[bb]]);
                         A[0][a][bb] += s11 * m;
                         A[1][a][bb] += s12 * m;
                         A[2][a][bb] += s22 * m;
@@ -283,7 +288,7 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
         rhs[a] += lambda * d1;
         rhs[NC + a] += lambda * d2;
     }
-    solve_spd(H, rhs, dim);
+    solve_spd<dim>(H, rhs);
     for (int a = 0; a < NC; ++a) {
         p1[a] = rhs[a];
         p2[a] = rhs[NC + a];
@@ -305,26 +310,54 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
 // fitted here take the mean of their neighbouring fitted values midway.
 double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                         const double* p2, double limit, double give_up) {
-    const int C = p_.C;
-    const bool quat_bezier = p_.kind == Kind::QUAT && ipo_ == KeyInterpolation::BEZIER;
+    if (p_.C == 4 && nc == 4) return evaluate_t<4, 4>(i, j, chans, p1, p2, limit, give_up);
+    if (p_.C == 4 && nc == 1) return evaluate_t<4, 1>(i, j, chans, p1, p2, limit, give_up);
+    if (p_.C == 3 && nc == 3) return evaluate_t<3, 3>(i, j, chans, p1, p2, limit, give_up);
+    return evaluate_t<3, 1>(i, j, chans, p1, p2, limit, give_up);
+}
+
+// tan of half the angle kBetweenFactor × the fit's (limit: tan²(θ/2)). Every fit of a key choice
+// shares its limit, so the last one is kept rather than calling tan and atan per fit.
+double Fitter::between_tan(double limit) {
+    if (limit != between_limit_) {
+        between_limit_ = limit;
+        between_tan_ = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+    }
+    return between_tan_;
+}
+
+// evaluate for C channels of which NC are fitted (NC == C: all, in order; the others keep F).
+template <int C, int NC>
+double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const double* p1,
+                          const double* p2, double limit, double give_up) {
+    const bool linear = ipo_ == KeyInterpolation::LINEAR;
+    const bool quat_bezier = p_.kind == Kind::QUAT && !linear;
     // The norm check: a quaternion's (BEZIER: LINEAR cannot dip without a sign flip, a break) or
     // an axis-angle axis's (any interpolation: two axes 90° apart lerp through 0.71 of their length).
-    const bool norm_check = quat_bezier || p_.kind == Kind::AXIS_ANGLE;
+    const bool norm_check = C == 4 && (quat_bezier || p_.kind == Kind::AXIS_ANGLE);
     const bool guard = quat_bezier || p_.kind != Kind::QUAT;
+    int ch[NC];
+    double yi[NC], yj[NC];
+    for (int a = 0; a < NC; ++a) {
+        ch[a] = NC == C ? a : chans[a];
+        yi[a] = p_.y[i * C + ch[a]];
+        yj[a] = p_.y[j * C + ch[a]];
+    }
+    // The fitted channels at parameter u (b: the Bezier basis there) into f.
+    auto fitted = [&](double u, const double* b, double* f) {
+        for (int a = 0; a < NC; ++a) {
+            f[ch[a]] = linear ? yi[a] + (yj[a] - yi[a]) * u
+                              : b[0] * yi[a] + b[1] * p1[a] + b[2] * p2[a] + b[3] * yj[a];
+        }
+    };
     between_failed_ = false;
     double worst = 0.0;
     for (std::size_t k = i + 1; k < j; ++k) {
-        double* f = &buf_[k * C];
-        for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
-        if (ipo_ == KeyInterpolation::LINEAR) {
-            const double u = u_[k];
-            for (int a = 0; a < nc; ++a) {
-                const int c = chans[a];
-                f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
-            }
-        } else {
-            bezier_values(i, j, chans, nc, p1, p2, u_[k], f);
-        }
+        double f[kMaxChannels] = {};
+        if (NC < C)
+            for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
+        fitted(u_[k], &bern_[k * 4], f);
+        for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
         const double e = error_tan2(p_, k, f);
         err_[k] = e;
         worst = std::max(worst, e);
@@ -336,32 +369,30 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
     }
     if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
         // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
-        const double tan_fit = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+        const double tan_fit = between_tan(limit);
         double prev_u = 0.0;
         for (std::size_t k = i; k < j; ++k) {
             const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
             const double u = 0.5 * (prev_u + next_u);
             prev_u = next_u;
-            double f[kMaxChannels], mean[kMaxChannels];
+            double f[kMaxChannels] = {}, mean[kMaxChannels] = {}, b[4];
             for (int c = 0; c < C; ++c) {
-                f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
+                if (NC < C) f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
                 mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
             }
-            if (ipo_ == KeyInterpolation::LINEAR) {
-                for (int a = 0; a < nc; ++a) {
-                    const int c = chans[a];
-                    f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
-                }
-            } else {
-                bezier_values(i, j, chans, nc, p1, p2, u, f);
-            }
+            if (!linear) bernstein(u, b);
+            fitted(u, b, f);
             if (norm_check && !norm_ok(p_, f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
                 between_failed_ = true;
                 return std::numeric_limits<double>::infinity();
             }
-            const Quat ref = p_.kind == Kind::QUAT         ? Quat(mean[0], mean[1], mean[2], mean[3])
-                             : p_.kind == Kind::AXIS_ANGLE ? axis_angle_rotation(mean)
-                                                           : euler_rotation(p_, mean);
+            Quat ref;
+            if constexpr (C == 4) {
+                ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
+                                            : axis_angle_rotation(mean);
+            } else {
+                ref = euler_rotation(p_, mean);
+            }
             const double denom = 1.0 - tan_fit * p_.step_tan[k];
             const double t = (tan_fit + p_.step_tan[k]) / denom;
             const double between_limit =
@@ -373,18 +404,6 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
         }
     }
     return worst;
-}
-
-// The fitted channels' Bezier values at parameter u, written into f.
-void Fitter::bezier_values(std::size_t i, std::size_t j, const int* chans, int nc,
-                           const double* p1, const double* p2, double u, double* f) const {
-    const int C = p_.C;
-    double b[4];
-    bernstein(u, b);
-    for (int a = 0; a < nc; ++a) {
-        const int c = chans[a];
-        f[c] = b[0] * p_.y[i * C + c] + b[1] * p1[a] + b[2] * p2[a] + b[3] * p_.y[j * C + c];
-    }
 }
 
 void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,

@@ -244,8 +244,10 @@ private:
     double evaluate(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                     const double* p2, double limit,
                     double give_up = std::numeric_limits<double>::infinity());
-    void bezier_values(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
-                       const double* p2, double u, double* f) const;
+    template <int C, int NC>
+    double evaluate_t(std::size_t i, std::size_t j, const int* chans, const double* p1,
+                      const double* p2, double limit, double give_up);
+    double between_tan(double limit);
     void commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                 const double* p2, bool exact_param);
 
@@ -253,6 +255,11 @@ private:
     KeyInterpolation ipo_;
     State& s_;
     std::vector<double> buf_, u_, w_, err_;
+    // BEZIER: the cubic's basis at each interior sample of the segment being fitted (n·4), computed
+    // once per fit for all its solves and evaluations.
+    std::vector<double> bern_;
+    // between_tan's last limit and result (the limit is the same for many fits in a row).
+    double between_limit_ = -1.0, between_tan_ = 0.0;
     bool between_failed_ = false;  // the last evaluate() failed a between-samples guard
 };
 
