@@ -135,16 +135,19 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             const int iterations = nc == 1 ? kReweightIterationsSingle : kReweightIterations;
             for (int it = 0; it <= iterations; ++it) {
                 solve_handles(i, j, chans, nc, kappa, p1, p2);
-                const double worst = evaluate(
-                    i, j, chans, nc, p1, p2, limit,
-                    force ? std::numeric_limits<double>::infinity() : kHopeless * limit);
+                // The last round keeps the first round's bound: over the limit it fails anyway,
+                // but a norm dip further on is still found (and refitted with radial weights).
+                const double give_up = force ? std::numeric_limits<double>::infinity()
+                                       : it < iterations ? kHopeless[it] * limit
+                                                         : kHopeless[0] * limit;
+                const double worst = evaluate(i, j, chans, nc, p1, p2, limit, give_up);
                 if (worst <= limit) {
                     ok = true;
                     break;
                 }
-                // Reweighting cannot fix the norm, nor hopeless segments (far over the limit).
-                if (between_failed_ || (!force && worst > kHopeless * limit)) break;
-                if (it == iterations) break;
+                // Reweighting cannot fix the norm, nor hopeless segments (too far over the limit
+                // for the rounds left).
+                if (between_failed_ || worst > give_up || it == iterations) break;
                 // Lawson-style reweighting toward the minimax fit: w ← w·err, normalized.
                 double total = 0.0;
                 for (std::size_t k = i + 1; k < j; ++k) {
