@@ -67,6 +67,16 @@ bool norm_ok(const Problem& p, const double* f, double norm2) {
     return f2 >= kMinNormRatio * kMinNormRatio * norm2;
 }
 
+// conj(r)·e_c for the unit quaternion e_c of channel c: r's components, permuted and signed.
+void relative_unit(const Quat& r, int c, double d[4]) {
+    switch (c) {
+    case 0: d[0] = r.w, d[1] = -r.x, d[2] = -r.y, d[3] = -r.z; break;
+    case 1: d[0] = r.x, d[1] = r.w, d[2] = -r.z, d[3] = r.y; break;
+    case 2: d[0] = r.y, d[1] = r.z, d[2] = r.w, d[3] = -r.x; break;
+    default: d[0] = r.z, d[1] = -r.y, d[2] = r.x, d[3] = r.w; break;
+    }
+}
+
 }  // namespace
 
 State empty_state(const Problem& p) {
@@ -105,6 +115,7 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
     }
     if (ipo_ == KeyInterpolation::BEZIER)
         for (std::size_t k = i + 1; k < j; ++k) bernstein(u_[k], &bern_[k * 4]);
+    if (p_.kind == Kind::QUAT && nc == 1) other_channels(i, j, chans[0]);
     double p1[kMaxChannels] = {}, p2[kMaxChannels] = {};
     bool ok;
     if (ipo_ == KeyInterpolation::LINEAR || j - i < 2) {
@@ -163,6 +174,48 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
     return ok;
 }
 
+// other_'s terms of samples i..j (and of the midpoints after them) for fits of channel `chan`:
+// d_o = conj(ref)·q − q_c·d_c from the fitted values q, with the channel's value taken out.
+void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
+    constexpr int C = 4;
+    if (other_.stamp.empty()) {
+        other_.stamp.assign(p_.n, 0);
+        other_.terms.resize(p_.n * OtherChannels::kStride);
+    }
+    if (chan != other_.chan) {
+        other_.chan = chan;
+        ++other_.epoch;
+    }
+    for (std::size_t k = i; k <= j; ++k) {
+        if (other_.stamp[k] == other_.epoch) continue;
+        other_.stamp[k] = other_.epoch;
+        double* o = &other_.terms[k * OtherChannels::kStride];
+        const double* F = &s_.F[k * C];
+        const double* y = &p_.y[k * C];
+        const double* u = &p_.unit[k * C];
+        relative_rotation(p_.ref[k], F, o);
+        relative_unit(p_.ref[k], chan, o + 4);
+        double ue = 0.0;
+        for (int c = 0; c < C; ++c) {
+            o[c] -= F[chan] * o[4 + c];
+            ue += u[c] * (F[c] - y[c]);
+        }
+        o[8] = F[0] * F[0] + F[1] * F[1] + F[2] * F[2] + F[3] * F[3] - F[chan] * F[chan];
+        o[9] = ue - u[chan] * (F[chan] - y[chan]);
+        if (k + 1 == p_.n) continue;
+        double q[C], mean[C];
+        for (int c = 0; c < C; ++c) {
+            q[c] = 0.5 * (F[c] + F[C + c]);
+            mean[c] = 0.5 * (y[c] + y[C + c]);
+        }
+        const Quat ref(mean[0], mean[1], mean[2], mean[3]);
+        relative_rotation(ref, q, o + 10);
+        relative_unit(ref, chan, o + 14);
+        for (int c = 0; c < C; ++c) o[10 + c] -= q[chan] * o[14 + c];
+        o[18] = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - q[chan] * q[chan];
+    }
+}
+
 void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
     const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
     hx[0] = float(ti + d / 3.0);
@@ -175,6 +228,7 @@ void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
 // directions the data leave free (few samples; the radial direction of quaternions).
 void Fitter::solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
                            double* p1, double* p2) {
+    if (p_.kind == Kind::QUAT && nc == 1) return solve_quat_channel(i, j, chans[0], kappa, p1, p2);
     if (p_.C == 4 && nc == 4) return solve_handles_t<4, 4>(i, j, chans, kappa, p1, p2);
     if (p_.C == 4 && nc == 1) return solve_handles_t<4, 1>(i, j, chans, kappa, p1, p2);
     if (p_.C == 3 && nc == 3) return solve_handles_t<3, 3>(i, j, chans, kappa, p1, p2);
@@ -310,6 +364,39 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
     }
 }
 
+// solve_handles for one quaternion channel, the others fixed (their terms from other_): the same
+// normal equations as solve_handles_t<4, 1>, a 2×2 system.
+void Fitter::solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
+                                double* p2) {
+    constexpr int C = 4;
+    const double yi = p_.y[i * C + chan], yj = p_.y[j * C + chan];
+    double A0 = 0.0, A1 = 0.0, A2 = 0.0, g0 = 0.0, g1 = 0.0;
+    for (std::size_t k = i + 1; k < j; ++k) {
+        const double* b = &bern_[k * 4];
+        const double e0 = b[0] * yi + b[3] * yj - p_.y[k * C + chan];
+        const double uc = p_.unit[k * C + chan];
+        const double ue = other_.terms[k * OtherChannels::kStride + 9] + uc * e0;
+        const double inv = 1.0 / p_.norm2[k];
+        const double ku = kappa * uc;
+        const double Me = inv * (4.0 * e0 - ku * ue);
+        const double m = inv * (4.0 - ku * uc);
+        const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
+        g0 -= w1 * Me;
+        g1 -= w2 * Me;
+        A0 += w1 * b[1] * m;
+        A1 += w1 * b[2] * m;
+        A2 += w2 * b[2] * m;
+    }
+    const double d = p_.t[j] - p_.t[i];
+    const double lambda = 1e-7;
+    double H[4] = {A0 + lambda, A1, A1, A2 + lambda};
+    double rhs[2] = {g0 + lambda * (yi + p_.slope[i * C + chan] * d / 3.0),
+                     g1 + lambda * (yj - p_.slope[j * C + chan] * d / 3.0)};
+    solve_spd<2>(H, rhs);
+    p1[0] = rhs[0];
+    p2[0] = rhs[1];
+}
+
 // Fitted values of the channels at the interior samples (into buf_), their tan²(θ/2) errors (into
 // err_) and the largest.
 // Between samples the fit is guarded too (quaternion BEZIER, every Euler and axis-angle fit): midway
@@ -351,6 +438,8 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
     // an axis-angle axis's (any interpolation: two axes 90° apart lerp through 0.71 of their length).
     const bool norm_check = C == 4 && (quat_bezier || p_.kind == Kind::AXIS_ANGLE);
     const bool guard = quat_bezier || p_.kind != Kind::QUAT;
+    // One quaternion channel: the others' part of the error from other_ (filled by fit).
+    const bool other = C == 4 && NC == 1 && p_.kind == Kind::QUAT;
     int ch[NC];
     double yi[NC], yj[NC];
     for (int a = 0; a < NC; ++a) {
@@ -369,15 +458,27 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
     double worst = 0.0;
     for (std::size_t k = i + 1; k < j; ++k) {
         double f[kMaxChannels] = {};
-        if (NC < C)
+        if (NC < C && !other)
             for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
         fitted(u_[k], &bern_[k * 4], f);
         for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
-        const double e = error_tan2(p_, k, f);
+        double e;
+        bool norm_failed;
+        if (other) {
+            const double* o = &other_.terms[k * OtherChannels::kStride];
+            const double x = f[ch[0]];
+            const double d[4] = {o[0] + x * o[4], o[1] + x * o[5], o[2] + x * o[6], o[3] + x * o[7]};
+            e = tan2_of_relative(d);
+            norm_failed = norm_check &&
+                          !(o[8] + x * x >= kMinNormRatio * kMinNormRatio * p_.norm2[k]);
+        } else {
+            e = error_tan2(p_, k, f);
+            norm_failed = norm_check && !norm_ok(p_, f, p_.norm2[k]);
+        }
         err_[k] = e;
         worst = std::max(worst, e);
         if (worst > give_up) return worst;  // the caller rejects the fit without looking further
-        if (norm_check && !norm_ok(p_, f, p_.norm2[k])) {
+        if (norm_failed) {
             between_failed_ = true;
             return std::numeric_limits<double>::infinity();
         }
@@ -390,29 +491,44 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
             const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
             const double u = 0.5 * (prev_u + next_u);
             prev_u = next_u;
-            double f[kMaxChannels] = {}, mean[kMaxChannels] = {}, b[4];
-            for (int c = 0; c < C; ++c) {
-                if (NC < C) f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
-                mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
-            }
+            double f[kMaxChannels] = {}, b[4];
+            if (NC < C && !other)
+                for (int c = 0; c < C; ++c) f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
             if (!linear) bernstein(u, b);
             fitted(u, b, f);
-            if (norm_check && !norm_ok(p_, f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
-                between_failed_ = true;
-                return std::numeric_limits<double>::infinity();
-            }
-            Quat ref;
-            if constexpr (C == 4) {
-                ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
-                                            : axis_angle_rotation(mean);
+            const double norm2 = std::min(p_.norm2[k], p_.norm2[k + 1]);
+            double e;
+            if (other) {
+                const double* o = &other_.terms[k * OtherChannels::kStride + 10];
+                const double x = f[ch[0]];
+                if (norm_check && !(o[8] + x * x >= kMinNormRatio * kMinNormRatio * norm2)) {
+                    between_failed_ = true;
+                    return std::numeric_limits<double>::infinity();
+                }
+                const double d[4] = {o[0] + x * o[4], o[1] + x * o[5], o[2] + x * o[6],
+                                     o[3] + x * o[7]};
+                e = tan2_of_relative(d);
             } else {
-                ref = euler_rotation(p_, mean);
+                double mean[kMaxChannels] = {};
+                for (int c = 0; c < C; ++c) mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
+                if (norm_check && !norm_ok(p_, f, norm2)) {
+                    between_failed_ = true;
+                    return std::numeric_limits<double>::infinity();
+                }
+                Quat ref;
+                if constexpr (C == 4) {
+                    ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
+                                                : axis_angle_rotation(mean);
+                } else {
+                    ref = euler_rotation(p_, mean);
+                }
+                e = error_tan2(p_, ref, f);
             }
             const double denom = 1.0 - tan_fit * p_.step_tan[k];
             const double t = (tan_fit + p_.step_tan[k]) / denom;
             const double between_limit =
                 denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
-            if (!(error_tan2(p_, ref, f) <= between_limit)) {
+            if (!(e <= between_limit)) {
                 between_failed_ = true;
                 return std::numeric_limits<double>::infinity();
             }
@@ -424,6 +540,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
 void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                     const double* p2, bool exact_param) {
     const int C = p_.C;
+    if (nc != 1 || chans[0] != other_.chan) ++other_.epoch;  // other_'s fixed channels change
     for (int a = 0; a < nc; ++a) {
         const int c = chans[a];
         for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
