@@ -180,7 +180,7 @@ void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
     constexpr int C = 4;
     if (other_.stamp.empty()) {
         other_.stamp.assign(p_.n, 0);
-        other_.terms.resize(p_.n * OtherChannels::kStride);
+        other_.terms.reset(new double[p_.n * OtherChannels::kStride]);  // filled before it is read
     }
     if (chan != other_.chan) {
         other_.chan = chan;
@@ -202,7 +202,8 @@ void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
         }
         o[8] = F[0] * F[0] + F[1] * F[1] + F[2] * F[2] + F[3] * F[3] - F[chan] * F[chan];
         o[9] = ue - u[chan] * (F[chan] - y[chan]);
-        if (k + 1 == p_.n) continue;
+        // The midpoint terms serve the between-samples guard (BEZIER only for quaternions).
+        if (k + 1 == p_.n || ipo_ == KeyInterpolation::LINEAR) continue;
         double q[C], mean[C];
         for (int c = 0; c < C; ++c) {
             q[c] = 0.5 * (F[c] + F[C + c]);

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "numbers.hpp"
@@ -285,7 +286,7 @@ private:
         int chan = -1;
         unsigned epoch = 1;
         std::vector<unsigned> stamp;
-        std::vector<double> terms;
+        std::unique_ptr<double[]> terms;
     };
     void other_channels(std::size_t i, std::size_t j, int chan);
     void solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
