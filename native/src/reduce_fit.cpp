@@ -442,17 +442,19 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
     // One quaternion channel: the others' part of the error from other_ (filled by fit).
     const bool other = C == 4 && NC == 1 && p_.kind == Kind::QUAT;
     int ch[NC];
-    double yi[NC], yj[NC];
+    double yi[NC], yj[NC], c1[NC], c2[NC];  // local copies: the stores below may not alias them
     for (int a = 0; a < NC; ++a) {
         ch[a] = NC == C ? a : chans[a];
         yi[a] = p_.y[i * C + ch[a]];
         yj[a] = p_.y[j * C + ch[a]];
+        c1[a] = p1[a];
+        c2[a] = p2[a];
     }
     // The fitted channels at parameter u (b: the Bezier basis there) into f.
     auto fitted = [&](double u, const double* b, double* f) {
         for (int a = 0; a < NC; ++a) {
             f[ch[a]] = linear ? yi[a] + (yj[a] - yi[a]) * u
-                              : b[0] * yi[a] + b[1] * p1[a] + b[2] * p2[a] + b[3] * yj[a];
+                              : b[0] * yi[a] + b[1] * c1[a] + b[2] * c2[a] + b[3] * yj[a];
         }
     };
     between_failed_ = false;
@@ -497,7 +499,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
                 for (int c = 0; c < C; ++c) f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
             if (!linear) bernstein(u, b);
             fitted(u, b, f);
-            const double norm2 = std::min(p_.norm2[k], p_.norm2[k + 1]);
+            const double norm2 = norm_check ? std::min(p_.norm2[k], p_.norm2[k + 1]) : 0.0;
             double e;
             if (other) {
                 const double* o = &other_.terms[k * OtherChannels::kStride + 10];

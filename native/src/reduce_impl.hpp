@@ -49,10 +49,10 @@ constexpr int kReweightIterationsSingle = 2;
 // A fit whose worst sample after reweighting round r (0: the plain least-squares fit) is above
 // kHopeless[r] × the limit (in tan²(θ/2); 4 is twice the angle) is rejected without further rounds.
 // Each round lowers the worst sample by less than the one before, and half of all rounds went to
-// fits that failed in the end. Rarely a fit that would have passed later is given up (a few in 10⁵
-// on the 100-bone SQUAD benchmark; the greedy search then finds another end, and the key counts of
-// the benchmark and of the motion-capture clips stayed the same): of those passing later, the worst
-// after rounds 0 to 3 reached 4.0, 2.2, 1.9, 1.2 × the limit.
+// fits that failed in the end. Of the fits that passed after reweighting on the 100-bone SQUAD
+// benchmark (synchronized), the worst after rounds 0 to 3 had reached 4.0, 2.2, 1.9, 1.2 × the
+// limit: these bounds give up one of ~47,000 such fits (the greedy search then takes another end;
+// the key counts of that benchmark and of the motion-capture clips stayed the same).
 constexpr double kHopeless[kReweightIterations] = {4.0, 2.5, 1.75, 1.4};
 using numbers::kPi;
 // The rotation ignores a quaternion's scale (and an axis-angle axis's length), so the fit may let the
@@ -284,8 +284,8 @@ private:
         // without the radial term.
         static constexpr int kStride = 20;
         int chan = -1;
-        unsigned epoch = 1;
-        std::vector<unsigned> stamp;
+        std::size_t epoch = 1;
+        std::vector<std::size_t> stamp;
         std::unique_ptr<double[]> terms;
     };
     void other_channels(std::size_t i, std::size_t j, int chan);
