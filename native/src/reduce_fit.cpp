@@ -15,27 +15,38 @@ namespace {
 
 // Solves H·x = g (H symmetric positive definite, dim ≤ 8) by Cholesky; H and g are overwritten.
 // A non-positive pivot (degenerate data) is lifted to a tiny positive value, so a solution always
-// comes back; the fit's quality is judged by the error test anyway.
-void solve_spd(double* H, double* g, int dim) {
+// comes back; the fit's quality is judged by the error test anyway. dim is a template argument and
+// the loops are unrolled: a reduction solves some 10⁴ of these small systems per bone, and rolled
+// loops of 1 to 7 steps cost three times the arithmetic.
+template <int dim>
+void solve_spd(double* H, double* g) {
+#pragma GCC unroll 8
     for (int j = 0; j < dim; ++j) {
         double d = H[j * dim + j];
+#pragma GCC unroll 8
         for (int k = 0; k < j; ++k) d -= H[j * dim + k] * H[j * dim + k];
         if (!(d > 1e-300)) d = 1e-300;
         const double L = std::sqrt(d);
         H[j * dim + j] = L;
+#pragma GCC unroll 8
         for (int i = j + 1; i < dim; ++i) {
             double s = H[i * dim + j];
+#pragma GCC unroll 8
             for (int k = 0; k < j; ++k) s -= H[i * dim + k] * H[j * dim + k];
             H[i * dim + j] = s / L;
         }
     }
+#pragma GCC unroll 8
     for (int i = 0; i < dim; ++i) {
         double s = g[i];
+#pragma GCC unroll 8
         for (int k = 0; k < i; ++k) s -= H[i * dim + k] * g[k];
         g[i] = s / H[i * dim + i];
     }
+#pragma GCC unroll 8
     for (int i = dim - 1; i >= 0; --i) {
         double s = g[i];
+#pragma GCC unroll 8
         for (int k = i + 1; k < dim; ++k) s -= H[k * dim + i] * g[k];
         g[i] = s / H[i * dim + i];
     }
@@ -56,6 +67,16 @@ bool norm_ok(const Problem& p, const double* f, double norm2) {
     return f2 >= kMinNormRatio * kMinNormRatio * norm2;
 }
 
+// conj(r)·e_c for the unit quaternion e_c of channel c: r's components, permuted and signed.
+void relative_unit(const Quat& r, int c, double d[4]) {
+    switch (c) {
+    case 0: d[0] = r.w, d[1] = -r.x, d[2] = -r.y, d[3] = -r.z; break;
+    case 1: d[0] = r.x, d[1] = r.w, d[2] = -r.z, d[3] = r.y; break;
+    case 2: d[0] = r.y, d[1] = r.z, d[2] = r.w, d[3] = -r.x; break;
+    default: d[0] = r.z, d[1] = -r.y, d[2] = r.x, d[3] = r.w; break;
+    }
+}
+
 }  // namespace
 
 State empty_state(const Problem& p) {
@@ -70,6 +91,7 @@ State empty_state(const Problem& p) {
 
 Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s) : p_(p), ipo_(ipo), s_(s) {
     buf_.resize(p.n * p.C);
+    bern_.resize(p.n * 4);
     u_.resize(p.n);
     w_.resize(p.n);
     err_.resize(p.n);
@@ -91,6 +113,9 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             if (r >= 0.0f) u_[k] = r;
         }
     }
+    if (ipo_ == KeyInterpolation::BEZIER)
+        for (std::size_t k = i + 1; k < j; ++k) bernstein(u_[k], &bern_[k * 4]);
+    if (p_.kind == Kind::QUAT && nc == 1) other_channels(i, j, chans[0]);
     double p1[kMaxChannels] = {}, p2[kMaxChannels] = {};
     bool ok;
     if (ipo_ == KeyInterpolation::LINEAR || j - i < 2) {
@@ -121,16 +146,19 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             const int iterations = nc == 1 ? kReweightIterationsSingle : kReweightIterations;
             for (int it = 0; it <= iterations; ++it) {
                 solve_handles(i, j, chans, nc, kappa, p1, p2);
-                const double worst = evaluate(
-                    i, j, chans, nc, p1, p2, limit,
-                    force ? std::numeric_limits<double>::infinity() : kHopeless * limit);
+                // The last round keeps the first round's bound: over the limit it fails anyway,
+                // but a norm dip further on is still found (and refitted with radial weights).
+                const double give_up = force ? std::numeric_limits<double>::infinity()
+                                       : it < iterations ? kHopeless[it] * limit
+                                                         : kHopeless[0] * limit;
+                const double worst = evaluate(i, j, chans, nc, p1, p2, limit, give_up);
                 if (worst <= limit) {
                     ok = true;
                     break;
                 }
-                // Reweighting cannot fix the norm, nor hopeless segments (far over the limit).
-                if (between_failed_ || (!force && worst > kHopeless * limit)) break;
-                if (it == iterations) break;
+                // Reweighting cannot fix the norm, nor hopeless segments (too far over the limit
+                // for the rounds left).
+                if (between_failed_ || worst > give_up || it == iterations) break;
                 // Lawson-style reweighting toward the minimax fit: w ← w·err, normalized.
                 double total = 0.0;
                 for (std::size_t k = i + 1; k < j; ++k) {
@@ -146,6 +174,49 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
     return ok;
 }
 
+// other_'s terms of samples i..j (and of the midpoints after them) for fits of channel `chan`:
+// d_o = conj(ref)·q − q_c·d_c from the fitted values q, with the channel's value taken out.
+void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
+    constexpr int C = 4;
+    if (other_.stamp.empty()) {
+        other_.stamp.assign(p_.n, 0);
+        other_.terms.reset(new double[p_.n * OtherChannels::kStride]);  // filled before it is read
+    }
+    if (chan != other_.chan) {
+        other_.chan = chan;
+        ++other_.epoch;
+    }
+    for (std::size_t k = i; k <= j; ++k) {
+        if (other_.stamp[k] == other_.epoch) continue;
+        other_.stamp[k] = other_.epoch;
+        double* o = &other_.terms[k * OtherChannels::kStride];
+        const double* F = &s_.F[k * C];
+        const double* y = &p_.y[k * C];
+        const double* u = &p_.unit[k * C];
+        relative_rotation(p_.ref[k], F, o);
+        relative_unit(p_.ref[k], chan, o + 4);
+        double ue = 0.0;
+        for (int c = 0; c < C; ++c) {
+            o[c] -= F[chan] * o[4 + c];
+            ue += u[c] * (F[c] - y[c]);
+        }
+        o[8] = F[0] * F[0] + F[1] * F[1] + F[2] * F[2] + F[3] * F[3] - F[chan] * F[chan];
+        o[9] = ue - u[chan] * (F[chan] - y[chan]);
+        // The midpoint terms serve the between-samples guard (BEZIER only for quaternions).
+        if (k + 1 == p_.n || ipo_ == KeyInterpolation::LINEAR) continue;
+        double q[C], mean[C];
+        for (int c = 0; c < C; ++c) {
+            q[c] = 0.5 * (F[c] + F[C + c]);
+            mean[c] = 0.5 * (y[c] + y[C + c]);
+        }
+        const Quat ref(mean[0], mean[1], mean[2], mean[3]);
+        relative_rotation(ref, q, o + 10);
+        relative_unit(ref, chan, o + 14);
+        for (int c = 0; c < C; ++c) o[10 + c] -= q[chan] * o[14 + c];
+        o[18] = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - q[chan] * q[chan];
+    }
+}
+
 void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
     const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
     hx[0] = float(ti + d / 3.0);
@@ -158,6 +229,7 @@ void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
 // directions the data leave free (few samples; the radial direction of quaternions).
 void Fitter::solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
                            double* p1, double* p2) {
+    if (p_.kind == Kind::QUAT && nc == 1) return solve_quat_channel(i, j, chans[0], kappa, p1, p2);
     if (p_.C == 4 && nc == 4) return solve_handles_t<4, 4>(i, j, chans, kappa, p1, p2);
     if (p_.C == 4 && nc == 1) return solve_handles_t<4, 1>(i, j, chans, kappa, p1, p2);
     if (p_.C == 3 && nc == 3) return solve_handles_t<3, 3>(i, j, chans, kappa, p1, p2);
@@ -193,8 +265,7 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
     double A[3][NC][NC] = {};
     double g[2][NC] = {};
     for (std::size_t k = i + 1; k < j; ++k) {
-        double b[4];
-        bernstein(u_[k], b);
+        const double* b = &bern_[k * 4];
         const double* yk = &p_.y[k * C];
         double e0[C];
         if (NC == C) {
@@ -233,13 +304,17 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
                 const double* u = &p_.unit[k * 4];
                 const double inv = 1.0 / p_.norm2[k];
                 const double ue = u[0] * e0[0] + u[1] * e0[1] + u[2] * e0[2] + u[3] * e0[3];
+                double ku[NC];
+                for (int a = 0; a < NC; ++a) ku[a] = kappa * u[ch[a]];
+                // Unrolled (GCC leaves these short loops rolled): the hottest lines of a reduction.
+#pragma GCC unroll 4
                 for (int a = 0; a < NC; ++a) {
-                    const double ua = u[ch[a]];
-                    const double Me = inv * (4.0 * e0[ch[a]] - kappa * ua * ue);
+                    const double Me = inv * (4.0 * e0[ch[a]] - ku[a] * ue);
                     g[0][a] -= w1 * Me;
                     g[1][a] -= w2 * Me;
+#pragma GCC unroll 4
                     for (int bb = 0; bb <= a; ++bb) {
-                        const double m = inv * ((a == bb ? 4.0 : 0.0) - kappa * ua * u[ch[bb]]);
+                        const double m = inv * ((a == bb ? 4.0 : 0.0) - ku[a] * u[ch[bb]]);
                         A[0][a][bb] += s11 * m;
                         A[1][a][bb] += s12 * m;
                         A[2][a][bb] += s22 * m;
@@ -283,11 +358,44 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
         rhs[a] += lambda * d1;
         rhs[NC + a] += lambda * d2;
     }
-    solve_spd(H, rhs, dim);
+    solve_spd<dim>(H, rhs);
     for (int a = 0; a < NC; ++a) {
         p1[a] = rhs[a];
         p2[a] = rhs[NC + a];
     }
+}
+
+// solve_handles for one quaternion channel, the others fixed (their terms from other_): the same
+// normal equations as solve_handles_t<4, 1>, a 2×2 system.
+void Fitter::solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
+                                double* p2) {
+    constexpr int C = 4;
+    const double yi = p_.y[i * C + chan], yj = p_.y[j * C + chan];
+    double A0 = 0.0, A1 = 0.0, A2 = 0.0, g0 = 0.0, g1 = 0.0;
+    for (std::size_t k = i + 1; k < j; ++k) {
+        const double* b = &bern_[k * 4];
+        const double e0 = b[0] * yi + b[3] * yj - p_.y[k * C + chan];
+        const double uc = p_.unit[k * C + chan];
+        const double ue = other_.terms[k * OtherChannels::kStride + 9] + uc * e0;
+        const double inv = 1.0 / p_.norm2[k];
+        const double ku = kappa * uc;
+        const double Me = inv * (4.0 * e0 - ku * ue);
+        const double m = inv * (4.0 - ku * uc);
+        const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
+        g0 -= w1 * Me;
+        g1 -= w2 * Me;
+        A0 += w1 * b[1] * m;
+        A1 += w1 * b[2] * m;
+        A2 += w2 * b[2] * m;
+    }
+    const double d = p_.t[j] - p_.t[i];
+    const double lambda = 1e-7;
+    double H[4] = {A0 + lambda, A1, A1, A2 + lambda};
+    double rhs[2] = {g0 + lambda * (yi + p_.slope[i * C + chan] * d / 3.0),
+                     g1 + lambda * (yj - p_.slope[j * C + chan] * d / 3.0)};
+    solve_spd<2>(H, rhs);
+    p1[0] = rhs[0];
+    p2[0] = rhs[1];
 }
 
 // Fitted values of the channels at the interior samples (into buf_), their tan²(θ/2) errors (into
@@ -305,68 +413,125 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
 // fitted here take the mean of their neighbouring fitted values midway.
 double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                         const double* p2, double limit, double give_up) {
-    const int C = p_.C;
-    const bool quat_bezier = p_.kind == Kind::QUAT && ipo_ == KeyInterpolation::BEZIER;
+    if (p_.C == 4 && nc == 4) return evaluate_t<4, 4>(i, j, chans, p1, p2, limit, give_up);
+    if (p_.C == 4 && nc == 1) return evaluate_t<4, 1>(i, j, chans, p1, p2, limit, give_up);
+    if (p_.C == 3 && nc == 3) return evaluate_t<3, 3>(i, j, chans, p1, p2, limit, give_up);
+    return evaluate_t<3, 1>(i, j, chans, p1, p2, limit, give_up);
+}
+
+// tan of half the angle kBetweenFactor × the fit's (limit: tan²(θ/2)). Every fit of a key choice
+// shares its limit, so the last one is kept rather than calling tan and atan per fit.
+double Fitter::between_tan(double limit) {
+    if (limit != between_limit_) {
+        between_limit_ = limit;
+        between_tan_ = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+    }
+    return between_tan_;
+}
+
+// evaluate for C channels of which NC are fitted (NC == C: all, in order; the others keep F).
+template <int C, int NC>
+double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const double* p1,
+                          const double* p2, double limit, double give_up) {
+    const bool linear = ipo_ == KeyInterpolation::LINEAR;
+    const bool quat_bezier = p_.kind == Kind::QUAT && !linear;
     // The norm check: a quaternion's (BEZIER: LINEAR cannot dip without a sign flip, a break) or
     // an axis-angle axis's (any interpolation: two axes 90° apart lerp through 0.71 of their length).
-    const bool norm_check = quat_bezier || p_.kind == Kind::AXIS_ANGLE;
+    const bool norm_check = C == 4 && (quat_bezier || p_.kind == Kind::AXIS_ANGLE);
     const bool guard = quat_bezier || p_.kind != Kind::QUAT;
+    // One quaternion channel: the others' part of the error from other_ (filled by fit).
+    const bool other = C == 4 && NC == 1 && p_.kind == Kind::QUAT;
+    int ch[NC];
+    double yi[NC], yj[NC], c1[NC], c2[NC];  // local copies: the stores below may not alias them
+    for (int a = 0; a < NC; ++a) {
+        ch[a] = NC == C ? a : chans[a];
+        yi[a] = p_.y[i * C + ch[a]];
+        yj[a] = p_.y[j * C + ch[a]];
+        c1[a] = p1[a];
+        c2[a] = p2[a];
+    }
+    // The fitted channels at parameter u (b: the Bezier basis there) into f.
+    auto fitted = [&](double u, const double* b, double* f) {
+        for (int a = 0; a < NC; ++a) {
+            f[ch[a]] = linear ? yi[a] + (yj[a] - yi[a]) * u
+                              : b[0] * yi[a] + b[1] * c1[a] + b[2] * c2[a] + b[3] * yj[a];
+        }
+    };
     between_failed_ = false;
     double worst = 0.0;
     for (std::size_t k = i + 1; k < j; ++k) {
-        double* f = &buf_[k * C];
-        for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
-        if (ipo_ == KeyInterpolation::LINEAR) {
-            const double u = u_[k];
-            for (int a = 0; a < nc; ++a) {
-                const int c = chans[a];
-                f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
-            }
+        double f[kMaxChannels] = {};
+        if (NC < C && !other)
+            for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
+        fitted(u_[k], &bern_[k * 4], f);
+        for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
+        double e;
+        bool norm_failed;
+        if (other) {
+            const double* o = &other_.terms[k * OtherChannels::kStride];
+            const double x = f[ch[0]];
+            const double d[4] = {o[0] + x * o[4], o[1] + x * o[5], o[2] + x * o[6], o[3] + x * o[7]};
+            e = tan2_of_relative(d);
+            norm_failed = norm_check &&
+                          !(o[8] + x * x >= kMinNormRatio * kMinNormRatio * p_.norm2[k]);
         } else {
-            bezier_values(i, j, chans, nc, p1, p2, u_[k], f);
+            e = error_tan2(p_, k, f);
+            norm_failed = norm_check && !norm_ok(p_, f, p_.norm2[k]);
         }
-        const double e = error_tan2(p_, k, f);
         err_[k] = e;
         worst = std::max(worst, e);
         if (worst > give_up) return worst;  // the caller rejects the fit without looking further
-        if (norm_check && !norm_ok(p_, f, p_.norm2[k])) {
+        if (norm_failed) {
             between_failed_ = true;
             return std::numeric_limits<double>::infinity();
         }
     }
     if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
         // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
-        const double tan_fit = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+        const double tan_fit = between_tan(limit);
         double prev_u = 0.0;
         for (std::size_t k = i; k < j; ++k) {
             const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
             const double u = 0.5 * (prev_u + next_u);
             prev_u = next_u;
-            double f[kMaxChannels], mean[kMaxChannels];
-            for (int c = 0; c < C; ++c) {
-                f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
-                mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
-            }
-            if (ipo_ == KeyInterpolation::LINEAR) {
-                for (int a = 0; a < nc; ++a) {
-                    const int c = chans[a];
-                    f[c] = p_.y[i * C + c] + (p_.y[j * C + c] - p_.y[i * C + c]) * u;
+            double f[kMaxChannels] = {}, b[4];
+            if (NC < C && !other)
+                for (int c = 0; c < C; ++c) f[c] = 0.5 * (s_.F[k * C + c] + s_.F[(k + 1) * C + c]);
+            if (!linear) bernstein(u, b);
+            fitted(u, b, f);
+            const double norm2 = norm_check ? std::min(p_.norm2[k], p_.norm2[k + 1]) : 0.0;
+            double e;
+            if (other) {
+                const double* o = &other_.terms[k * OtherChannels::kStride + 10];
+                const double x = f[ch[0]];
+                if (norm_check && !(o[8] + x * x >= kMinNormRatio * kMinNormRatio * norm2)) {
+                    between_failed_ = true;
+                    return std::numeric_limits<double>::infinity();
                 }
+                const double d[4] = {o[0] + x * o[4], o[1] + x * o[5], o[2] + x * o[6],
+                                     o[3] + x * o[7]};
+                e = tan2_of_relative(d);
             } else {
-                bezier_values(i, j, chans, nc, p1, p2, u, f);
+                double mean[kMaxChannels] = {};
+                for (int c = 0; c < C; ++c) mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
+                if (norm_check && !norm_ok(p_, f, norm2)) {
+                    between_failed_ = true;
+                    return std::numeric_limits<double>::infinity();
+                }
+                Quat ref;
+                if constexpr (C == 4) {
+                    ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
+                                                : axis_angle_rotation(mean);
+                } else {
+                    ref = euler_rotation(p_, mean);
+                }
+                e = error_tan2(p_, ref, f);
             }
-            if (norm_check && !norm_ok(p_, f, std::min(p_.norm2[k], p_.norm2[k + 1]))) {
-                between_failed_ = true;
-                return std::numeric_limits<double>::infinity();
-            }
-            const Quat ref = p_.kind == Kind::QUAT         ? Quat(mean[0], mean[1], mean[2], mean[3])
-                             : p_.kind == Kind::AXIS_ANGLE ? axis_angle_rotation(mean)
-                                                           : euler_rotation(p_, mean);
             const double denom = 1.0 - tan_fit * p_.step_tan[k];
             const double t = (tan_fit + p_.step_tan[k]) / denom;
             const double between_limit =
                 denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
-            if (!(error_tan2(p_, ref, f) <= between_limit)) {
+            if (!(e <= between_limit)) {
                 between_failed_ = true;
                 return std::numeric_limits<double>::infinity();
             }
@@ -375,21 +540,10 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
     return worst;
 }
 
-// The fitted channels' Bezier values at parameter u, written into f.
-void Fitter::bezier_values(std::size_t i, std::size_t j, const int* chans, int nc,
-                           const double* p1, const double* p2, double u, double* f) const {
-    const int C = p_.C;
-    double b[4];
-    bernstein(u, b);
-    for (int a = 0; a < nc; ++a) {
-        const int c = chans[a];
-        f[c] = b[0] * p_.y[i * C + c] + b[1] * p1[a] + b[2] * p2[a] + b[3] * p_.y[j * C + c];
-    }
-}
-
 void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                     const double* p2, bool exact_param) {
     const int C = p_.C;
+    if (nc != 1 || chans[0] != other_.chan) ++other_.epoch;  // other_'s fixed channels change
     for (int a = 0; a < nc; ++a) {
         const int c = chans[a];
         for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
