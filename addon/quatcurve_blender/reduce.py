@@ -67,15 +67,15 @@ def parallel_map(fn, items):
 def parallel_imap(fn, items, busy_main=False):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
     so the caller (on the main thread) can use the first results while thread_count() workers compute
-    the rest (one thread: no workers, each call made when its result is asked for, after every item is
-    made). `items` may be a
-    generator that reads Blender on the main thread: each item is handed to the workers as soon as it
-    is made, and the first result is yielded only after the last item is made. While it runs, the
-    interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's Blender calls hold
-    it, and the workers need it briefly between their native calls (measured: a 100-target bake
-    0.69 s → 0.43 s). When the caller stops early (an error, a generator closed), the calls not yet
-    started are cancelled. busy_main: the caller keeps the main thread busy while the workers run
-    (the bake writes keys), so one worker fewer runs than thread_count() says."""
+    the rest. `items` may be a generator that reads Blender on the main thread: each item goes to the
+    workers as soon as it is made, and the first result is yielded only after the last item is made
+    (one thread: no workers; every item is made, then each call runs when its result is asked for).
+
+    While it runs, the interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's
+    Blender calls hold it, and the workers need it briefly between their native calls (measured: a
+    100-target bake 0.69 s → 0.43 s). When the caller stops early (an error, a generator closed), the
+    calls not yet started are cancelled. busy_main: the caller keeps the main thread busy while the
+    workers run (the bake writes keys), so one worker fewer runs than thread_count() says."""
     threads = thread_count()
     if hasattr(items, "__len__"):
         threads = min(threads, len(items))
