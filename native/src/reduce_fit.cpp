@@ -90,11 +90,11 @@ State empty_state(const Problem& p) {
 }
 
 Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s) : p_(p), ipo_(ipo), s_(s) {
-    buf_.resize(p.n * p.C);
-    bern_.resize(p.n * 4);
-    u_.resize(p.n);
-    w_.resize(p.n);
-    err_.resize(p.n);
+    buf_.reset(new double[p.n * p.C]);
+    bern_.reset(new double[p.n * 4]);
+    u_.reset(new double[p.n]);
+    w_.reset(new double[p.n]);
+    err_.reset(new double[p.n]);
 }
 
 bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
