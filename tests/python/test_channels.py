@@ -182,3 +182,17 @@ def test_sample_keys_refuses_bad_arguments():
         curve.sample_keys([[0.0, 1.0]], "QUATERNION")
     with pytest.raises(ValueError, match="reference"):
         curve.sample_keys([0.0, 1.0], "QUATERNION", [1.0, 0.0, 0.0])
+
+
+def test_sample_keys_follow_a_per_frame_euler_reference():
+    """The bake's same-order Euler output: one reference row per frame (the keyed angles, linear between
+    keys) keeps the keyed turn counts, exactly as quats_to_channels does with it."""
+    key_times = np.array([0.0, 10.0, 20.0])
+    key_angles = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 3.5], [0.0, 0.0, 7.0]])  # two turns past π
+    curve = qc.Curve.from_euler(key_times, key_angles, order="XYZ", method="SLERP")
+    frames = np.arange(0.0, 20.5, 0.5)
+    reference = np.column_stack([np.interp(frames, key_times, key_angles[:, i]) for i in range(3)])
+    expected = qc.quats_to_channels(curve.sample(frames), "XYZ", reference)
+    got = curve.sample_keys(frames, "XYZ", reference)
+    assert np.array_equal(got[:, :, 1].T, expected.astype(np.float32))
+    assert abs(got[2, -1, 1] - 7.0) < 1e-5  # the Z angle ends at 7 rad, not wrapped to 7 - 2π
