@@ -384,10 +384,16 @@ def evaluate(fcurve, frames):
     return out
 
 
-# Raw type of Keyframe.interpolation in bulk I/O: foreach_set takes a fast (memcpy-like) path only
-# when the buffer's type matches the DNA field — char in 3.x, uint8_t in 4.x/5.x — and goes key by
-# key through RNA otherwise (25x slower; the values are the same either way).
-_INTERPOLATION_DTYPE = np.int8 if bpy.app.version < (4, 0, 0) else np.uint8
+# Raw type of Keyframe's enums (interpolation, handle types, key type) in bulk I/O: foreach_set and
+# foreach_get take a fast (memcpy-like) path only when the buffer's type matches the DNA field — char
+# in 3.x, uint8_t in 4.x/5.x — and go key by key through RNA otherwise (14-25x slower; the values are
+# the same either way).
+KEY_ENUM_DTYPE = np.int8 if bpy.app.version < (4, 0, 0) else np.uint8
+# Reading them, and writing handle types: Blender 3.4's raw path reads bytes from elsewhere for these
+# (action digests changed between two reads), so there they go through int32 buffers — RNA's own path,
+# which reads correctly and ignores handle-type writes (set key by key instead, see _set_free_handles).
+KEY_ENUM_READ_DTYPE = np.int32 if bpy.app.version < (4, 0, 0) else np.uint8
+_NO_ENUM = -1 if KEY_ENUM_READ_DTYPE == np.int32 else 255  # no enum value: a buffer left untouched
 
 
 def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolation="BEZIER"):
@@ -449,7 +455,7 @@ def write_packed(fcurve, packed, interpolation="LINEAR"):
     points.add(n)
     points.foreach_set("co", packed.co)
     kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
-    points.foreach_set("interpolation", np.full(n, kind, dtype=_INTERPOLATION_DTYPE))
+    points.foreach_set("interpolation", np.full(n, kind, dtype=KEY_ENUM_DTYPE))
     if not packed.increasing:
         fcurve.update()
     return fcurve
@@ -488,7 +494,7 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
         points.add(n)
     points.foreach_set("co", packed.co)
     kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
-    points.foreach_set("interpolation", np.full(n, kind, dtype=_INTERPOLATION_DTYPE))
+    points.foreach_set("interpolation", np.full(n, kind, dtype=KEY_ENUM_DTYPE))
     if reuse:
         for point in points:
             if point.handle_left_type != "FREE":
@@ -524,7 +530,7 @@ def _set_free_handles(points, n):
         return
     free = _enum_value(bpy.types.Keyframe, "handle_left_type", "FREE")
     if _BULK_ENUM.get("handle_left_type", True):
-        buf = np.full(n, free, dtype=np.int32)
+        buf = np.full(n, free, dtype=KEY_ENUM_READ_DTYPE)
         points.foreach_set("handle_left_type", buf)
         points.foreach_set("handle_right_type", buf)
         if "handle_left_type" in _BULK_ENUM:
@@ -540,21 +546,20 @@ def _set_free_handles(points, n):
 
 def _get_enum(points, prop, n):
     """Enum values of every key (as int32). Blender 3.4's foreach_get leaves handle-type buffers
-    untouched, so a buffer still holding the -1 fill is read key by key (and from then on directly);
-    on a library-linked action it fills even `interpolation` with bytes from elsewhere (seen in the
-    fault table's digests), so there every key is read through RNA."""
-    buf = np.full(n, -1, dtype=np.int32)
+    untouched, so a buffer still holding its no-value fill is read key by key (and from then on
+    directly); on a library-linked action it fills even `interpolation` with bytes from elsewhere
+    (seen in the fault table's digests), so there every key is read through RNA."""
     linked = bpy.app.version < (4, 0, 0) and points.id_data.library is not None
     if not linked and _BULK_ENUM.get("get " + prop, True):
-        points.foreach_get(prop, buf)
-        if not n or not (buf == -1).any():
+        raw = np.full(n, _NO_ENUM, dtype=KEY_ENUM_READ_DTYPE)
+        points.foreach_get(prop, raw)
+        if not n or not (raw == _NO_ENUM).any():
             if n:
                 _BULK_ENUM["get " + prop] = True
-            return buf
+            return raw.astype(np.int32)
         _BULK_ENUM["get " + prop] = False
     items = bpy.types.Keyframe.bl_rna.properties[prop].enum_items
-    buf[:] = [items[getattr(point, prop)].value for point in points]
-    return buf
+    return np.array([items[getattr(point, prop)].value for point in points], dtype=np.int32).reshape(n)
 
 
 def read_key_types(fcurve):
@@ -569,7 +574,7 @@ def write_key_types(fcurve, types):
     points = fcurve.keyframe_points
     n = len(points)
     types = np.asarray(types, dtype=np.int64)
-    points.foreach_set("type", types.astype(_INTERPOLATION_DTYPE))
+    points.foreach_set("type", types.astype(KEY_ENUM_DTYPE))
     if n and not np.array_equal(_get_enum(points, "type", n), types):
         items = {item.value: item.identifier for item in bpy.types.Keyframe.bl_rna.properties["type"].enum_items}
         for point, t in zip(points, types):

@@ -127,7 +127,7 @@ def raw_digest(target):
         points = curve.keyframe_points
         n = len(points)
         co = np.empty(2 * n, dtype=np.float32)
-        types = np.empty(n, dtype=np.int32)
+        types = np.empty(n, dtype=fcurves.KEY_ENUM_READ_DTYPE)
         points.foreach_get("co", co)
         points.foreach_get("type", types)
         h.update(b"%d %d|" % (n, len(curve.modifiers)))
