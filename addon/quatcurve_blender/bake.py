@@ -207,6 +207,8 @@ class BakePlan:
             return np.column_stack([np.interp(self.frames, source.frames, source.values[:, i])
                                     for i in range(3)])
         if source.mode == item.output_mode:
+            if len(source.frames) and self.frames[0] == source.frames[0]:
+                return source.values[0].copy()  # read there already (the same evaluation)
             return source.evaluate(self.frames[:1])[0]
         return None
 
