@@ -298,8 +298,10 @@ Curve::Curve(std::vector<double> times, const std::vector<Quat>& quats, Method m
     raw_ = quats;
     quats_.reserve(quats.size());
     for (std::size_t i = 0; i < quats.size(); ++i) {
-        check_finite(quats[i], "quats[" + std::to_string(i) + "]");
-        quats_.push_back(normalized_rotation(quats[i], "quats[" + std::to_string(i) + "]"));
+        // The key's name is built for an error message only (per key it cost more than the key's math).
+        const std::string problem = nonzero_problem(quats[i]);
+        if (!problem.empty()) throw InvalidArgument("quats[" + std::to_string(i) + "]: " + problem);
+        quats_.push_back(normalized_rotation(quats[i]));
     }
     build();
 }

@@ -47,7 +47,13 @@ int scale_exponent(double a, double b, double c, double d) {
     return m > 0.0 && std::isfinite(m) ? std::ilogb(m) : 0;
 }
 
+// q·2^-e. Where 2^-e is a normal double the four products by it are ldexp's correctly rounded
+// results, one libm call instead of four; a subnormal q (e < −1022) takes ldexp itself.
 Quat scaled(const Quat& q, int e) {
+    if (e >= -1022 && e <= 1022) {
+        const double f = std::ldexp(1.0, -e);
+        return Quat(q.w * f, q.x * f, q.y * f, q.z * f);
+    }
     return Quat(std::ldexp(q.w, -e), std::ldexp(q.x, -e), std::ldexp(q.y, -e), std::ldexp(q.z, -e));
 }
 
