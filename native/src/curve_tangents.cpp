@@ -132,15 +132,21 @@ double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
     return len;
 }
 
-// Step 2: the λ of every knot. A segment's path is first bounded from above cheaply (`bound`, see
-// path_bound below); only a key segment whose bounds exceed its limit is sampled, so dense keys
-// (motion capture: small arcs, similar neighbours) cost no sampling at all.
-template <class Make, class At, class Bound>
-std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
-                                  Make&& make, At&& at, Bound&& bound) {
+// Step 2: the λ of every knot, and segs[i] = make(…) of every knot segment i with its knots' final
+// λ. A segment's path is first bounded from above cheaply (`bound`, see path_bound below); only a
+// key segment whose bounds exceed its limit is sampled, so dense keys (motion capture: small arcs,
+// similar neighbours) cost no sampling at all. segs[i] always holds knot segment i made with the
+// current λ: bounding, sampling and the result share one make per change of λ.
+template <class Seg, class Make, class At, class Bound>
+void clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
+                   std::vector<Seg>& segs, Make&& make, At&& at, Bound&& bound) {
     const std::size_t S = m.kr.size();
     std::vector<double> lambda(S + 1);
     for (std::size_t j = 0; j <= S; ++j) lambda[j] = fc_factor(m, T, j);
+    segs.resize(S);
+    auto remake = [&](std::size_t i) {
+        segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
+    };
 
     // Knot segments [first[k], first[k+1]) belong to key segment k.
     std::vector<std::size_t> first{0};
@@ -154,8 +160,8 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
     std::vector<double> len(S);
     std::vector<int> sampled(S);
     auto measure = [&](std::size_t i) {  // an upper bound, refined by sampling on demand
-        const Vec3 out = lambda[i] * T.out[i], in = lambda[i + 1] * T.in[i + 1];
-        len[i] = bound(m, i, out, in, make(m, i, out, in));
+        remake(i);
+        len[i] = bound(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1], segs[i]);
         sampled[i] = 0;
     };
     for (std::size_t i = 0; i < S; ++i) measure(i);
@@ -165,7 +171,7 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
         double L = 0.0;
         for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
             if (sampled[i] < samples) {
-                len[i] = sampled_path(make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]), at, samples);
+                len[i] = sampled_path(segs[i], at, samples);
                 sampled[i] = samples;
             }
             L += len[i];
@@ -182,19 +188,21 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
         if (search) {
             L = 0.0;
             for (std::size_t i = first[k]; i < first[k + 1]; ++i)
-                L += sampled[i] ? len[i]
-                                : sampled_path(make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]), at,
-                                               kSearchSamples);
+                L += sampled[i] ? len[i] : sampled_path(segs[i], at, kSearchSamples);
             return L <= limit(k);
         }
         if (refined(k, kSearchSamples) <= kCoarseShare * limit(k)) return true;
         return refined(k, kSamples) <= limit(k);
     };
-    // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch.
+    // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch:
+    // its own knot segments, and with `neighbours` the two next to it (the bisection's steps look at
+    // k's own only, so its neighbours are measured once, at the λ it settles on).
     std::vector<double> saved;
-    auto scale = [&](std::size_t k, double mu) {
+    auto scale = [&](std::size_t k, double mu, bool neighbours) {
         for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j - first[k]] * mu;
-        for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) measure(i);
+        const std::size_t i0 = neighbours && first[k] > 0 ? first[k] - 1 : first[k];
+        const std::size_t i1 = neighbours ? std::min(S, first[k + 1] + 1) : first[k + 1];
+        for (std::size_t i = i0; i < i1; ++i) measure(i);
     };
 
     for (int round = 0; round < 20; ++round) {
@@ -210,10 +218,10 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
             auto bisect = [&](bool search) {
                 for (int it = 0; it < 12; ++it) {
                     const double mid = 0.5 * (lo + hi);
-                    scale(k, mid);
+                    scale(k, mid, false);
                     (passes(k, search) ? lo : hi) = mid;
                 }
-                scale(k, lo);
+                scale(k, lo, true);
             };
             bisect(true);
             if (!passes(k)) {
@@ -222,12 +230,15 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
                 bisect(false);
             }
         }
-        if (!beyond) return lambda;
+        if (!beyond) return;
     }
-    for (std::size_t k = 0; k < K; ++k)
-        if (!passes(k))
-            for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
-    return lambda;
+    // The segments touched are made again (the later verdicts sample them at the new λ), their
+    // measures left as they were.
+    for (std::size_t k = 0; k < K; ++k) {
+        if (passes(k)) continue;
+        for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
+        for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) remake(i);
+    }
 }
 
 // Upper bounds of a segment's path length (angle integrated over s).
@@ -259,11 +270,12 @@ double squad_bound(const Curve::Impl& m, std::size_t i, const Vec3& out, const V
 template <class Seg, class Make, class At, class Bound>
 void build_segments(Curve::Impl& m, const KnotTangents& T, bool clamped, const std::vector<double>& key_arcs,
                     std::vector<Seg>& segs, Make&& make, At&& at, Bound&& bound) {
-    const std::size_t S = m.kr.size();
-    const std::vector<double> lambda =
-        clamped ? clamp_factors(m, T, key_arcs, make, at, bound) : std::vector<double>(S + 1, 1.0);
-    segs.resize(S);
-    for (std::size_t i = 0; i < S; ++i) segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
+    if (clamped) {
+        clamp_factors(m, T, key_arcs, segs, make, at, bound);
+        return;
+    }
+    segs.resize(m.kr.size());
+    for (std::size_t i = 0; i < segs.size(); ++i) segs[i] = make(m, i, T.out[i], T.in[i + 1]);
 }
 
 }  // namespace
