@@ -82,11 +82,12 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
 // |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
 namespace {
 
-// Samples i0 … i1 − 1 of `times`, all within segment g, four at a time (curve_simd.hpp).
-QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
-                                        double* out) {
+// Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
+// (for_groups or for_groups_columns, curve_simd.hpp).
+template <class Groups>
+QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
     auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
-        for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+        groups([&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
             const V4 s = (t - g.t0) * g.inv_h;
             const V4 s2 = s * s;
             V4 c1, k1, c2, k2;
@@ -119,6 +120,12 @@ QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, 
     }
 }
 
+// Samples i0 … i1 − 1 of `times`, all within segment g, as rows (w, x, y, z) at out + 4·i.
+QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
+                                        double* out) {
+    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE { for_groups(times, i0, i1, out, f); });
+}
+
 }  // namespace
 
 QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
@@ -132,11 +139,14 @@ QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::
 }
 
 QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out) {
+    QUATCURVE_EXPECTS(samples >= 3 && samples <= kMaxSegmentSamples, "sample_squad_segment: 3 … 64 samples");
     double times[kMaxSegmentSamples + 1];
     const double h = 1.0 / g.inv_h;
     for (std::size_t k = 0; k <= samples; ++k)
         times[k] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
-    squad_segment_run(g, times, 0, samples + 1, out);
+    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE {
+        for_groups_columns(times, samples + 1, kSegmentColumn, out, f);
+    });
 }
 
 void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

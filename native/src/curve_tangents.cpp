@@ -40,6 +40,7 @@
 #include <type_traits>
 
 #include "curve_impl.hpp"
+#include "curve_simd.hpp"
 
 namespace quatcurve::detail {
 
@@ -105,6 +106,32 @@ inline double chord_angle(const double* a, const double* b) {
     return 4.0 * std::sqrt(x2) * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 / 9))));
 }
 
+// chord_angle of four pairs of quaternions, lane by lane: the same operations in the same order,
+// so the same bits as four calls (this file is baseline code, no FMA contraction in either).
+// a, b: four w, then x, y, z at a + stride, … (columns of sample_squad_segment).
+QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_t stride, double* out) {
+    const QV p{load4(a), load4(a + stride), load4(a + 2 * stride), load4(a + 3 * stride)};
+    const QV q{load4(b), load4(b + stride), load4(b + 2 * stride), load4(b + 3 * stride)};
+    const V4 dot = p.w * q.w + p.x * q.x + p.y * q.y + p.z * q.z;
+    const V4 sign = select(dot < splat(0.0), splat(-1.0), splat(1.0));
+    V4 d2 = splat(0.0), s2 = splat(0.0);
+    auto add = [&](const V4& u, const V4& v) QUATCURVE_LAMBDA_INLINE {
+        const V4 d = u - sign * v, s = u + sign * v;
+        d2 += d * d;
+        s2 += s * s;
+    };
+    add(p.w, q.w);
+    add(p.x, q.x);
+    add(p.y, q.y);
+    add(p.z, q.z);
+    const V4 x2 = d2 / s2;
+    const V4 r = 4.0 * sqrt4(x2) * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 / 9.0))));
+    std::memcpy(out, &r, sizeof r);
+    const M4 series = d2 * 64.0 < s2;
+    for (int k = 0; k < 4; ++k)
+        if (!series[k]) out[k] = 4.0 * std::atan2(std::sqrt(d2[k]), std::sqrt(s2[k]));
+}
+
 // Path length of segment g by `samples` chords: kSearchSamples first and while the bisection
 // searches, kSamples where that leaves the verdict close (a chord sum converges as 1/n²: 16 chords
 // of a smooth segment that turns 180° miss about 0.3°).
@@ -117,9 +144,11 @@ double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
     static_assert(kSamples <= static_cast<int>(kMaxSegmentSamples));
     double len = 0.0;
     if constexpr (std::is_same_v<Seg, SquadSeg>) {
-        double q[4 * (kMaxSegmentSamples + 1)];
+        static_assert(kSearchSamples % 4 == 0 && kSamples % 4 == 0);
+        double q[4 * kSegmentColumn], chords[kMaxSegmentSamples];
         sample_squad_segment(g, static_cast<std::size_t>(samples), q);
-        for (int k = 0; k < samples; ++k) len += chord_angle(q + 4 * k, q + 4 * k + 4);
+        for (int k = 0; k < samples; k += 4) chord_angles4(q + k, q + k + 1, kSegmentColumn, chords + k);
+        for (int k = 0; k < samples; ++k) len += chords[k];  // in order, as the rows' sum was
         return len;
     }
     double prev[4], cur[4];
