@@ -297,12 +297,7 @@ Curve::Curve(std::vector<double> times, const std::vector<Quat>& quats, Method m
     times_ = std::move(times);
     raw_ = quats;
     quats_.reserve(quats.size());
-    for (std::size_t i = 0; i < quats.size(); ++i) {
-        // The key's name is built for an error message only (per key it cost more than the key's math).
-        const std::string problem = nonzero_problem(quats[i]);
-        if (!problem.empty()) throw InvalidArgument("quats[" + std::to_string(i) + "]: " + problem);
-        quats_.push_back(normalized_rotation(quats[i]));
-    }
+    for (std::size_t i = 0; i < quats.size(); ++i) quats_.push_back(normalized_rotation(quats[i], "quats", i));
     build();
 }
 

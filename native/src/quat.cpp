@@ -138,6 +138,8 @@ std::string finite_problem(const std::array<double, 16>& m) {
 }
 
 std::string nonzero_problem(const Quat& q) {
+    const double s = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    if (s > 1e-290 && s < 1e290) return {};  // finite, and norm(q) = √s ≥ 1e-145 (the usual case, first)
     std::string p = finite_problem(q);
     if (p.empty() && norm(q) < kMinNorm) p = "zero-length quaternion";
     return p;
@@ -185,11 +187,26 @@ void check_nonzero(const Vec3& v, const std::string& what) {
     if (!p.empty()) fail(what, p);
 }
 
-Quat normalized_rotation(const Quat& q, const std::string& what) {
-    check_nonzero(q, what);
+namespace {
+
+// q/|q| for a finite nonzero q.
+Quat normalized_unchecked(const Quat& q) {
     const Quat s = scaled(q);  // |q| itself overflows for components near 1e308
     const double n = norm(s);
     return Quat(s.w / n, s.x / n, s.y / n, s.z / n);
+}
+
+}  // namespace
+
+Quat normalized_rotation(const Quat& q, const std::string& what) {
+    check_nonzero(q, what);
+    return normalized_unchecked(q);
+}
+
+Quat normalized_rotation(const Quat& q, const char* array, std::size_t index) {
+    const std::string p = nonzero_problem(q);
+    if (!p.empty()) fail(array + ("[" + std::to_string(index) + "]"), p);
+    return normalized_unchecked(q);
 }
 
 // ---- algebra -------------------------------------------------------------------------------------
