@@ -208,8 +208,8 @@ void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& opti
 std::vector<double> key_arcs(const Curve::Impl& m);
 SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_squad.cpp
 Q4 squad_at(const SquadSeg& g, double s);                                                      // curve_squad.cpp
-// The segment g at s = k/samples, k = 0 … samples (3 ≤ samples ≤ kMaxSegmentSamples), as sample()
-// computes them, by component: w[k] = out[k], x[k] = out[kSegmentColumn + k], y[k] at
+// The segment g at s = k/samples, k = 0 … samples (4 ≤ samples ≤ kMaxSegmentSamples), as sample()
+// computes them (at s = 0 up to the sign of a zero component, see curve_squad.cpp), by component: w[k] = out[k], x[k] = out[kSegmentColumn + k], y[k] at
 // 2·kSegmentColumn + k, z[k] at 3·kSegmentColumn + k (curve_squad.cpp).
 constexpr std::size_t kMaxSegmentSamples = 64;
 constexpr std::size_t kSegmentColumn = kMaxSegmentSamples + 1;

@@ -138,14 +138,21 @@ QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
+// The first sample is g.A itself: at s = 0 the formula gives A = Q exactly (c1 = 1, k1·s = 0 and
+// g = 0, so the outer exp is (1, ±0·X)), only a zero component's sign may differ, which no chord
+// angle sees. The others, s = 1/samples … 1, fill whole groups of four for 16 or 64 samples.
 QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out) {
-    QUATCURVE_EXPECTS(samples >= 3 && samples <= kMaxSegmentSamples, "sample_squad_segment: 3 … 64 samples");
-    double times[kMaxSegmentSamples + 1];
+    QUATCURVE_EXPECTS(samples >= 4 && samples <= kMaxSegmentSamples, "sample_squad_segment: 4 … 64 samples");
+    double times[kMaxSegmentSamples];
     const double h = 1.0 / g.inv_h;
-    for (std::size_t k = 0; k <= samples; ++k)
-        times[k] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
+    for (std::size_t k = 1; k <= samples; ++k)
+        times[k - 1] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
+    out[0] = g.A.w;
+    out[kSegmentColumn] = g.A.x;
+    out[2 * kSegmentColumn] = g.A.y;
+    out[3 * kSegmentColumn] = g.A.z;
     squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE {
-        for_groups_columns(times, samples + 1, kSegmentColumn, out, f);
+        for_groups_columns(times, samples, kSegmentColumn, out + 1, f);
     });
 }
 

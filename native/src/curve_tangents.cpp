@@ -291,8 +291,9 @@ double squad_bound(const Curve::Impl& m, std::size_t i, const Vec3& out, const V
     const double rr = glm::length(r), pp = std::sqrt(g.psi2), d = glm::length(g.psi - r);
     const double M = std::fmin(std::fmax(a, b) + d, 0.5 * (a + b + d));
     if (M >= 0.99 * kTwoPi) return HUGE_VAL;
-    const double W = std::fmin(rr + pp, d + 2.0 * std::sin(0.5 * std::fmin(M, kPi)) * rr);
-    const double kappa = M > 1e-8 ? 0.5 * M / std::sin(0.5 * M) : 1.0;
+    const double sin_half = std::sin(0.5 * std::fmin(M, kPi));  // for M ≤ π also κ's sin(M/2)
+    const double W = std::fmin(rr + pp, d + 2.0 * sin_half * rr);
+    const double kappa = M > 1e-8 ? 0.5 * M / (M <= kPi ? sin_half : std::sin(0.5 * M)) : 1.0;
     return rr + M + W * kappa / 3.0;
 }
 
