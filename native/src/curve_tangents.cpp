@@ -107,7 +107,7 @@ inline double chord_angle(const double* a, const double* b) {
 }
 
 // chord_angle of four pairs of quaternions, lane by lane: the same operations in the same order,
-// so the same bits as four calls (this file is baseline code, no FMA contraction in either).
+// so the same bits as four calls (with no FMA contraction in either, see squad_chord_angles).
 // a, b: four w, then x, y, z at a + stride, … (columns of sample_squad_segment).
 QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_t stride, double* out) {
     const QV p{load4(a), load4(a + stride), load4(a + 2 * stride), load4(a + 3 * stride)};
@@ -132,6 +132,13 @@ QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_
         if (!series[k]) out[k] = 4.0 * std::atan2(std::sqrt(d2[k]), std::sqrt(s2[k]));
 }
 
+// chords[k] = chord_angle of samples k and k + 1 of sample_squad_segment's columns q, k < samples
+// (a multiple of 4). Four at a time, in the x86-64-v3 clone too, unfused: each lane's bits are
+// those of the scalar chord_angle in baseline code.
+QUATCURVE_HOT_UNFUSED void squad_chord_angles(const double* q, int samples, double* chords) {
+    for (int k = 0; k < samples; k += 4) chord_angles4(q + k, q + k + 1, kSegmentColumn, chords + k);
+}
+
 // Path length of segment g by `samples` chords: kSearchSamples first and while the bisection
 // searches, kSamples where that leaves the verdict close (a chord sum converges as 1/n²: 16 chords
 // of a smooth segment that turns 180° miss about 0.3°).
@@ -147,7 +154,7 @@ double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
         static_assert(kSearchSamples % 4 == 0 && kSamples % 4 == 0);
         double q[4 * kSegmentColumn], chords[kMaxSegmentSamples];
         sample_squad_segment(g, static_cast<std::size_t>(samples), q);
-        for (int k = 0; k < samples; k += 4) chord_angles4(q + k, q + k + 1, kSegmentColumn, chords + k);
+        squad_chord_angles(q, samples, chords);
         for (int k = 0; k < samples; ++k) len += chords[k];  // in order, as the rows' sum was
         return len;
     }
