@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <string>
 
 #include "numbers.hpp"
@@ -42,16 +45,24 @@ double safe_norm3(const Vec3& v) { return safe_norm4(v.x, v.y, v.z, 0.0); }
 // The power of two 2^e with the largest |component| of x in [1, 2) (e = 0 for zero): dividing by it
 // is exact, so a quaternion's direction, a matrix's polar factor or a sandwich product can be
 // computed on x·2^-e without squares overflowing (components near 1e308) or underflowing (1e-300).
+// A normal m's exponent is read from its bits (what ilogb returns, without the libm call).
 int scale_exponent(double a, double b, double c, double d) {
     const double m = std::max({std::fabs(a), std::fabs(b), std::fabs(c), std::fabs(d)});
+    if (m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max()) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &m, sizeof bits);
+        return static_cast<int>(bits >> 52) - 1023;
+    }
     return m > 0.0 && std::isfinite(m) ? std::ilogb(m) : 0;
 }
 
-// q·2^-e. Where 2^-e is a normal double the four products by it are ldexp's correctly rounded
-// results, one libm call instead of four; a subnormal q (e < −1022) takes ldexp itself.
+// q·2^-e. Where 2^-e is a normal double (built from its exponent bits) the four products by it are
+// ldexp's correctly rounded results, without libm calls; a subnormal q (e < −1022) takes ldexp.
 Quat scaled(const Quat& q, int e) {
     if (e >= -1022 && e <= 1022) {
-        const double f = std::ldexp(1.0, -e);
+        const std::uint64_t bits = static_cast<std::uint64_t>(1023 - e) << 52;
+        double f;
+        std::memcpy(&f, &bits, sizeof f);
         return Quat(q.w * f, q.x * f, q.y * f, q.z * f);
     }
     return Quat(std::ldexp(q.w, -e), std::ldexp(q.x, -e), std::ldexp(q.y, -e), std::ldexp(q.z, -e));
