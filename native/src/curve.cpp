@@ -297,10 +297,7 @@ Curve::Curve(std::vector<double> times, const std::vector<Quat>& quats, Method m
     times_ = std::move(times);
     raw_ = quats;
     quats_.reserve(quats.size());
-    for (std::size_t i = 0; i < quats.size(); ++i) {
-        check_finite(quats[i], "quats[" + std::to_string(i) + "]");
-        quats_.push_back(normalized_rotation(quats[i], "quats[" + std::to_string(i) + "]"));
-    }
+    for (std::size_t i = 0; i < quats.size(); ++i) quats_.push_back(normalized_rotation(quats[i], "quats", i));
     build();
 }
 

@@ -146,11 +146,15 @@ QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double*
 // Hot samplers get an x86-64-v3 (AVX2, FMA) clone next to the baseline x86-64 one, chosen at load
 // time (GCC function multi-versioning), so the module still runs on any x86-64. Define
 // QUATCURVE_NO_MULTIVERSION to build the baseline only.
+// QUATCURVE_HOT_UNFUSED: the same clones without contracting a·b + c into an FMA, for kernels
+// whose every bit must match baseline scalar code (which has no FMA to contract into).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(QUATCURVE_NO_MULTIVERSION)
 #define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define QUATCURVE_HOT_UNFUSED __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=off")))
 #else
 #define QUATCURVE_HOT
+#define QUATCURVE_HOT_UNFUSED
 #endif
 
 struct Curve::Impl {
@@ -208,9 +212,11 @@ void build_tangent_curve(Curve::Impl& m, Method method, const CurveOptions& opti
 std::vector<double> key_arcs(const Curve::Impl& m);
 SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_squad.cpp
 Q4 squad_at(const SquadSeg& g, double s);                                                      // curve_squad.cpp
-// The segment g at s = k/samples, k = 0 … samples (samples ≤ kMaxSegmentSamples): samples + 1 rows
-// (w, x, y, z) into out, as sample() computes them (curve_squad.cpp).
+// The segment g at s = k/samples, k = 0 … samples (4 ≤ samples ≤ kMaxSegmentSamples), as sample()
+// computes them (at s = 0 up to the sign of a zero component, see curve_squad.cpp), by component: w[k] = out[k], x[k] = out[kSegmentColumn + k], y[k] at
+// 2·kSegmentColumn + k, z[k] at 3·kSegmentColumn + k (curve_squad.cpp).
 constexpr std::size_t kMaxSegmentSamples = 64;
+constexpr std::size_t kSegmentColumn = kMaxSegmentSamples + 1;
 void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out);
 BezierSeg make_bezier_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, const Vec3& in);  // curve_catmull_rom.cpp
 Q4 bezier_at(const BezierSeg& g, double s);                                                       // curve_catmull_rom.cpp

@@ -136,6 +136,25 @@ QUATCURVE_INLINE V4 atan2_over_n_any4(const V4& n, const V4& w) {
     return select(~pos & (n == zero), zero, r);
 }
 
+// Calls f(t, q) for the times [0, n), n ≥ 4, four at a time and stores q by component: w at out[i],
+// x at out[stride + i], y at out[2·stride + i], z at out[3·stride + i]. When n is not a multiple of
+// four the last group overlaps the one before (the rows written twice get the same values).
+template <class F>
+QUATCURVE_INLINE void for_groups_columns(const double* times, std::size_t n, std::size_t stride, double* out,
+                                         F&& f) {
+    QUATCURVE_EXPECTS(n >= 4, "for_groups_columns: four times or more");
+    QV q;
+    for (std::size_t i = 0;; i += 4) {
+        if (i + 4 > n) i = n - 4;
+        f(load4(times + i), q);
+        std::memcpy(out + i, &q.w, sizeof q.w);
+        std::memcpy(out + stride + i, &q.x, sizeof q.x);
+        std::memcpy(out + 2 * stride + i, &q.y, sizeof q.y);
+        std::memcpy(out + 3 * stride + i, &q.z, sizeof q.z);
+        if (i + 4 >= n) return;
+    }
+}
+
 // Calls f(t, q) for the times [i0, i1) four at a time (q: the four samples' quaternions) and stores
 // q at out + 4·i. A run of four or more ends with a group that overlaps the one before (lanes are
 // independent, so the rows written twice get the same values); a shorter run is padded with its last

@@ -82,11 +82,12 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
 // |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
 namespace {
 
-// Samples i0 … i1 − 1 of `times`, all within segment g, four at a time (curve_simd.hpp).
-QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
-                                        double* out) {
+// Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
+// (for_groups or for_groups_columns, curve_simd.hpp).
+template <class Groups>
+QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
     auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
-        for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+        groups([&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
             const V4 s = (t - g.t0) * g.inv_h;
             const V4 s2 = s * s;
             V4 c1, k1, c2, k2;
@@ -119,6 +120,12 @@ QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, 
     }
 }
 
+// Samples i0 … i1 − 1 of `times`, all within segment g, as rows (w, x, y, z) at out + 4·i.
+QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
+                                        double* out) {
+    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE { for_groups(times, i0, i1, out, f); });
+}
+
 }  // namespace
 
 QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
@@ -131,12 +138,22 @@ QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
 
+// The first sample is g.A itself: at s = 0 the formula gives A = Q exactly (c1 = 1, k1·s = 0 and
+// g = 0, so the outer exp is (1, ±0·X)), only a zero component's sign may differ, which no chord
+// angle sees. The others, s = 1/samples … 1, fill whole groups of four for 16 or 64 samples.
 QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out) {
-    double times[kMaxSegmentSamples + 1];
+    QUATCURVE_EXPECTS(samples >= 4 && samples <= kMaxSegmentSamples, "sample_squad_segment: 4 … 64 samples");
+    double times[kMaxSegmentSamples];
     const double h = 1.0 / g.inv_h;
-    for (std::size_t k = 0; k <= samples; ++k)
-        times[k] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
-    squad_segment_run(g, times, 0, samples + 1, out);
+    for (std::size_t k = 1; k <= samples; ++k)
+        times[k - 1] = g.t0 + h * (static_cast<double>(k) / static_cast<double>(samples));
+    out[0] = g.A.w;
+    out[kSegmentColumn] = g.A.x;
+    out[2 * kSegmentColumn] = g.A.y;
+    out[3 * kSegmentColumn] = g.A.z;
+    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE {
+        for_groups_columns(times, samples, kSegmentColumn, out + 1, f);
+    });
 }
 
 void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

@@ -40,6 +40,7 @@
 #include <type_traits>
 
 #include "curve_impl.hpp"
+#include "curve_simd.hpp"
 
 namespace quatcurve::detail {
 
@@ -105,6 +106,39 @@ inline double chord_angle(const double* a, const double* b) {
     return 4.0 * std::sqrt(x2) * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 / 9))));
 }
 
+// chord_angle of four pairs of quaternions, lane by lane: the same operations in the same order,
+// so the same bits as four calls (with no FMA contraction in either, see squad_chord_angles).
+// a, b: four w, then x, y, z at a + stride, … (columns of sample_squad_segment).
+QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_t stride, double* out) {
+    const QV p{load4(a), load4(a + stride), load4(a + 2 * stride), load4(a + 3 * stride)};
+    const QV q{load4(b), load4(b + stride), load4(b + 2 * stride), load4(b + 3 * stride)};
+    const V4 dot = p.w * q.w + p.x * q.x + p.y * q.y + p.z * q.z;
+    const V4 sign = select(dot < splat(0.0), splat(-1.0), splat(1.0));
+    V4 d2 = splat(0.0), s2 = splat(0.0);
+    auto add = [&](const V4& u, const V4& v) QUATCURVE_LAMBDA_INLINE {
+        const V4 d = u - sign * v, s = u + sign * v;
+        d2 += d * d;
+        s2 += s * s;
+    };
+    add(p.w, q.w);
+    add(p.x, q.x);
+    add(p.y, q.y);
+    add(p.z, q.z);
+    const V4 x2 = d2 / s2;
+    const V4 r = 4.0 * sqrt4(x2) * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 / 9.0))));
+    std::memcpy(out, &r, sizeof r);
+    const M4 series = d2 * 64.0 < s2;
+    for (int k = 0; k < 4; ++k)
+        if (!series[k]) out[k] = 4.0 * std::atan2(std::sqrt(d2[k]), std::sqrt(s2[k]));
+}
+
+// chords[k] = chord_angle of samples k and k + 1 of sample_squad_segment's columns q, k < samples
+// (a multiple of 4). Four at a time, in the x86-64-v3 clone too, unfused: each lane's bits are
+// those of the scalar chord_angle in baseline code.
+QUATCURVE_HOT_UNFUSED void squad_chord_angles(const double* q, int samples, double* chords) {
+    for (int k = 0; k < samples; k += 4) chord_angles4(q + k, q + k + 1, kSegmentColumn, chords + k);
+}
+
 // Path length of segment g by `samples` chords: kSearchSamples first and while the bisection
 // searches, kSamples where that leaves the verdict close (a chord sum converges as 1/n²: 16 chords
 // of a smooth segment that turns 180° miss about 0.3°).
@@ -117,9 +151,11 @@ double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
     static_assert(kSamples <= static_cast<int>(kMaxSegmentSamples));
     double len = 0.0;
     if constexpr (std::is_same_v<Seg, SquadSeg>) {
-        double q[4 * (kMaxSegmentSamples + 1)];
+        static_assert(kSearchSamples % 4 == 0 && kSamples % 4 == 0);
+        double q[4 * kSegmentColumn], chords[kMaxSegmentSamples];
         sample_squad_segment(g, static_cast<std::size_t>(samples), q);
-        for (int k = 0; k < samples; ++k) len += chord_angle(q + 4 * k, q + 4 * k + 4);
+        squad_chord_angles(q, samples, chords);
+        for (int k = 0; k < samples; ++k) len += chords[k];  // in order, as the rows' sum was
         return len;
     }
     double prev[4], cur[4];
@@ -132,15 +168,21 @@ double sampled_path(const Seg& g, At&& at, int samples = kSamples) {
     return len;
 }
 
-// Step 2: the λ of every knot. A segment's path is first bounded from above cheaply (`bound`, see
-// path_bound below); only a key segment whose bounds exceed its limit is sampled, so dense keys
-// (motion capture: small arcs, similar neighbours) cost no sampling at all.
-template <class Make, class At, class Bound>
-std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
-                                  Make&& make, At&& at, Bound&& bound) {
+// Step 2: the λ of every knot, and segs[i] = make(…) of every knot segment i with its knots' final
+// λ. A segment's path is first bounded from above cheaply (`bound`, see path_bound below); only a
+// key segment whose bounds exceed its limit is sampled, so dense keys (motion capture: small arcs,
+// similar neighbours) cost no sampling at all. segs[i] always holds knot segment i made with the
+// current λ: bounding, sampling and the result share one make per change of λ.
+template <class Seg, class Make, class At, class Bound>
+void clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vector<double>& key_arcs,
+                   std::vector<Seg>& segs, Make&& make, At&& at, Bound&& bound) {
     const std::size_t S = m.kr.size();
     std::vector<double> lambda(S + 1);
     for (std::size_t j = 0; j <= S; ++j) lambda[j] = fc_factor(m, T, j);
+    segs.resize(S);
+    auto remake = [&](std::size_t i) {
+        segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
+    };
 
     // Knot segments [first[k], first[k+1]) belong to key segment k.
     std::vector<std::size_t> first{0};
@@ -154,8 +196,8 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
     std::vector<double> len(S);
     std::vector<int> sampled(S);
     auto measure = [&](std::size_t i) {  // an upper bound, refined by sampling on demand
-        const Vec3 out = lambda[i] * T.out[i], in = lambda[i + 1] * T.in[i + 1];
-        len[i] = bound(m, i, out, in, make(m, i, out, in));
+        remake(i);
+        len[i] = bound(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1], segs[i]);
         sampled[i] = 0;
     };
     for (std::size_t i = 0; i < S; ++i) measure(i);
@@ -165,7 +207,7 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
         double L = 0.0;
         for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
             if (sampled[i] < samples) {
-                len[i] = sampled_path(make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]), at, samples);
+                len[i] = sampled_path(segs[i], at, samples);
                 sampled[i] = samples;
             }
             L += len[i];
@@ -182,19 +224,21 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
         if (search) {
             L = 0.0;
             for (std::size_t i = first[k]; i < first[k + 1]; ++i)
-                L += sampled[i] ? len[i]
-                                : sampled_path(make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]), at,
-                                               kSearchSamples);
+                L += sampled[i] ? len[i] : sampled_path(segs[i], at, kSearchSamples);
             return L <= limit(k);
         }
         if (refined(k, kSearchSamples) <= kCoarseShare * limit(k)) return true;
         return refined(k, kSamples) <= limit(k);
     };
-    // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch.
+    // Scales the knots of key segment k by mu (relative to `saved`) and re-measures what they touch:
+    // its own knot segments, and with `neighbours` the two next to it (the bisection's steps look at
+    // k's own only, so its neighbours are measured once, at the λ it settles on).
     std::vector<double> saved;
-    auto scale = [&](std::size_t k, double mu) {
+    auto scale = [&](std::size_t k, double mu, bool neighbours) {
         for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j - first[k]] * mu;
-        for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) measure(i);
+        const std::size_t i0 = neighbours && first[k] > 0 ? first[k] - 1 : first[k];
+        const std::size_t i1 = neighbours ? std::min(S, first[k + 1] + 1) : first[k + 1];
+        for (std::size_t i = i0; i < i1; ++i) measure(i);
     };
 
     for (int round = 0; round < 20; ++round) {
@@ -210,10 +254,10 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
             auto bisect = [&](bool search) {
                 for (int it = 0; it < 12; ++it) {
                     const double mid = 0.5 * (lo + hi);
-                    scale(k, mid);
+                    scale(k, mid, false);
                     (passes(k, search) ? lo : hi) = mid;
                 }
-                scale(k, lo);
+                scale(k, lo, true);
             };
             bisect(true);
             if (!passes(k)) {
@@ -222,12 +266,15 @@ std::vector<double> clamp_factors(const Curve::Impl& m, const KnotTangents& T, c
                 bisect(false);
             }
         }
-        if (!beyond) return lambda;
+        if (!beyond) return;
     }
-    for (std::size_t k = 0; k < K; ++k)
-        if (!passes(k))
-            for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
-    return lambda;
+    // The segments touched are made again (the later verdicts sample them at the new λ), their
+    // measures left as they were.
+    for (std::size_t k = 0; k < K; ++k) {
+        if (passes(k)) continue;
+        for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
+        for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) remake(i);
+    }
 }
 
 // Upper bounds of a segment's path length (angle integrated over s).
@@ -251,19 +298,21 @@ double squad_bound(const Curve::Impl& m, std::size_t i, const Vec3& out, const V
     const double rr = glm::length(r), pp = std::sqrt(g.psi2), d = glm::length(g.psi - r);
     const double M = std::fmin(std::fmax(a, b) + d, 0.5 * (a + b + d));
     if (M >= 0.99 * kTwoPi) return HUGE_VAL;
-    const double W = std::fmin(rr + pp, d + 2.0 * std::sin(0.5 * std::fmin(M, kPi)) * rr);
-    const double kappa = M > 1e-8 ? 0.5 * M / std::sin(0.5 * M) : 1.0;
+    const double sin_half = std::sin(0.5 * std::fmin(M, kPi));  // for M ≤ π also κ's sin(M/2)
+    const double W = std::fmin(rr + pp, d + 2.0 * sin_half * rr);
+    const double kappa = M > 1e-8 ? 0.5 * M / (M <= kPi ? sin_half : std::sin(0.5 * M)) : 1.0;
     return rr + M + W * kappa / 3.0;
 }
 
 template <class Seg, class Make, class At, class Bound>
 void build_segments(Curve::Impl& m, const KnotTangents& T, bool clamped, const std::vector<double>& key_arcs,
                     std::vector<Seg>& segs, Make&& make, At&& at, Bound&& bound) {
-    const std::size_t S = m.kr.size();
-    const std::vector<double> lambda =
-        clamped ? clamp_factors(m, T, key_arcs, make, at, bound) : std::vector<double>(S + 1, 1.0);
-    segs.resize(S);
-    for (std::size_t i = 0; i < S; ++i) segs[i] = make(m, i, lambda[i] * T.out[i], lambda[i + 1] * T.in[i + 1]);
+    if (clamped) {
+        clamp_factors(m, T, key_arcs, segs, make, at, bound);
+        return;
+    }
+    segs.resize(m.kr.size());
+    for (std::size_t i = 0; i < segs.size(); ++i) segs[i] = make(m, i, T.out[i], T.in[i + 1]);
 }
 
 }  // namespace

@@ -37,7 +37,7 @@ std::string element(const std::string& name, std::size_t i) {
 // Every quaternion checked (finite, nonzero) and normalized; messages name "name[i]".
 std::vector<Quat> normalized_all(const std::vector<Quat>& quats, const std::string& name) {
     std::vector<Quat> out(quats.size());
-    for (std::size_t i = 0; i < quats.size(); ++i) out[i] = normalized_rotation(quats[i], element(name, i));
+    for (std::size_t i = 0; i < quats.size(); ++i) out[i] = normalized_rotation(quats[i], name.c_str(), i);
     return out;
 }
 

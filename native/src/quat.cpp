@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <string>
 
 #include "numbers.hpp"
@@ -42,12 +45,26 @@ double safe_norm3(const Vec3& v) { return safe_norm4(v.x, v.y, v.z, 0.0); }
 // The power of two 2^e with the largest |component| of x in [1, 2) (e = 0 for zero): dividing by it
 // is exact, so a quaternion's direction, a matrix's polar factor or a sandwich product can be
 // computed on x·2^-e without squares overflowing (components near 1e308) or underflowing (1e-300).
+// A normal m's exponent is read from its bits (what ilogb returns, without the libm call).
 int scale_exponent(double a, double b, double c, double d) {
     const double m = std::max({std::fabs(a), std::fabs(b), std::fabs(c), std::fabs(d)});
+    if (m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max()) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &m, sizeof bits);
+        return static_cast<int>(bits >> 52) - 1023;
+    }
     return m > 0.0 && std::isfinite(m) ? std::ilogb(m) : 0;
 }
 
+// q·2^-e. Where 2^-e is a normal double (built from its exponent bits) the four products by it are
+// ldexp's correctly rounded results, without libm calls; a subnormal q (e < −1022) takes ldexp.
 Quat scaled(const Quat& q, int e) {
+    if (e >= -1022 && e <= 1022) {
+        const std::uint64_t bits = static_cast<std::uint64_t>(1023 - e) << 52;
+        double f;
+        std::memcpy(&f, &bits, sizeof f);
+        return Quat(q.w * f, q.x * f, q.y * f, q.z * f);
+    }
     return Quat(std::ldexp(q.w, -e), std::ldexp(q.x, -e), std::ldexp(q.y, -e), std::ldexp(q.z, -e));
 }
 
@@ -132,6 +149,8 @@ std::string finite_problem(const std::array<double, 16>& m) {
 }
 
 std::string nonzero_problem(const Quat& q) {
+    const double s = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    if (s > 1e-290 && s < 1e290) return {};  // finite, and norm(q) = √s ≥ 1e-145 (the usual case, first)
     std::string p = finite_problem(q);
     if (p.empty() && norm(q) < kMinNorm) p = "zero-length quaternion";
     return p;
@@ -179,11 +198,26 @@ void check_nonzero(const Vec3& v, const std::string& what) {
     if (!p.empty()) fail(what, p);
 }
 
-Quat normalized_rotation(const Quat& q, const std::string& what) {
-    check_nonzero(q, what);
+namespace {
+
+// q/|q| for a finite nonzero q.
+Quat normalized_unchecked(const Quat& q) {
     const Quat s = scaled(q);  // |q| itself overflows for components near 1e308
     const double n = norm(s);
     return Quat(s.w / n, s.x / n, s.y / n, s.z / n);
+}
+
+}  // namespace
+
+Quat normalized_rotation(const Quat& q, const std::string& what) {
+    check_nonzero(q, what);
+    return normalized_unchecked(q);
+}
+
+Quat normalized_rotation(const Quat& q, const char* array, std::size_t index) {
+    const std::string p = nonzero_problem(q);
+    if (!p.empty()) fail(array + ("[" + std::to_string(index) + "]"), p);
+    return normalized_unchecked(q);
 }
 
 // ---- algebra -------------------------------------------------------------------------------------

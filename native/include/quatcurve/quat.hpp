@@ -10,6 +10,7 @@
 
 #include <array>
 #include <complex>
+#include <cstddef>
 #include <string>
 
 #include "quatcurve/errors.hpp"
@@ -47,6 +48,9 @@ void check_nonzero(const Vec3& v, const std::string& what);
 // q/|q| for a quaternion meant as a rotation; throws on zero length or non-finite input. Exact for
 // tiny or huge finite q, up to components of 1.8e308 (computed on q·2^-e, e the largest exponent).
 Quat normalized_rotation(const Quat& q, const std::string& what = "q");
+// The same for element `index` of the array named `array`: the name "array[index]" is built for the
+// error message only (for loops over many keys, where building it cost more than the check).
+Quat normalized_rotation(const Quat& q, const char* array, std::size_t index);
 
 // ---- algebra -------------------------------------------------------------------------------------
 // Hamilton product a·b = (wa·wb − va·vb, wa·vb + wb·va + va×vb). Not commutative.
