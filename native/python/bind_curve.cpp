@@ -180,19 +180,7 @@ void bind_curve(py::module_& m) {
                     // after the curve: its worker thread then waits for the GIL twice per target,
                     // not at every step, while the main thread writes keys.
                     py::gil_scoped_release release;
-                    std::vector<double> wxyz(4 * n);
-                    c.sample(t.data(), n, wxyz.data());
-                    std::vector<Quat> q(n);
-                    for (std::size_t k = 0; k < n; ++k) q[k] = from_wxyz(&wxyz[4 * k]);
-                    const std::vector<double> v = quats_to_channels(q, mode, rows ? ref.data() : nullptr, rows);
-                    for (std::size_t ch = 0; ch < nc; ++ch) {
-                        float* row = o + 2 * n * ch;
-                        for (std::size_t k = 0; k < n; ++k) {
-                            row[2 * k] = static_cast<float>(t.data()[k]);
-                            row[2 * k + 1] = static_cast<float>(v[nc * k + ch]);
-                            finite = finite && std::isfinite(row[2 * k + 1]);
-                        }
-                    }
+                    finite = sample_channel_keys(c, t.data(), n, mode, rows ? ref.data() : nullptr, rows, o);
                 }
                 if (!finite) throw py::value_error("the curve gave non-finite channel values");
                 return out;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "numbers.hpp"
+#include "quatcurve/curve.hpp"
 #include "quatcurve/metrics.hpp"
 
 namespace quatcurve {
@@ -211,6 +212,56 @@ std::vector<double> quats_to_channels(const std::vector<Quat>& q, const Rotation
     std::vector<double> out(4 * n);
     for (std::size_t s = 0; s < n; ++s) to_wxyz(out_q[s], out.data() + 4 * s);
     return out;
+}
+
+bool sample_channel_keys(const Curve& curve, const double* frames, std::size_t n, const RotationMode& mode,
+                         const double* reference, std::size_t reference_rows, float* out) {
+    const std::size_t channels = channel_count(mode);
+    bool finite = true;
+    // Sample k's channel values v as key k of each channel's row of (frame, value) pairs.
+    auto put = [&](std::size_t k, const double* v) {
+        const float frame = static_cast<float>(frames[k]);
+        for (std::size_t c = 0; c < channels; ++c) {
+            float* key = out + 2 * (n * c + k);
+            key[0] = frame;
+            key[1] = static_cast<float>(v[c]);
+            finite = finite && std::isfinite(key[1]);
+        }
+    };
+    if (mode.kind != RotationMode::Kind::quaternion) {
+        std::vector<double> wxyz(4 * n);
+        curve.sample(frames, n, wxyz.data());
+        std::vector<Quat> q(n);
+        for (std::size_t k = 0; k < n; ++k) q[k] = from_wxyz(&wxyz[4 * k]);
+        const std::vector<double> v = quats_to_channels(q, mode, reference, reference_rows);
+        for (std::size_t k = 0; k < n; ++k) put(k, &v[channels * k]);
+        return finite;
+    }
+    if (reference == nullptr) reference_rows = 0;
+    if (reference_rows > 1)
+        throw InvalidArgument("reference: expected one row, got " + std::to_string(reference_rows));
+    check_reference(reference, reference_rows, channels);
+    // As hemisphere_continuous: each sample on the side of the one before (the first: of the reference).
+    constexpr std::size_t kBlock = 256;
+    double wxyz[4 * kBlock];
+    Quat before = reference_rows ? from_wxyz(reference) : Quat();
+    bool has_before = reference_rows > 0;
+    for (std::size_t begin = 0; begin < n; begin += kBlock) {
+        const std::size_t m = std::min(kBlock, n - begin);
+        curve.sample(frames + begin, m, wxyz);
+        for (std::size_t i = 0; i < m; ++i) {
+            Quat q = from_wxyz(wxyz + 4 * i);
+            const double n2 = glm::dot(q, q);  // as check_nonzero_rows
+            if (!(n2 > 1e-200 && n2 < 1e300)) check_nonzero(q, row_name("quats", begin + i));
+            if (has_before && glm::dot(q, before) < 0.0) q = -q;
+            before = q;
+            has_before = true;
+            double v[4];
+            to_wxyz(q, v);
+            put(begin + i, v);
+        }
+    }
+    return finite;
 }
 
 // ---- sampling policies --------------------------------------------------------------------------------

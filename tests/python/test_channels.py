@@ -157,12 +157,15 @@ def test_sampling_policies():
 @pytest.mark.parametrize("mode", MODES)
 def test_sample_keys_are_the_sampled_channels_as_blender_keys(mode):
     """Curve.sample_keys: the bake's dense keys in one call — per channel (frame, value) float32 rows
-    of quats_to_channels(sample(frames), mode, reference)."""
+    of quats_to_channels(sample(frames), mode, reference). Quaternion keys stream through blocks of
+    256 samples: 801 frames cross three block ends, and the reference flips every sample, so each
+    block must carry the side of the sample before it."""
     rng = np.random.default_rng(5)
     key_times = np.arange(0.0, 60.0, 10.0)
     keys = rng.normal(size=(len(key_times), 4))
+    keys[1::2] *= -1  # neighbours in opposite hemispheres
     curve = qc.Curve(key_times, keys / np.linalg.norm(keys, axis=1, keepdims=True), method="SQUAD")
-    frames = np.arange(0.0, 50.25, 0.25)
+    frames = np.arange(0.0, 50.0 + 1e-9, 1.0 / 16.0)
     reference = qc.quats_to_channels(-curve.sample(frames[:1]), mode)[0]
     expected = qc.quats_to_channels(curve.sample(frames), mode, reference)
     got = curve.sample_keys(frames, mode, reference)

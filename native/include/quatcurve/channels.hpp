@@ -62,6 +62,18 @@ std::vector<double> quats_to_channels(const std::vector<Quat>& q, const Rotation
                                       const double* reference = nullptr, std::size_t reference_rows = 0,
                                       EulerBranch branch = EulerBranch::continuous);
 
+class Curve;
+
+// The F-curve keys of `curve` sampled at `frames` (n) in rotation mode `mode`: out holds, per channel,
+// n (frame, value) float32 pairs as Blender stores keys — (C, n, 2) — the values those of
+// quats_to_channels(curve sampled at frames, mode, reference, reference_rows) rounded to float32.
+// Quaternion keys stream through a small buffer, a block of samples at a time (hemisphere continuity
+// looks only at the sample before), so a dense bake makes no sample-sized temporaries; Euler and
+// axis-angle choose their branches over the whole path and convert it at once. Returns false when a
+// value is not finite in float32; throws as quats_to_channels on a bad reference.
+bool sample_channel_keys(const Curve& curve, const double* frames, std::size_t n, const RotationMode& mode,
+                         const double* reference, std::size_t reference_rows, float* out);
+
 // AXIS_ANGLE channels of the samples q of a path from the key `start` to the key `end` (channel rows
 // (angle, x, y, z); q[0] is start's rotation and q[n-1] end's): as quats_to_channels with reference
 // `start`, when that arrives at `end` as keyed (angle within π, axis on its side). Otherwise — a path
