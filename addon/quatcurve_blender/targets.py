@@ -148,14 +148,12 @@ class RotationKeys:
         qc = native.require()
         if self.is_euler:
             return qc.Curve.from_euler(self.frames, self.values, order=self.mode, method=method, **options)
-        quats = self.quats()  # refuses zero quaternions / axes, naming the frame
+        refuse_zero_rotations(self.mode, self.values, self.target.name, self.frames)
         if self.mode == "AXIS_ANGLE":
             return qc.Curve.from_axis_angle(self.frames, self.values, method=method, **options)
-        if self.mode == "QUATERNION":
-            # The stored components as they are: QUAT_COMPONENTS lerps them before normalizing, as
-            # Blender does, which differs from lerping normalized keys when they are not unit length.
-            quats = self.values
-        return qc.Curve(self.frames, quats, method=method, **options)
+        # The stored components as they are: QUAT_COMPONENTS lerps them before normalizing, as
+        # Blender does, which differs from lerping normalized keys when they are not unit length.
+        return qc.Curve(self.frames, self.values, method=method, **options)
 
 
 def evaluate_channels(target, prop, channel_fcurves, frames):
@@ -297,16 +295,23 @@ def channels_to_quats(mode, values, name="", frames=None):
     """(N, 4) unit quaternions of channel values in `mode`, as Blender builds the rotation (native
     quatcurve.channels_to_quats). Zero quaternions or axes raise TargetError naming `name` and the
     frame."""
-    qc = native.require()
     values = np.asarray(values, dtype=np.float64)
-    if mode not in fcurves.EULER_ORDERS:
-        norms = np.linalg.norm(values if mode == "QUATERNION" else values[:, 1:], axis=1)
-        if (norms == 0).any():
-            k = int(np.flatnonzero(norms == 0)[0])
-            frame = " at frame %s" % num(float(frames[k])) if frames is not None else ""
-            what = "quaternion" if mode == "QUATERNION" else "axis-angle axis"
-            raise TargetError("%s: the %s is zero%s (no rotation defined)" % (name, what, frame))
-    return qc.channels_to_quats(values, mode)
+    refuse_zero_rotations(mode, values, name, frames)
+    return native.require().channels_to_quats(values, mode)
+
+
+def refuse_zero_rotations(mode, values, name="", frames=None):
+    """Raises TargetError naming `name` and the frame at the first zero quaternion or axis-angle axis
+    among channel values (N, C) in `mode` (Euler angles always define a rotation)."""
+    if mode in fcurves.EULER_ORDERS:
+        return
+    values = np.asarray(values, dtype=np.float64)
+    norms = np.linalg.norm(values if mode == "QUATERNION" else values[:, 1:], axis=1)
+    if (norms == 0).any():
+        k = int(np.flatnonzero(norms == 0)[0])
+        frame = " at frame %s" % num(float(frames[k])) if frames is not None else ""
+        what = "quaternion" if mode == "QUATERNION" else "axis-angle axis"
+        raise TargetError("%s: the %s is zero%s (no rotation defined)" % (name, what, frame))
 
 
 def default_frame_range(targets):
