@@ -98,13 +98,18 @@ def text_width(text, scale=1):
 
 
 # ---- canvas -------------------------------------------------------------------------------------------
+def _rgba_word(colour):
+    """The opaque pixel (r, g, b, 255) as the uint32 its four bytes make in memory."""
+    return int(np.frombuffer(bytes(tuple(colour) + (255,)), np.uint32)[0])
+
+
 class Canvas:
     """RGBA uint8 pixels (height, width, 4), rows top to bottom, opaque."""
 
     def __init__(self, width=WIDTH, height=HEIGHT, background=BACKGROUND):
         self.pixels = np.empty((height, width, 4), np.uint8)
-        self.pixels[..., :3] = background
-        self.pixels[..., 3] = 255
+        # One 32-bit word per pixel: a plain fill, not four strided byte planes.
+        self.pixels.view(np.uint32).fill(_rgba_word(background))
 
     @property
     def width(self):
@@ -131,17 +136,21 @@ class Canvas:
             return
         a = coverage[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0]
         rows, cols = np.nonzero(a > 0)
-        a = a[rows, cols, None].astype(np.float32)
-        rows, cols = rows + cy0, cols + cx0
-        mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
-        self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
+        self._mix((rows + cy0) * self.width + (cols + cx0), a[rows, cols], colour)
 
     def blend_pixels(self, rows, cols, coverage, colour):
         """Mixes `colour` over the pixels (rows[i], cols[i]) by coverage[i] (0..1); each pixel once."""
         keep = coverage > 0
-        rows, cols, a = rows[keep], cols[keep], coverage[keep, None].astype(np.float32)
-        mixed = self.pixels[rows, cols, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a
-        self.pixels[rows, cols, :3] = np.rint(mixed).astype(np.uint8)
+        self._mix(rows[keep] * self.width + cols[keep], coverage[keep], colour)
+
+    def _mix(self, index, coverage, colour):
+        """pixel = rint(pixel·(1 − a) + colour·a) for the pixels at flat `index` (row·width + column),
+        a = coverage (float32 arithmetic); whole pixels are gathered and scattered (alpha stays)."""
+        flat = self.pixels.reshape(-1, 4)
+        a = coverage.astype(np.float32)[:, None]
+        under = flat[index]
+        under[:, :3] = np.rint(under[:, :3] * (1.0 - a) + np.asarray(colour, np.float32) * a).astype(np.uint8)
+        flat[index] = under
 
     def text(self, x, y, text, colour=INK, scale=1, align="left", valign="top", rotate=False):
         """Draws `text` with its anchor at (x, y): align left/center/right, valign top/middle/bottom
@@ -272,10 +281,12 @@ class Panel:
         # as in motion capture): at most one line per 12 pixels on average.
         if len(key_frames) > (right - left) / 12:
             key_frames = ()
+        dashes = np.arange(top, bottom)
+        dashes = dashes[(dashes - top) % 8 < 4]  # 4 pixels on, 4 off
         for kf in key_frames:
             px = int(round(float(self.to_pixels(kf, 0)[0])))
-            for y in range(top, bottom, 8):
-                c.fill_rect(px, y, px + 1, min(y + 4, bottom), KEY_LINE)
+            if 0 <= px < c.width:
+                c.pixels[dashes, px, :3] = KEY_LINE
         c.fill_rect(left, top, right + 1, top + 1, INK)
         c.fill_rect(left, bottom, right + 1, bottom + 1, INK)
         c.fill_rect(left, top, left + 1, bottom, INK)
