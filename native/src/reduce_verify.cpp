@@ -49,17 +49,23 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
     return ch;
 }
 
-// Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Channels with
-// the same keys as the previous one share its Bezier parameters.
+// Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Consecutive
+// channels with the same keys are evaluated in one walk (all of them when synchronized), sharing
+// their Bezier parameters.
 void emulate_errors(const Problem& p, const std::vector<ReducedChannel>& chans,
                     KeyInterpolation ipo, std::vector<double>& err) {
     const int C = p.C;
-    std::vector<double> vals(p.n * C), col;
-    std::vector<float> params;
-    for (int c = 0; c < C; ++c) {
-        const bool reuse = c > 0 && chans[c].indices == chans[c - 1].indices;
-        blender_evaluate_sorted(chans[c], ipo, p.t, col, &params, reuse);
-        for (std::size_t k = 0; k < p.n; ++k) vals[k * C + c] = col[k];
+    std::vector<double> vals(p.n * C);
+    const FCurveKeys* run[kMaxChannels];
+    for (int c = 0; c < C;) {
+        int count = 1;
+        run[0] = &chans[c];
+        while (c + count < C && chans[c + count].indices == chans[c].indices) {
+            run[count] = &chans[c + count];
+            ++count;
+        }
+        blender_evaluate_sorted_shared(run, count, ipo, p.t, &vals[c], C);
+        c += count;
     }
     err.resize(p.n);
     for (std::size_t k = 0; k < p.n; ++k) {
