@@ -313,9 +313,10 @@ private:
 
 // Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit where it can be:
 // every forced sample, plus inserted keys at candidate samples; the chosen segments' fits are
-// committed in the Fitter's State.
+// committed in the Fitter's State. Empty (given up) as soon as the keys cannot come out fewer than
+// `budget`.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit);
+                                     double limit, std::size_t budget = kNone);
 
 // ---- stage 4: verification and repair (reduce_verify.cpp) ------------------------------------------
 

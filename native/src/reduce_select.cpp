@@ -12,11 +12,19 @@ namespace quatcurve::reduce_impl {
 // an end that is not a candidate (too close to a forced key) steps back to the nearest candidate.
 // Then one pass drops an inserted key wherever the segment joining its neighbours passes. A probe
 // that passes commits its fit, and the ends only grow, so the chosen segment's fit is the one held.
+// The ranges share nothing but the greedy's last segment length (a fit reads and commits only the
+// samples of its own range; the forced keys keep their values), so each range's removal pass runs
+// as soon as its greedy keys are chosen: from then on its keys are final, and with the forced keys
+// still ahead they bound the result from below (`budget`).
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit) {
+                                     double limit, std::size_t budget) {
     const std::size_t n = p.n;
     std::vector<std::size_t> keys{0};
     if (n == 1) return keys;
+    std::size_t forced_ahead = 0;  // forced samples after the current range's start
+    for (std::size_t k = 1; k < n; ++k) forced_ahead += p.is_forced(k) ? 1 : 0;
+    std::vector<std::size_t> kept{keys[0]};
+    std::size_t next = 1;  // the first key of `keys` the removal pass has not decided on
     auto probe = [&](std::size_t i, std::size_t j) {
         return fitter.fit(i, j, chans, nc, limit, false);
     };
@@ -85,13 +93,16 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         keys.push_back(good);
         last_len = good - i;
         i = good;
-    }
-    // Removal pass: join neighbours where one segment suffices (never across a forced key). A
-    // failed probe changes nothing, so the fits already committed stay valid.
-    std::vector<std::size_t> kept{keys[0]};
-    for (std::size_t a = 1; a + 1 < keys.size(); ++a) {
-        if (!p.is_forced(keys[a]) && probe(kept.back(), keys[a + 1])) continue;
-        kept.push_back(keys[a]);
+        if (good != end) continue;
+        // The range is chosen. Removal pass over its keys: join neighbours where one segment
+        // suffices (never across a forced key). A failed probe changes nothing, so the fits already
+        // committed stay valid.
+        for (; next + 1 < keys.size(); ++next) {
+            if (!p.is_forced(keys[next]) && probe(kept.back(), keys[next + 1])) continue;
+            kept.push_back(keys[next]);
+        }
+        --forced_ahead;  // `end`, the next range's start, is the last key and counts as kept below
+        if (kept.size() + 1 + forced_ahead >= budget) return {};
     }
     kept.push_back(keys.back());
     return kept;
