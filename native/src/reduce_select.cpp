@@ -1,5 +1,6 @@
 // Key reduction, stage 3: which samples become keys (reduce_impl.hpp: select_keys).
 #include <algorithm>
+#include <utility>
 
 #include "reduce_impl.hpp"
 
@@ -25,8 +26,19 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
     for (std::size_t k = 1; k < n; ++k) forced_ahead += p.is_forced(k) ? 1 : 0;
     std::vector<std::size_t> kept{keys[0]};
     std::size_t next = 1;  // the first key of `keys` the removal pass has not decided on
+    // A probe's outcome depends on its segment alone: the other channels stay fixed while these
+    // keys are chosen, a fit reads none of its own channels' committed values (Fitter::other_'s
+    // terms are filled once per key choice), and a failed probe commits nothing. So a segment that
+    // failed once fails again, and is not refitted: the removal pass often tries the segment that
+    // the greedy search tried first (a range in one piece) and found too long. Kept per range (no
+    // segment spans two).
+    std::vector<std::pair<std::size_t, std::size_t>> failed;
     auto probe = [&](std::size_t i, std::size_t j) {
-        return fitter.fit(i, j, chans, nc, limit, false);
+        for (const auto& f : failed)
+            if (f.first == i && f.second == j) return false;
+        const bool ok = fitter.fit(i, j, chans, nc, limit, false);
+        if (!ok) failed.emplace_back(i, j);
+        return ok;
     };
     std::size_t i = 0, last_len = 2;
     std::size_t end = 0;  // the range's end: the first forced key after i
@@ -36,6 +48,7 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         if (end <= i) {
             end = i + 1;
             while (!p.is_forced(end)) ++end;
+            failed.clear();
         }
         std::size_t good = i + 1, bad = kNone;  // good: feasible (committed unless i + 1)
         const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), end - i);
