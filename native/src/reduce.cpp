@@ -52,7 +52,7 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     auto run = [&](bool sync, std::size_t beat, ReducedKeys& out) {
         // Nothing to build when the forced keys alone cannot beat the synchronized result.
         if (!sync && forced * static_cast<std::size_t>(C) >= beat) return false;
-        State s = empty_state(p);
+        State s = empty_state(p, !sync);
         Fitter fitter(p, ipo, s);
         std::vector<std::vector<int>> groups;
         if (tolerance == 0.0 || p.n <= 2) {

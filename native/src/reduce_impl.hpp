@@ -228,16 +228,17 @@ void set_forced_keys(Problem& p, const std::vector<std::size_t>& forced, double 
 
 // The state of a reduction in progress: per channel its keys, the fitted values at every sample
 // (F, used as the "other channels" when channels are fitted one by one) and, per segment start, the
-// two inner Bezier control values.
+// two inner Bezier control values. F is read only by fits of fewer than all channels, and a run
+// never mixes those with fits of all channels: a synchronized run keeps no F (it stays empty).
 struct State {
-    std::vector<double> F;                           // n·C fitted values
+    std::vector<double> F;                           // n·C fitted values (one-by-one runs)
     std::vector<std::vector<std::size_t>> keys;      // per channel
     std::vector<double> h1, h2;                      // n·C: control values of the segment starting at i
     std::vector<unsigned char> exact_param;          // n·C: segment refitted with Blender's parameter
 };
 
-// A State with no keys, F at the samples.
-State empty_state(const Problem& p);
+// A State with no keys; for a run that fits channels one by one (one_by_one), F at the samples.
+State empty_state(const Problem& p, bool one_by_one);
 
 class Fitter {
 public:
