@@ -2,6 +2,7 @@
 // (blender_eval.hpp), and the repairs — refit with Blender's own frame→parameter map, then split —
 // until every sample passes (reduce_impl.hpp: verify_and_repair).
 #include <algorithm>
+#include <limits>
 
 #include "quatcurve/blender_eval.hpp"
 #include "reduce_impl.hpp"
@@ -9,6 +10,8 @@
 namespace quatcurve::reduce_impl {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpolation ipo) {
     ReducedChannel ch;
@@ -189,8 +192,16 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
         }
         if (!changed) break;
     }
+    // The largest angle, from the largest tan²: angle_of_tan2 rises with it, so only samples near the
+    // largest need the arctangent. Below half of it (at most 1e20, ~1e-10 rad short of π) the angle is
+    // smaller by far more than atan's rounding (< 1 ulp), so none of them can come out larger;
+    // beyond, and for non-finite errors (π), every sample is converted as before.
+    double worst = 0.0;
+    for (std::size_t k = 0; k < p.n; ++k) worst = std::max(worst, err[k] < kInf ? err[k] : kInf);
+    const double below = worst <= 1e20 ? 0.5 * worst : -1.0;
     max_error = 0.0;
-    for (std::size_t k = 0; k < p.n; ++k) max_error = std::max(max_error, angle_of_tan2(err[k]));
+    for (std::size_t k = 0; k < p.n; ++k)
+        if (!(err[k] < below)) max_error = std::max(max_error, angle_of_tan2(err[k]));
     return chans;
 }
 
