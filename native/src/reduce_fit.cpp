@@ -513,18 +513,18 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
                                      o[3] + x * o[7]};
                 e = tan2_of_relative(d);
             } else {
-                double mean[kMaxChannels] = {};
-                for (int c = 0; c < C; ++c) mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
                 if (norm_check && !norm_ok(p_, f, norm2)) {
                     between_failed_ = true;
                     return std::numeric_limits<double>::infinity();
                 }
                 Quat ref;
-                if constexpr (C == 4) {
-                    ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
-                                                : axis_angle_rotation(mean);
+                if (C == 4 && p_.kind == Kind::QUAT) {
+                    const double* a = &p_.y[k * C];
+                    const double* b = &p_.y[(k + 1) * C];
+                    ref = Quat(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]),
+                               0.5 * (a[3] + b[3]));
                 } else {
-                    ref = euler_rotation(p_, mean);
+                    ref = p_.mid_ref[k];  // the rotation of the mean (Problem)
                 }
                 e = error_tan2(p_, ref, f);
             }

@@ -113,6 +113,11 @@ struct Problem {
     // step_tan[k] = tan(kBetweenStep/2 × the rotation angle between samples k and k+1), for the
     // between-samples guard.
     std::vector<double> step_tan;
+    // Euler and axis-angle: mid_ref[k] = the rotation of the mean of samples k and k+1, the
+    // between-samples guard's reference there (n − 1 entries; built once: every fit that passes
+    // its samples evaluates it again, and it costs three sines and cosines). Quaternions take the
+    // mean itself (no entries).
+    std::vector<Quat> mid_ref;
     // Euler: the order's axes (first applied, middle, last) as indices into (X, Y, Z).
     int axis_first = 0, axis_mid = 1, axis_last = 2;
     // Key choice (fit_keys): forced[k] — sample k must be a key of every channel (the first and the
