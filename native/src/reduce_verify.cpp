@@ -3,6 +3,7 @@
 // until every sample passes (reduce_impl.hpp: verify_and_repair).
 #include <algorithm>
 #include <limits>
+#include <memory>
 
 #include "quatcurve/blender_eval.hpp"
 #include "reduce_impl.hpp"
@@ -58,7 +59,8 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
 void emulate_errors(const Problem& p, const std::vector<ReducedChannel>& chans,
                     KeyInterpolation ipo, std::vector<double>& err) {
     const int C = p.C;
-    std::vector<double> vals(p.n * C);
+    // Every entry is written below (the runs cover all channels): no zero-fill.
+    std::unique_ptr<double[]> vals(new double[p.n * C]);
     const FCurveKeys* run[kMaxChannels];
     for (int c = 0; c < C;) {
         int count = 1;
