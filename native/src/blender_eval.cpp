@@ -341,6 +341,98 @@ void blender_evaluate_sorted(const FCurveKeys& ch, KeyInterpolation interpolatio
     }
 }
 
+// The walk of blender_evaluate_sorted once for channels with the same key frames. A segment's control
+// points (after correct_bezpart) and Blender's flat-segment test are taken per channel when the walk
+// enters it; the parameter of a frame is found once and reused by every channel whose corrected
+// handle frames equal the ones it was found for (findzero depends on nothing else).
+void blender_evaluate_sorted_shared(const FCurveKeys* const* channels, int count,
+                                    KeyInterpolation interpolation, const std::vector<double>& frames,
+                                    double* out, std::size_t stride) {
+    const std::size_t m = frames.size(), n = channels[0]->frames.size();
+    const std::size_t C = static_cast<std::size_t>(count);
+    if (n == 0) {
+        for (std::size_t s = 0; s < m; ++s)
+            for (std::size_t c = 0; c < C; ++c) out[s * stride + c] = 0.0;
+        return;
+    }
+    const std::vector<double>& keys = channels[0]->frames;
+    const float first = float(keys[0]), last = float(keys[n - 1]);
+    struct Segment {
+        float v1[2], v2[2], v3[2], v4[2];
+        bool flat;  // Blender's flat-segment shortcut: the value is v1[1]
+    };
+    std::vector<Segment> seg(C);
+    std::size_t a = 1, seg_a = 0;  // seg holds the segment ending at key seg_a (0: none yet)
+    for (std::size_t s = 0; s < m; ++s) {
+        double* o = out + s * stride;
+        const float e = float(frames[s]);
+        if (e <= first) {
+            for (std::size_t c = 0; c < C; ++c) o[c] = float(channels[c]->values[0]);
+            continue;
+        }
+        if (last <= e) {
+            for (std::size_t c = 0; c < C; ++c) o[c] = float(channels[c]->values[n - 1]);
+            continue;
+        }
+        while (float(keys[a]) <= e) ++a;  // first key after e (exists: e < last)
+        const std::size_t prev = a - 1;
+        const float px = float(keys[prev]), bx = float(keys[a]);
+        if (e == px) {  // on a key: Blender's search always finds an exactly equal key
+            for (std::size_t c = 0; c < C; ++c) o[c] = float(channels[c]->values[prev]);
+            continue;
+        }
+        if (e - px <= 2e-4f || bx - e <= 2e-4f) {
+            for (std::size_t c = 0; c < C; ++c) o[c] = blender_evaluate(*channels[c], interpolation, e);
+            continue;
+        }
+        const float duration = bx - px;
+        if (duration == 0) {
+            for (std::size_t c = 0; c < C; ++c) o[c] = float(channels[c]->values[prev]);
+            continue;
+        }
+        if (interpolation == KeyInterpolation::LINEAR) {
+            for (std::size_t c = 0; c < C; ++c) {
+                const float py = float(channels[c]->values[prev]), by = float(channels[c]->values[a]);
+                o[c] = (by - py) * (e - px) / duration + py;
+            }
+            continue;
+        }
+        if (seg_a != a) {
+            seg_a = a;
+            const float flt_eps = 1.1920928955078125e-07f;  // FLT_EPSILON
+            for (std::size_t c = 0; c < C; ++c) {
+                const FCurveKeys& ch = *channels[c];
+                Segment& g = seg[c];
+                g.v1[0] = px, g.v1[1] = float(ch.values[prev]);
+                g.v2[0] = float(ch.handle_right[2 * prev]), g.v2[1] = float(ch.handle_right[2 * prev + 1]);
+                g.v3[0] = float(ch.handle_left[2 * a]), g.v3[1] = float(ch.handle_left[2 * a + 1]);
+                g.v4[0] = bx, g.v4[1] = float(ch.values[a]);
+                g.flat = std::fabs(g.v1[1] - g.v4[1]) < flt_eps && std::fabs(g.v2[1] - g.v3[1]) < flt_eps &&
+                         std::fabs(g.v3[1] - g.v4[1]) < flt_eps;
+                if (!g.flat) correct_bezpart(g.v1, g.v2, g.v3, g.v4);
+            }
+        }
+        // The parameter found last at this frame and the handle frames it was found for.
+        bool found = false, root = false;
+        float u = 0.0f, q1 = 0.0f, q2 = 0.0f;
+        for (std::size_t c = 0; c < C; ++c) {
+            const Segment& g = seg[c];
+            if (g.flat) {
+                o[c] = g.v1[1];
+                continue;
+            }
+            if (!found || g.v2[0] != q1 || g.v3[0] != q2) {
+                float opl[32];
+                root = findzero(e, g.v1[0], g.v2[0], g.v3[0], g.v4[0], opl) != 0;
+                if (root) u = opl[0];
+                q1 = g.v2[0], q2 = g.v3[0];
+                found = true;
+            }
+            o[c] = root ? berekeny(g.v1[1], g.v2[1], g.v3[1], g.v4[1], u) : 0.0f;
+        }
+    }
+}
+
 // Used by the reducer to refit with Blender's own frame→parameter map when float32 handle frames
 // make it slightly non-linear.
 float blender_bezier_parameter(float frame, float q0, float q1, float q2, float q3) {

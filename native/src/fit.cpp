@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "quatcurve/errors.hpp"
@@ -55,16 +56,40 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         fit.forced[k] = i;
     }
     const std::vector<std::size_t>& forced = fit.forced;
-    std::vector<double> qd(4 * N);
-    curve.sample(t.data(), N, qd.data());
-    std::vector<Quat> q(N);
-    for (std::size_t i = 0; i < N; ++i) q[i] = from_wxyz(&qd[4 * i]);
+    // The curve at every sample (Curve::sample writes all of it: no zero-fill first).
+    std::unique_ptr<double[]> qd(new double[4 * N]);
+    curve.sample(t.data(), N, qd.get());
     // u along each key segment (samples of key segment k: forced[k] … forced[k+1])
     auto u_of = [&](std::size_t i, std::size_t k) {
         return (t[i] - key_frames[k]) / (key_frames[k + 1] - key_frames[k]);
     };
-    std::vector<double> values(N * C);
     const double* kv = key_values.data();
+    if (mode.kind == RotationMode::Kind::quaternion) {
+        // Straight into the reducer's input, sample after sample: the keys as given, between them
+        // the curve scaled by the keys' norms (interpolated) in the sign of the segment's first key.
+        std::vector<Quat> a;
+        a.reserve(N);
+        for (std::size_t k = 0; k + 1 < K; ++k) {
+            const double* ka = kv + 4 * k;
+            const double* kb = kv + 4 * (k + 1);
+            const double* r = &qd[4 * forced[k]];
+            const double sign = r[0] * ka[0] + r[1] * ka[1] + r[2] * ka[2] + r[3] * ka[3] < 0.0 ? -1.0 : 1.0;
+            const double n0 = std::sqrt(ka[0] * ka[0] + ka[1] * ka[1] + ka[2] * ka[2] + ka[3] * ka[3]);
+            const double n1 = std::sqrt(kb[0] * kb[0] + kb[1] * kb[1] + kb[2] * kb[2] + kb[3] * kb[3]);
+            a.push_back(from_wxyz(ka));
+            for (std::size_t i = forced[k] + 1; i < forced[k + 1]; ++i) {
+                const double u = u_of(i, k), s = sign * ((1 - u) * n0 + u * n1);
+                const double* q = &qd[4 * i];
+                a.push_back(Quat(q[0] * s, q[1] * s, q[2] * s, q[3] * s));
+            }
+        }
+        a.push_back(from_wxyz(kv + 4 * (K - 1)));
+        fit.keys = fit_keys(t, a, forced, tolerance, KeyInterpolation::BEZIER, false, min_gap);
+        return fit;
+    }
+    std::vector<Quat> q(N);
+    for (std::size_t i = 0; i < N; ++i) q[i] = from_wxyz(&qd[4 * i]);
+    std::vector<double> values(N * C);
     switch (mode.kind) {
         case RotationMode::Kind::euler:
             for (std::size_t k = 0; k + 1 < K; ++k) {
@@ -91,22 +116,7 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
             }
             break;
         case RotationMode::Kind::quaternion:
-            for (std::size_t k = 0; k + 1 < K; ++k) {
-                const double* a = kv + 4 * k;
-                const double* b = kv + 4 * (k + 1);
-                const Quat& r = q[forced[k]];
-                const double sign = r.w * a[0] + r.x * a[1] + r.y * a[2] + r.z * a[3] < 0.0 ? -1.0 : 1.0;
-                const double n0 = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]);
-                const double n1 = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]);
-                for (std::size_t i = forced[k]; i < forced[k + 1]; ++i) {
-                    const double u = u_of(i, k), s = sign * ((1 - u) * n0 + u * n1);
-                    values[4 * i] = q[i].w * s;
-                    values[4 * i + 1] = q[i].x * s;
-                    values[4 * i + 2] = q[i].y * s;
-                    values[4 * i + 3] = q[i].z * s;
-                }
-            }
-            break;
+            break;  // above
     }
     for (std::size_t k = 0; k < K; ++k) std::copy(kv + C * k, kv + C * (k + 1), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
     switch (mode.kind) {
@@ -123,12 +133,8 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
             fit.keys = fit_keys_axis_angle(t, a, forced, tolerance, KeyInterpolation::BEZIER, false, min_gap);
             break;
         }
-        case RotationMode::Kind::quaternion: {
-            std::vector<Quat> a(N);
-            for (std::size_t i = 0; i < N; ++i) a[i] = from_wxyz(&values[4 * i]);
-            fit.keys = fit_keys(t, a, forced, tolerance, KeyInterpolation::BEZIER, false, min_gap);
-            break;
-        }
+        case RotationMode::Kind::quaternion:
+            break;  // above
     }
     return fit;
 }

@@ -47,8 +47,12 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     // than `beat` — verification only ever adds keys, and every channel keeps at least the forced
     // samples (the first and last included) — so the result is the one a full run would lose with.
     // (When the synchronized result keeps only the forced keys, no per-channel run starts at all.)
+    std::size_t forced = 0;
+    for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
     auto run = [&](bool sync, std::size_t beat, ReducedKeys& out) {
-        State s = empty_state(p);
+        // Nothing to build when the forced keys alone cannot beat the synchronized result.
+        if (!sync && forced * static_cast<std::size_t>(C) >= beat) return false;
+        State s = empty_state(p, !sync);
         Fitter fitter(p, ipo, s);
         std::vector<std::vector<int>> groups;
         if (tolerance == 0.0 || p.n <= 2) {
@@ -75,14 +79,15 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
             // for axis-angle) goes first.
             static const double kQuatShare[4] = {0.6, 0.75, 0.9, 1.0};
             static const double kEulerShare[3] = {0.7, 0.85, 1.0};
-            std::size_t forced = 0;
-            for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
             std::size_t chosen = 0;
-            if (forced * static_cast<std::size_t>(C) >= beat) return false;
             for (int c = 0; c < C; ++c) {
                 groups.push_back({c});
                 const double share = C == 4 ? kQuatShare[c] : kEulerShare[c];
-                s.keys[c] = select_keys(p, fitter, &c, 1, tan2_half(share * fit_angle));
+                // The channel's keys may reach no further than this (the later channels keep at
+                // least the forced ones); select_keys gives up as soon as they would.
+                const std::size_t budget = beat - chosen - forced * static_cast<std::size_t>(C - 1 - c);
+                s.keys[c] = select_keys(p, fitter, &c, 1, tan2_half(share * fit_angle), budget);
+                if (s.keys[c].empty()) return false;
                 chosen += s.keys[c].size();
                 if (chosen + forced * static_cast<std::size_t>(C - 1 - c) >= beat) return false;
             }

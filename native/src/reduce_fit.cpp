@@ -79,9 +79,9 @@ void relative_unit(const Quat& r, int c, double d[4]) {
 
 }  // namespace
 
-State empty_state(const Problem& p) {
+State empty_state(const Problem& p, bool one_by_one) {
     State s;
-    s.F = p.y;
+    if (one_by_one) s.F = p.y;
     s.keys.assign(p.C, {});
     s.h1.assign(p.n * p.C, 0.0);
     s.h2.assign(p.n * p.C, 0.0);
@@ -398,8 +398,8 @@ void Fitter::solve_quat_channel(std::size_t i, std::size_t j, int chan, double k
     p2[0] = rhs[1];
 }
 
-// Fitted values of the channels at the interior samples (into buf_), their tan²(θ/2) errors (into
-// err_) and the largest.
+// Fitted values of the channels at the interior samples (into buf_, when fewer than all channels are
+// fitted: see State), their tan²(θ/2) errors (into err_) and the largest.
 // Between samples the fit is guarded too (quaternion BEZIER, every Euler and axis-angle fit): midway
 // between consecutive samples (keys included) the fitted rotation must lie within
 // kBetweenFactor × the fit's angle + kBetweenStep × the step between the two samples of what
@@ -464,7 +464,8 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
         if (NC < C && !other)
             for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
         fitted(u_[k], &bern_[k * 4], f);
-        for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
+        if (NC < C)  // kept for commit (F); fits of all channels keep no F (State)
+            for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
         double e;
         bool norm_failed;
         if (other) {
@@ -512,18 +513,18 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
                                      o[3] + x * o[7]};
                 e = tan2_of_relative(d);
             } else {
-                double mean[kMaxChannels] = {};
-                for (int c = 0; c < C; ++c) mean[c] = 0.5 * (p_.y[k * C + c] + p_.y[(k + 1) * C + c]);
                 if (norm_check && !norm_ok(p_, f, norm2)) {
                     between_failed_ = true;
                     return std::numeric_limits<double>::infinity();
                 }
                 Quat ref;
-                if constexpr (C == 4) {
-                    ref = p_.kind == Kind::QUAT ? Quat(mean[0], mean[1], mean[2], mean[3])
-                                                : axis_angle_rotation(mean);
+                if (C == 4 && p_.kind == Kind::QUAT) {
+                    const double* a = &p_.y[k * C];
+                    const double* b = &p_.y[(k + 1) * C];
+                    ref = Quat(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]),
+                               0.5 * (a[3] + b[3]));
                 } else {
-                    ref = euler_rotation(p_, mean);
+                    ref = p_.mid_ref[k];  // the rotation of the mean (Problem)
                 }
                 e = error_tan2(p_, ref, f);
             }
@@ -546,9 +547,11 @@ void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, cons
     if (nc != 1 || chans[0] != other_.chan) ++other_.epoch;  // other_'s fixed channels change
     for (int a = 0; a < nc; ++a) {
         const int c = chans[a];
-        for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
-        s_.F[i * C + c] = p_.y[i * C + c];
-        s_.F[j * C + c] = p_.y[j * C + c];
+        if (nc < C) {  // F: only fits of fewer than all channels read it (State)
+            for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
+            s_.F[i * C + c] = p_.y[i * C + c];
+            s_.F[j * C + c] = p_.y[j * C + c];
+        }
         s_.h1[i * C + c] = p1[a];
         s_.h2[i * C + c] = p2[a];
         s_.exact_param[i * C + c] = exact_param ? 1 : 0;

@@ -113,6 +113,11 @@ struct Problem {
     // step_tan[k] = tan(kBetweenStep/2 × the rotation angle between samples k and k+1), for the
     // between-samples guard.
     std::vector<double> step_tan;
+    // Euler and axis-angle: mid_ref[k] = the rotation of the mean of samples k and k+1, the
+    // between-samples guard's reference there (n − 1 entries; built once: every fit that passes
+    // its samples evaluates it again, and it costs three sines and cosines). Quaternions take the
+    // mean itself (no entries).
+    std::vector<Quat> mid_ref;
     // Euler: the order's axes (first applied, middle, last) as indices into (X, Y, Z).
     int axis_first = 0, axis_mid = 1, axis_last = 2;
     // Key choice (fit_keys): forced[k] — sample k must be a key of every channel (the first and the
@@ -228,16 +233,17 @@ void set_forced_keys(Problem& p, const std::vector<std::size_t>& forced, double 
 
 // The state of a reduction in progress: per channel its keys, the fitted values at every sample
 // (F, used as the "other channels" when channels are fitted one by one) and, per segment start, the
-// two inner Bezier control values.
+// two inner Bezier control values. F is read only by fits of fewer than all channels, and a run
+// never mixes those with fits of all channels: a synchronized run keeps no F (it stays empty).
 struct State {
-    std::vector<double> F;                           // n·C fitted values
+    std::vector<double> F;                           // n·C fitted values (one-by-one runs)
     std::vector<std::vector<std::size_t>> keys;      // per channel
     std::vector<double> h1, h2;                      // n·C: control values of the segment starting at i
     std::vector<unsigned char> exact_param;          // n·C: segment refitted with Blender's parameter
 };
 
-// A State with no keys, F at the samples.
-State empty_state(const Problem& p);
+// A State with no keys; for a run that fits channels one by one (one_by_one), F at the samples.
+State empty_state(const Problem& p, bool one_by_one);
 
 class Fitter {
 public:
@@ -313,9 +319,10 @@ private:
 
 // Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit where it can be:
 // every forced sample, plus inserted keys at candidate samples; the chosen segments' fits are
-// committed in the Fitter's State.
+// committed in the Fitter's State. Empty (given up) as soon as the keys cannot come out fewer than
+// `budget`.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit);
+                                     double limit, std::size_t budget = kNone);
 
 // ---- stage 4: verification and repair (reduce_verify.cpp) ------------------------------------------
 

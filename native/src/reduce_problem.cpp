@@ -82,6 +82,14 @@ void compute_breaks(Problem& p, bool guard) {
     p.step_tan.assign(p.n, 0.0);
     for (std::size_t k = 0; guard && k + 1 < p.n; ++k)
         p.step_tan[k] = std::tan(0.5 * kBetweenStep * unit_angle(p.ref[k], p.ref[k + 1]));
+    if (guard && p.kind != Kind::QUAT && p.n > 1) {
+        p.mid_ref.resize(p.n - 1);
+        for (std::size_t k = 0; k + 1 < p.n; ++k) {
+            double mean[kMaxChannels] = {};
+            for (int c = 0; c < p.C; ++c) mean[c] = 0.5 * (p.y[k * p.C + c] + p.y[(k + 1) * p.C + c]);
+            p.mid_ref[k] = p.kind == Kind::AXIS_ANGLE ? axis_angle_rotation(mean) : euler_rotation(p, mean);
+        }
+    }
 }
 
 // Slopes for default tangents: central differences inside, one-sided at the ends and next to a

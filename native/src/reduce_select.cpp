@@ -1,5 +1,6 @@
 // Key reduction, stage 3: which samples become keys (reduce_impl.hpp: select_keys).
 #include <algorithm>
+#include <utility>
 
 #include "reduce_impl.hpp"
 
@@ -12,13 +13,42 @@ namespace quatcurve::reduce_impl {
 // an end that is not a candidate (too close to a forced key) steps back to the nearest candidate.
 // Then one pass drops an inserted key wherever the segment joining its neighbours passes. A probe
 // that passes commits its fit, and the ends only grow, so the chosen segment's fit is the one held.
+// The ranges share nothing but the greedy's last segment length (a fit reads and commits only the
+// samples of its own range; the forced keys keep their values), so each range's removal pass runs
+// as soon as its greedy keys are chosen: from then on its keys are final, and with the forced keys
+// still ahead they bound the result from below (`budget`).
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit) {
+                                     double limit, std::size_t budget) {
     const std::size_t n = p.n;
     std::vector<std::size_t> keys{0};
     if (n == 1) return keys;
+    std::size_t forced_ahead = 0;  // forced samples after the current range's start
+    for (std::size_t k = 1; k < n; ++k) forced_ahead += p.is_forced(k) ? 1 : 0;
+    std::vector<std::size_t> kept{keys[0]};
+    std::size_t next = 1;  // the first key of `keys` the removal pass has not decided on
     auto probe = [&](std::size_t i, std::size_t j) {
         return fitter.fit(i, j, chans, nc, limit, false);
+    };
+    // A probe's outcome depends on its segment alone: the other channels stay fixed while these
+    // keys are chosen, a fit reads none of its own channels' committed values (Fitter::other_'s
+    // terms are filled once per key choice), and a failed probe commits nothing. So a segment that
+    // failed once fails again: the removal pass does not refit the segments the greedy search
+    // found too long (often a range in one piece). `failed`: the greedy's failed segments of the
+    // current range (no segment spans two), in increasing order of their start.
+    std::vector<std::pair<std::size_t, std::size_t>> failed;
+    auto greedy_probe = [&](std::size_t i, std::size_t j) {
+        const bool ok = probe(i, j);
+        if (!ok) failed.emplace_back(i, j);
+        return ok;
+    };
+    auto failed_before = [&](std::size_t i, std::size_t j) {
+        auto it = std::lower_bound(failed.begin(), failed.end(), i,
+                                   [](const std::pair<std::size_t, std::size_t>& f, std::size_t start) {
+                                       return f.first < start;
+                                   });
+        for (; it != failed.end() && it->first == i; ++it)
+            if (it->second == j) return true;
+        return false;
     };
     std::size_t i = 0, last_len = 2;
     std::size_t end = 0;  // the range's end: the first forced key after i
@@ -28,16 +58,17 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         if (end <= i) {
             end = i + 1;
             while (!p.is_forced(end)) ++end;
+            failed.clear();
         }
         std::size_t good = i + 1, bad = kNone;  // good: feasible (committed unless i + 1)
         const std::size_t guess = i + std::min(std::max<std::size_t>(last_len, 2), end - i);
         std::size_t step = std::max<std::size_t>(1, last_len / 4);
         if (guess > i + 1) {
-            if (probe(i, guess)) {
+            if (greedy_probe(i, guess)) {
                 good = guess;
                 while (good < end) {
                     const std::size_t j = std::min(good + step, end);
-                    if (!probe(i, j)) {
+                    if (!greedy_probe(i, j)) {
                         bad = j;
                         break;
                     }
@@ -49,7 +80,7 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
                 while (bad > i + 2) {
                     const std::size_t j = bad > i + 1 + step ? bad - step : i + 1;
                     if (j == i + 1) break;
-                    if (probe(i, j)) {
+                    if (greedy_probe(i, j)) {
                         good = j;
                         break;
                     }
@@ -60,7 +91,7 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
             if (bad != kNone) {
                 while (bad - good > 1) {
                     const std::size_t mid = good + (bad - good) / 2;
-                    if (probe(i, mid)) {
+                    if (greedy_probe(i, mid)) {
                         good = mid;
                     } else {
                         bad = mid;
@@ -85,13 +116,18 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         keys.push_back(good);
         last_len = good - i;
         i = good;
-    }
-    // Removal pass: join neighbours where one segment suffices (never across a forced key). A
-    // failed probe changes nothing, so the fits already committed stay valid.
-    std::vector<std::size_t> kept{keys[0]};
-    for (std::size_t a = 1; a + 1 < keys.size(); ++a) {
-        if (!p.is_forced(keys[a]) && probe(kept.back(), keys[a + 1])) continue;
-        kept.push_back(keys[a]);
+        if (good != end) continue;
+        // The range is chosen. Removal pass over its keys: join neighbours where one segment
+        // suffices (never across a forced key). A failed probe changes nothing, so the fits already
+        // committed stay valid.
+        for (; next + 1 < keys.size(); ++next) {
+            if (!p.is_forced(keys[next]) && !failed_before(kept.back(), keys[next + 1]) &&
+                probe(kept.back(), keys[next + 1]))
+                continue;
+            kept.push_back(keys[next]);
+        }
+        --forced_ahead;  // `end`, the next range's start, is the last key and counts as kept below
+        if (kept.size() + 1 + forced_ahead >= budget) return {};
     }
     kept.push_back(keys.back());
     return kept;

@@ -2,6 +2,8 @@
 // (blender_eval.hpp), and the repairs — refit with Blender's own frame→parameter map, then split —
 // until every sample passes (reduce_impl.hpp: verify_and_repair).
 #include <algorithm>
+#include <limits>
+#include <memory>
 
 #include "quatcurve/blender_eval.hpp"
 #include "reduce_impl.hpp"
@@ -9,6 +11,8 @@
 namespace quatcurve::reduce_impl {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpolation ipo) {
     ReducedChannel ch;
@@ -49,17 +53,24 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
     return ch;
 }
 
-// Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Channels with
-// the same keys as the previous one share its Bezier parameters.
+// Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Consecutive
+// channels with the same keys are evaluated in one walk (all of them when synchronized), sharing
+// their Bezier parameters.
 void emulate_errors(const Problem& p, const std::vector<ReducedChannel>& chans,
                     KeyInterpolation ipo, std::vector<double>& err) {
     const int C = p.C;
-    std::vector<double> vals(p.n * C), col;
-    std::vector<float> params;
-    for (int c = 0; c < C; ++c) {
-        const bool reuse = c > 0 && chans[c].indices == chans[c - 1].indices;
-        blender_evaluate_sorted(chans[c], ipo, p.t, col, &params, reuse);
-        for (std::size_t k = 0; k < p.n; ++k) vals[k * C + c] = col[k];
+    // Every entry is written below (the runs cover all channels): no zero-fill.
+    std::unique_ptr<double[]> vals(new double[p.n * C]);
+    const FCurveKeys* run[kMaxChannels];
+    for (int c = 0; c < C;) {
+        int count = 1;
+        run[0] = &chans[c];
+        while (c + count < C && chans[c + count].indices == chans[c].indices) {
+            run[count] = &chans[c + count];
+            ++count;
+        }
+        blender_evaluate_sorted_shared(run, count, ipo, p.t, &vals[c], C);
+        c += count;
     }
     err.resize(p.n);
     for (std::size_t k = 0; k < p.n; ++k) {
@@ -183,8 +194,16 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
         }
         if (!changed) break;
     }
+    // The largest angle, from the largest tan²: angle_of_tan2 rises with it, so only samples near the
+    // largest need the arctangent. Below half of it (at most 1e20, ~1e-10 rad short of π) the angle is
+    // smaller by far more than atan's rounding (< 1 ulp), so none of them can come out larger;
+    // beyond, and for non-finite errors (π), every sample is converted as before.
+    double worst = 0.0;
+    for (std::size_t k = 0; k < p.n; ++k) worst = std::max(worst, err[k] < kInf ? err[k] : kInf);
+    const double below = worst <= 1e20 ? 0.5 * worst : -1.0;
     max_error = 0.0;
-    for (std::size_t k = 0; k < p.n; ++k) max_error = std::max(max_error, angle_of_tan2(err[k]));
+    for (std::size_t k = 0; k < p.n; ++k)
+        if (!(err[k] < below)) max_error = std::max(max_error, angle_of_tan2(err[k]));
     return chans;
 }
 

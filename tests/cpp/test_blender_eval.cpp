@@ -112,6 +112,55 @@ TEST(BlenderEval, SortedSweepEqualsPointwiseEvaluation) {
     }
 }
 
+TEST(BlenderEval, SharedSweepEqualsEachChannelOnItsOwn) {
+    // Three channels on the same key frames: values and handle values differ, one channel is flat
+    // on some segments (Blender's shortcut), and the third has other (long) handle frames on one
+    // segment, so its parameter must be found on its own there.
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> val(-1.0, 1.0), gap(0.3, 4.0);
+    FCurveKeys chans[3];
+    double f = 10.0;
+    for (int a = 0; a < 30; ++a) {
+        for (int c = 0; c < 3; ++c) {
+            chans[c].frames.push_back(double(float(f)));
+            chans[c].values.push_back(c == 1 && a % 5 < 2 ? 0.25 : double(float(val(rng))));
+        }
+        f += gap(rng);
+    }
+    for (std::size_t a = 0; a < chans[0].frames.size(); ++a) {
+        const std::vector<double>& fr = chans[0].frames;
+        const double dl = a > 0 ? fr[a] - fr[a - 1] : 1.0;
+        const double dr = a + 1 < fr.size() ? fr[a + 1] - fr[a] : 1.0;
+        for (int c = 0; c < 3; ++c) {
+            const bool flat = c == 1 && a % 5 < 2;
+            const double stretch = c == 2 && a == 7 ? 2.5 : 1.0 / 3;
+            chans[c].handle_left.push_back(double(float(fr[a] - dl / 3)));
+            chans[c].handle_left.push_back(flat ? 0.25 : double(float(val(rng))));
+            chans[c].handle_right.push_back(double(float(fr[a] + dr * stretch)));
+            chans[c].handle_right.push_back(flat ? 0.25 : double(float(val(rng))));
+        }
+    }
+    std::vector<double> at;
+    for (double x = 5.0; x < f + 5.0; x += 0.173) at.push_back(x);
+    for (double key : chans[0].frames) {
+        at.push_back(key);
+        at.push_back(key + 0.00005);
+        at.push_back(key - 0.00015);
+    }
+    std::sort(at.begin(), at.end());
+    const FCurveKeys* ptrs[3] = {&chans[0], &chans[1], &chans[2]};
+    for (KeyInterpolation ipo : {KeyInterpolation::LINEAR, KeyInterpolation::BEZIER}) {
+        std::vector<double> shared(3 * at.size());
+        blender_evaluate_sorted_shared(ptrs, 3, ipo, at, shared.data(), 3);
+        for (int c = 0; c < 3; ++c) {
+            std::vector<double> alone;
+            blender_evaluate_sorted(chans[c], ipo, at, alone);
+            for (std::size_t k = 0; k < at.size(); ++k)
+                ASSERT_EQ(shared[3 * k + c], alone[k]) << "channel " << c << ", frame " << at[k];
+        }
+    }
+}
+
 TEST(BlenderEval, LongHandlesAreScaledBackToTheSegment) {
     // The first key's right handle reaches 30 frames into a 10-frame segment: Blender scales it back
     // to length 10 at evaluation, frame and value by the same factor 10/30 ((30, 6) → (10, 2)), so

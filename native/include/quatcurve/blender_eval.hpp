@@ -70,6 +70,15 @@ void blender_evaluate_sorted(const FCurveKeys& keys, KeyInterpolation interpolat
                              const std::vector<double>& frames, std::vector<double>& out,
                              std::vector<float>* param_cache = nullptr, bool reuse = false);
 
+// blender_evaluate_sorted for `count` channels that share their key frames (as float32), each into
+// out[s·stride + c] for frame s: one walk over the keys for all of them, each segment's control
+// points read once, and the Bezier curve parameter found once per frame for the channels whose
+// handle frames agree (recomputed for one whose do not). Bit-identical to evaluating each channel
+// on its own.
+void blender_evaluate_sorted_shared(const FCurveKeys* const* channels, int count,
+                                    KeyInterpolation interpolation, const std::vector<double>& frames,
+                                    double* out, std::size_t stride);
+
 // The curve parameter Blender's root finder returns for `frame` in a Bezier segment whose key and
 // handle frames are q0, q1, q2, q3 (after correct_bezpart; findzero's first root); -1 when it finds
 // none.
