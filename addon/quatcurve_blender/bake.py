@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fcurves, native, path_rule, targets, write
-from .reduce import parallel_imap, parallel_map
+from .reduce import parallel_imap, parallel_map, thread_count
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
 
@@ -186,18 +186,27 @@ class BakePlan:
 
     def compute(self):
         """Computes every target left: Blender's data read here, on the main thread, then the native
-        work (curve, sampling, channels, reduction) on worker threads (reduce.parallel_map); the
-        results do not depend on the thread count."""
+        work (curve, sampling, channels, reduction) on worker threads; the results do not depend on
+        the thread count."""
         begin = time.perf_counter()
         todo = self.items[self.computed:]
-        references = [self._reference(item) for item in todo]
-        parallel_map(lambda job: self._compute_native(*job), list(zip(todo, references)))
+        if self.settings.tolerance == 0:
+            threads = thread_count()
+            for _ in self._dense(todo, threads if threads > 1 else 0):
+                pass
+        else:
+            references = [self._reference(item) for item in todo]
+            parallel_map(lambda job: self._reduced(*job), list(zip(todo, references)))
         self.computed = len(self.items)
         self.seconds += time.perf_counter() - begin
         return self
 
     def _compute(self, item):
-        self._compute_native(item, self._reference(item))
+        if self.settings.tolerance == 0:
+            for _ in self._dense([item], 0):
+                pass
+        else:
+            self._reduced(item, self._reference(item))
 
     def _reference(self, item):
         """What output_values needs from Blender for `item` (read on the main thread), or None."""
@@ -212,9 +221,36 @@ class BakePlan:
             return source.evaluate(self.frames[:1])[0]
         return None
 
-    def _compute_native(self, item, reference):
-        """The curve through the item's keys, sampled, as output channel values (and reduced): no
-        Blender data is touched, so it may run on a worker thread."""
+    def _dense(self, todo, threads):
+        """Yields each item of `todo` in order once its dense keys are computed (item.packed, its
+        path-rule notes). A quatcurve.BakeQueue computes them on `threads` native worker threads (0:
+        each here, when it is asked for). The workers never need the GIL, so the caller may write
+        keys between the items without waiting for them, or they for it (Python worker threads wait
+        for the GIL at every step between two native calls). Blender is read here, on the calling
+        thread, before any job starts."""
+        settings = self.settings
+        jobs = []
+        for item in todo:
+            try:
+                jobs.append(item.source.bake_job(settings.method, item.output_mode, self._reference(item),
+                                                 **settings.curve_options()))
+            except ValueError as error:
+                raise BakeError("%s: %s" % (item.target.name, error)) from error
+        queue = native.require().BakeQueue(self.frames, jobs, threads=threads)
+        for item in todo:
+            try:
+                keys, broken = next(queue)
+            except ValueError as error:
+                raise BakeError("%s: %s" % (item.target.name, error)) from error
+            item.notes += ["path rule: " + b.text() for b in path_rule.breaks(
+                None, item.source.frames, item.target.name, settings.method, rows=broken)]
+            item.frames = self.frames
+            item.packed = [fcurves.PackedKeys.from_pairs(rows, self.increasing) for rows in keys]
+            yield item
+
+    def _reduced(self, item, reference):
+        """The curve through the item's keys, sampled, as output channel values, reduced (tolerance
+        > 0): no Blender data is touched, so it may run on a worker thread."""
         settings, source = self.settings, item.source
         try:
             curve = source.curve(settings.method, **settings.curve_options())
@@ -223,16 +259,6 @@ class BakePlan:
             raise BakeError("%s: %s" % (item.target.name, error)) from error
         item.notes += ["path rule: " + b.text() for b in broken]
         item.frames = self.frames
-        if settings.tolerance == 0:
-            # Sampled and packed for the main thread's plainest write in one native call: on a worker
-            # thread every step that lets go of the GIL waits to get it back from the main thread,
-            # which holds it while it writes keys.
-            try:
-                keys = curve.sample_keys(self.frames, item.output_mode, reference)
-            except ValueError as error:
-                raise BakeError("%s: the %s curve: %s" % (item.target.name, settings.method, error)) from error
-            item.packed = [fcurves.PackedKeys.from_pairs(rows, self.increasing) for rows in keys]
-            return
         quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
@@ -255,17 +281,20 @@ class BakePlan:
         begin = time.perf_counter()
         settings = self.settings
         todo = self.items[self.computed:]
+        computing = None
         if todo and settings.new_action:
-            references = [self._reference(item) for item in todo]  # Blender data: main thread
+            if settings.tolerance == 0:
+                # The main thread writes keys meanwhile: it keeps a core for that.
+                computing = self._dense(todo, thread_count() - 1)
+            else:
+                references = [self._reference(item) for item in todo]  # Blender data: main thread
 
-            def computed(job):
-                self._compute_native(*job)
-                return job[0]
+                def reduced(job):
+                    self._reduced(*job)
+                    return job[0]
 
-            # Dense keys: writing them keeps the main thread as busy as the workers.
-            dense = settings.tolerance == 0
-            done = self.items[:self.computed]
-            items = itertools.chain(done, parallel_imap(computed, list(zip(todo, references)), busy_main=dense))
+                computing = parallel_imap(reduced, list(zip(todo, references)))
+            items = itertools.chain(self.items[:self.computed], computing)
         else:
             if todo:
                 self.compute()
@@ -273,7 +302,11 @@ class BakePlan:
         writes = (self._write_of(item) for item in items)
         if not settings.new_action:
             writes = list(writes)
-        actions = write.write_rotations(writes, settings.new_action, settings.method.lower())
+        try:
+            actions = write.write_rotations(writes, settings.new_action, settings.method.lower())
+        finally:
+            if computing is not None:
+                computing.close()  # a failure: stop the workers now, not when the generator is collected
         self.computed = len(self.items)
         result = BakeResult(settings.method, float(self.frames[0]), float(self.frames[-1]))
         for item, action in zip(self.items, actions):

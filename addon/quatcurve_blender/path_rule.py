@@ -45,14 +45,17 @@ class PathRuleBreak:
                 "ratio": self.ratio if math.isfinite(self.ratio) else None}
 
 
-def breaks(curve, key_frames, target, method, segment_paths=None):
+def breaks(curve, key_frames, target, method, segment_paths=None, rows=None):
     """[PathRuleBreak] of `curve` (a quatcurve.Curve through keys at key_frames), one per key segment
     whose sampled path is longer than the rule allows; [] when it obeys it everywhere.
 
     segment_paths: the curve's Curve.segment_paths() when the caller already has them (compare);
-    otherwise Curve.path_rule_breaks() answers, which samples nothing where the construction already
-    settled the rule (SLERP, NLERP, the clamped SQUAD, TCB and CATMULL_ROM)."""
-    if segment_paths is None:
+    rows: its Curve.path_rule_breaks() when the caller has them (a quatcurve.BakeQueue gives them;
+    curve may then be None); otherwise Curve.path_rule_breaks() answers, which samples nothing where
+    the construction already settled the rule (SLERP, NLERP, the clamped SQUAD, TCB and CATMULL_ROM)."""
+    if rows is not None:
+        rows = [(int(i), arc, path) for i, arc, path in rows]
+    elif segment_paths is None:
         rows = [(int(i), arc, path) for i, arc, path in curve.path_rule_breaks()]
     else:
         qc = native.require()

@@ -64,7 +64,7 @@ def parallel_map(fn, items):
         return list(pool.map(fn, items))
 
 
-def parallel_imap(fn, items, busy_main=False):
+def parallel_imap(fn, items):
     """Like parallel_map, but yields each result in order as soon as it and those before it are done,
     so the caller (on the main thread) can use the first results while thread_count() workers compute
     the rest. `items` may be a generator that reads Blender on the main thread: each item goes to the
@@ -73,9 +73,9 @@ def parallel_imap(fn, items, busy_main=False):
 
     While it runs, the interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's
     Blender calls hold it, and the workers need it briefly between their native calls (measured: a
-    100-target bake 0.69 s → 0.43 s). When the caller stops early (an error, a generator closed), the
-    calls not yet started are cancelled. busy_main: the caller keeps the main thread busy while the
-    workers run (the bake writes keys), so one worker fewer runs than thread_count() says."""
+    100-target bake 0.69 s → 0.43 s, when the bake's dense keys were computed here; a BakeQueue's
+    native workers now do without the GIL). When the caller stops early (an error, a generator
+    closed), the calls not yet started are cancelled."""
     threads = thread_count()
     if hasattr(items, "__len__"):
         threads = min(threads, len(items))
@@ -83,8 +83,6 @@ def parallel_imap(fn, items, busy_main=False):
         for item in list(items):  # every item made first, as with workers
             yield fn(item)
         return
-    if busy_main:
-        threads -= 1  # the main thread keeps a core for its own work (at least one worker still runs)
     switch = sys.getswitchinterval()
     sys.setswitchinterval(min(switch, GIL_SWITCH))
     pool = ThreadPoolExecutor(max_workers=threads)

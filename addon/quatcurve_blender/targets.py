@@ -155,6 +155,12 @@ class RotationKeys:
         # Blender does, which differs from lerping normalized keys when they are not unit length.
         return qc.Curve(self.frames, self.values, method=method, **options)
 
+    def bake_job(self, method, mode, reference=None, **options):
+        """quatcurve.BakeJob: the curve() of `method` through these keys, to be sampled as the keys of
+        rotation mode `mode` (with Curve.sample_keys' `reference`) by a quatcurve.BakeQueue."""
+        refuse_zero_rotations(self.mode, self.values, self.target.name, self.frames)
+        return native.require().BakeJob(self.frames, self.values, self.mode, method, mode, reference, **options)
+
 
 def evaluate_channels(target, prop, channel_fcurves, frames):
     """(N, len(channel_fcurves)) values of target.prop's channels at `frames`: Blender's evaluation of

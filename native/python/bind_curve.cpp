@@ -2,11 +2,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/bake.hpp"
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
@@ -266,6 +269,85 @@ void bind_curve(py::module_& m) {
             for (const auto& item : options_dict(c))
                 s += ", " + py::str(item.first).cast<std::string>() + "=" + py::repr(item.second).cast<std::string>();
             return s + ")";
+        });
+
+    py::class_<BakeJob>(m, "BakeJob",
+                        "One target of a BakeQueue: BakeJob(times, values, keys_mode, method, mode, reference=None, "
+                        "**options) — the curve of `method` through keys (times (K,), values (K, C) channel values of "
+                        "rotation mode `keys_mode`: Curve, Curve.from_euler or Curve.from_axis_angle) with the "
+                        "curve's options, sampled as the keys of rotation mode `mode` with `reference` as "
+                        "Curve.sample_keys takes it.")
+        .def(py::init([](py::handle times, py::handle values, const std::string& keys_mode, const std::string& method,
+                         const std::string& mode, py::object reference, const py::kwargs& kwargs) {
+                 BakeJob job;
+                 job.keys_mode = parse_rotation_mode(keys_mode);
+                 job.method = parse_method(method);
+                 job.output = parse_rotation_mode(mode);
+                 job.options = to_options(job.method, kwargs);
+                 job.times = key_times(times);
+                 const Batch v = key_rows(values, static_cast<py::ssize_t>(channel_count(job.keys_mode)), "values");
+                 job.values.assign(v.data(), v.data() + v.count * channel_count(job.keys_mode));
+                 if (!reference.is_none()) {
+                     const std::size_t nc = channel_count(job.output);
+                     const Batch ref = as_batch(reference, {static_cast<py::ssize_t>(nc)}, "reference");
+                     if (ref.batch_shape.size() > 1)
+                         throw py::value_error("reference: expected one row, or one per frame, got " +
+                                               shape_string(ref.array));
+                     job.reference_rows = ref.batch_shape.empty() ? 1 : ref.count;
+                     job.reference.assign(ref.data(), ref.data() + nc * job.reference_rows);
+                 }
+                 return job;
+             }),
+             py::arg("times"), py::arg("values"), py::arg("keys_mode"), py::arg("method"), py::arg("mode"),
+             py::arg("reference") = py::none());
+
+    py::class_<BakeQueue>(m, "BakeQueue",
+                          "BakeQueue(frames, jobs, threads=0, window=8): the jobs (BakeJob) run on `threads` native "
+                          "worker threads (0: each when it is taken), at most `window` finished ahead of the "
+                          "taker, and are taken in order by iterating: each gives (keys, breaks) — keys the "
+                          "(C, N, 2) float32 of Curve.sample_keys(frames, mode, reference), breaks the (B, 3) of "
+                          "Curve.path_rule_breaks(). The same results bit for bit whatever the thread count; a "
+                          "job's error (ValueError) is raised when it is taken. The workers never need the GIL, "
+                          "so the taker may hold it (writing keys) while they run.")
+        .def(py::init([](py::handle frames, const py::sequence& job_list, std::size_t threads, std::size_t window) {
+                 std::vector<BakeJob> jobs;
+                 jobs.reserve(py::len(job_list));
+                 for (const py::handle job : job_list) {
+                     if (!py::isinstance<BakeJob>(job))
+                         throw py::type_error("jobs[" + std::to_string(jobs.size()) +
+                                              "]: expected a quatcurve.BakeJob, got " +
+                                              py::str(py::type::of(job).attr("__name__")).cast<std::string>());
+                     jobs.push_back(job.cast<const BakeJob&>());
+                 }
+                 const Batch f = as_batch(frames, {}, "frames");
+                 if (f.batch_shape.size() != 1)
+                     throw py::value_error("frames: expected shape (N,), got " + shape_string(f.array));
+                 return std::make_unique<BakeQueue>(std::vector<double>(f.data(), f.data() + f.count),
+                                                    std::move(jobs), threads, window);
+             }),
+             py::arg("frames"), py::arg("jobs"), py::arg("threads") = 0, py::arg("window") = 8)
+        .def("__len__", &BakeQueue::size)
+        .def_property_readonly("remaining", &BakeQueue::remaining)
+        .def("__iter__", [](py::object self) { return self; })
+        .def("__next__", [](BakeQueue& q) {
+            if (q.remaining() == 0) throw py::stop_iteration();
+            BakedKeys baked;
+            {
+                py::gil_scoped_release release;
+                baked = q.next();
+            }
+            const auto n = static_cast<py::ssize_t>(baked.channels ? baked.keys.size() / (2 * baked.channels) : 0);
+            auto* owned = new std::vector<float>(std::move(baked.keys));
+            py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+            py::array_t<float> keys({static_cast<py::ssize_t>(baked.channels), n, py::ssize_t(2)}, owned->data(),
+                                    owner);
+            DArray breaks({static_cast<py::ssize_t>(baked.path_rule_breaks.size()), py::ssize_t(3)});
+            for (std::size_t i = 0; i < baked.path_rule_breaks.size(); ++i) {
+                breaks.mutable_data()[3 * i] = static_cast<double>(baked.path_rule_breaks[i].first);
+                breaks.mutable_data()[3 * i + 1] = baked.path_rule_breaks[i].second.arc;
+                breaks.mutable_data()[3 * i + 2] = baked.path_rule_breaks[i].second.length;
+            }
+            return py::make_tuple(std::move(keys), std::move(breaks));
         });
 }
 

@@ -83,12 +83,10 @@ def test_zero_quaternion_in_the_source(scene):
     refused("Cube: the quaternion is zero at frame 7")
 
 
-@pytest.mark.parametrize("threads", [1, 2])
-def test_a_target_failing_after_others_were_written_leaves_nothing_behind(scene, monkeypatch, threads):
-    # Into new actions the bake writes each target while the next ones compute: the zero quaternion
-    # of the last target is found (its curve refuses it) after the first ones were written, and the
-    # new actions made so far (copies, and a new one for a target with only NLA strips) are removed.
-    from quatcurve_blender import reduce
+def _failing_last(monkeypatch, threads, bad_keys):
+    """Three good targets, one with only NLA strips, then 'Zz' keyed with bad_keys, all selected;
+    returns the list the names of the targets written are appended to."""
+    from quatcurve_blender import reduce, write
     monkeypatch.setattr(reduce, "THREADS", threads)
     good = [add_empty("Good%d" % i, "QUATERNION") for i in range(3)]
     for obj in good:
@@ -99,16 +97,34 @@ def test_a_target_failing_after_others_were_written_leaves_nothing_behind(scene,
     anim.nla_tracks.new().strips.new("Strip", 1, fcurves.active_action(strip_only))
     anim.action = None
     bad = add_empty("Zz", "QUATERNION")
-    key(bad, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 0, 0, 0))])
+    key(bad, "rotation_quaternion", bad_keys)
     select_objects(*good, strip_only, bad)
     assert [t.name for t in targets.gather_targets(bpy.context)][-1] == "Zz"
-    from quatcurve_blender import write
     written = []
     real = write._write_keys
     monkeypatch.setattr(write, "_write_keys", lambda channels, item: (written.append(item.target.name),
                                                                        real(channels, item)))
-    refused("Zz: the quaternion is zero at frame 7")
+    return written
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_a_target_failing_after_others_were_written_leaves_nothing_behind(scene, monkeypatch, threads):
+    # Into new actions the bake writes each target while the next ones compute: the last target's
+    # curve refuses its keys (spacings of 0.02 and 29,999 frames: a SQUAD tangent cannot carry one
+    # over the other) on a worker, after the first ones were written, and the new actions made so far
+    # (copies, and a new one for a target with only NLA strips) are removed.
+    written = _failing_last(monkeypatch, threads, [(1, (1, 0, 0, 0)), (1.02, (1, 0.001, 0, 0)),
+                                                   (30000, (0, 1, 0, 0))])
+    refused(r"Zz: times\[2\]: .* SQUAD needs neighbouring key spacings", method="SQUAD", frame_start=1,
+            frame_end=7)
     assert written == ["Good0", "Good1", "Good2", "Good9"]  # written, then removed again
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_keys_refused_while_reading_stop_the_bake_before_any_write(scene, monkeypatch, threads):
+    written = _failing_last(monkeypatch, threads, [(1, (1, 0, 0, 0)), (7, (0, 0, 0, 0))])
+    refused("Zz: the quaternion is zero at frame 7")
+    assert written == []
 
 
 def test_empty_frame_range(keyed):
