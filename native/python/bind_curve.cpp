@@ -74,6 +74,17 @@ py::dict options_dict(const Curve& c) {
     return d;
 }
 
+// Curve::path_rule_breaks as a (B, 3) array: key segment index, keyed arc, sampled path length.
+DArray breaks_array(const std::vector<std::pair<std::size_t, SegmentPath>>& breaks) {
+    DArray a({static_cast<py::ssize_t>(breaks.size()), py::ssize_t(3)});
+    for (std::size_t i = 0; i < breaks.size(); ++i) {
+        a.mutable_data()[3 * i] = static_cast<double>(breaks[i].first);
+        a.mutable_data()[3 * i + 1] = breaks[i].second.arc;
+        a.mutable_data()[3 * i + 2] = breaks[i].second.length;
+    }
+    return a;
+}
+
 DArray read_only(DArray a) {
     py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
     return a;
@@ -233,13 +244,7 @@ void bind_curve(py::module_& m) {
                     py::gil_scoped_release release;
                     b = c.path_rule_breaks();
                 }
-                DArray a({static_cast<py::ssize_t>(b.size()), py::ssize_t(3)});
-                for (std::size_t i = 0; i < b.size(); ++i) {
-                    a.mutable_data()[3 * i] = static_cast<double>(b[i].first);
-                    a.mutable_data()[3 * i + 1] = b[i].second.arc;
-                    a.mutable_data()[3 * i + 2] = b[i].second.length;
-                }
-                return a;
+                return breaks_array(b);
             },
             "(B, 3): key segment index, keyed arc and sampled path length (radians) of every key segment "
             "whose segment_paths() length breaks the path rule; nothing is sampled where the curve's "
@@ -341,13 +346,7 @@ void bind_curve(py::module_& m) {
             py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<float>*>(p); });
             py::array_t<float> keys({static_cast<py::ssize_t>(baked.channels), n, py::ssize_t(2)}, owned->data(),
                                     owner);
-            DArray breaks({static_cast<py::ssize_t>(baked.path_rule_breaks.size()), py::ssize_t(3)});
-            for (std::size_t i = 0; i < baked.path_rule_breaks.size(); ++i) {
-                breaks.mutable_data()[3 * i] = static_cast<double>(baked.path_rule_breaks[i].first);
-                breaks.mutable_data()[3 * i + 1] = baked.path_rule_breaks[i].second.arc;
-                breaks.mutable_data()[3 * i + 2] = baked.path_rule_breaks[i].second.length;
-            }
-            return py::make_tuple(std::move(keys), std::move(breaks));
+            return py::make_tuple(std::move(keys), breaks_array(baked.path_rule_breaks));
         });
 }
 
