@@ -59,7 +59,7 @@ def write_rotations(items, new_action, suffix):
     if not new_action and not isinstance(items, (list, tuple)):
         raise TypeError("write_rotations: in place, the writes must all be computed first (a list)")
     copies = {}        # original action → its copy
-    destination = {}   # ID → the action its targets are written into
+    destination = {}   # ID → the action its targets are written into, and the ID's Channels there
     made = []          # actions made here
     written, done = [], []
     try:
@@ -77,9 +77,9 @@ def write_rotations(items, new_action, suffix):
                     action = copies[original]
                 else:
                     action = original
-                destination[id_data.name_full] = action
-            action = destination[id_data.name_full]
-            _write_keys(fcurves.Channels.of(id_data, action, create=True), item)
+                destination[id_data.name_full] = action, fcurves.Channels.of(id_data, action, create=True)
+            action, channels = destination[id_data.name_full]
+            _write_keys(channels, item)
             written.append(action)
             done.append(item)
     except BaseException:
@@ -88,7 +88,7 @@ def write_rotations(items, new_action, suffix):
         raise
     for item in done:
         id_data = item.target.id_data
-        action = destination[id_data.name_full]
+        action = destination[id_data.name_full][0]
         if fcurves.active_action(id_data) != action:
             fcurves.assign_action(id_data, action)
         if item.target.owner.rotation_mode != item.mode:
