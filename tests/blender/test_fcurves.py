@@ -47,6 +47,41 @@ def test_bezier_keys_with_free_handles_are_kept_as_written(scene):
     assert {p.handle_left_type for p in fcurve.keyframe_points} == {"FREE"}
 
 
+def _handle_types(fcurve):
+    return [(p.handle_left_type, p.handle_right_type) for p in fcurve.keyframe_points]
+
+
+@pytest.mark.parametrize("count", [7, 10, 13])
+def test_a_rewrite_with_handles_makes_every_handle_type_free(scene, count):
+    """Rewriting keys with handles (a refit: fewer, as many or more keys) leaves FREE handle types on
+    every key, also where they were changed since the last write (Blender 3.x: key slots are kept and
+    only the types that are not FREE are set)."""
+    obj = add_empty("Cube")
+    key(obj, "location", [(1, (0, 0, 0))])
+    channels = fcurves.Channels.of(obj)
+    frames = np.arange(10.0) * 3
+    values = np.sin(frames)
+    fcurve = channels.write('["prop"]', 0, frames, values, interpolation="BEZIER",
+                            handle_left=np.stack([frames - 1, values], 1), handle_right=np.stack([frames + 1, values], 1))
+    kinds = ["AUTO", "VECTOR", "ALIGNED", "AUTO_CLAMPED"]
+    points = fcurve.keyframe_points
+    for i, kind in enumerate(kinds):
+        points[2 * i + 1].handle_left_type = kind
+        points[2 * i + 2].handle_right_type = kinds[-1 - i]
+    points[9].handle_left_type = points[9].handle_right_type = "VECTOR"
+    assert len({t for pair in _handle_types(fcurve) for t in pair}) == 5
+    frames = np.arange(count) * 2.5 + 1
+    values = np.cos(frames)
+    left, right = np.stack([frames - 0.5, values + 0.1], 1), np.stack([frames + 0.5, values - 0.1], 1)
+    fcurves.write_keys(fcurve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
+    assert _handle_types(fcurve) == [("FREE", "FREE")] * count
+    got_left, got_right = fcurves.read_handles(fcurve)
+    np.testing.assert_allclose(got_left, left, atol=1e-6)
+    np.testing.assert_allclose(got_right, right, atol=1e-6)
+    np.testing.assert_allclose(fcurves.read_keys(fcurve)[1], values, atol=1e-7)
+    assert {p.interpolation for p in points} == {"BEZIER"}
+
+
 @pytest.mark.parametrize("interpolation", ["LINEAR", "BEZIER", "CONSTANT", "ELASTIC"])
 @pytest.mark.parametrize("modifier", [None, "GENERATOR", "NOISE"])
 def test_evaluate_equals_blenders_own_evaluation(scene, interpolation, modifier):

@@ -178,6 +178,24 @@ def test_changed_value_refits_euler_keys_exactly(live_scene):
     assert_plays_method(obj, frames.astype(float), values, method="SLERP")
 
 
+def test_a_refit_makes_handle_types_changed_by_the_animator_free_again(fitted):
+    # A handle type changed alone refits nothing (the fit reads no handle types); the next refit writes
+    # fitted FREE handles on every key again, wherever the changed ones sit.
+    prop_path = fitted.path_from_id("rotation_quaternion")
+    curves = fcurves.Channels.of(fitted).find_all(prop_path, 4)
+    curves[1].keyframe_points[1].handle_left_type = "VECTOR"
+    curves[2].keyframe_points[2].handle_right_type = "AUTO_CLAMPED"
+    curves[3].keyframe_points[-1].handle_left_type = curves[3].keyframe_points[-1].handle_right_type = "ALIGNED"
+    update()
+    assert live.STATS.refits == 0
+    point = next(p for p in curves[0].keyframe_points if p.co[0] == 6)
+    point.co[1] += 0.05
+    update()
+    assert live.STATS.refits == 1, live.STATS
+    for curve in fcurves.Channels.of(fitted).find_all(prop_path, 4):
+        assert {(p.handle_left_type, p.handle_right_type) for p in curve.keyframe_points} == {("FREE", "FREE")}
+
+
 def test_location_key_changes_nothing(fitted):
     fitted.location = (1, 2, 3)
     fitted.keyframe_insert("location", frame=9)
