@@ -28,6 +28,7 @@ it). Everything is read and computed before anything is written, so an error lea
 untouched; the operator's UNDO flag makes the write one undo step.
 """
 
+import contextlib
 import hashlib
 import math
 import time
@@ -109,13 +110,56 @@ def target_key(target):
     return fcurves.slot_identifier(target.id_data) or "", path
 
 
+# action pointer → (record count, {(slot, owner path): index of its first record}), inside record_index() only.
+_record_index = None
+
+
+@contextlib.contextmanager
+def record_index():
+    """Within the block find_record finds records through an index of each action's records, built by
+    one pass over them on first use, instead of a pass per call (a refit of 100 targets asks twice per
+    target: 26 µs each). Inside the block only store_record may change records (it adds; slots and
+    owner paths never change); the index is made again when the action's record count changes, and
+    a record found must still carry the target's slot and path. Main thread only, like all bpy use."""
+    global _record_index
+    outer = _record_index
+    if outer is None:
+        _record_index = {}
+    try:
+        yield
+    finally:
+        if outer is None:
+            _record_index = None
+
+
 def find_record(action, target):
-    """The fit record of `target` in `action`, or None."""
+    """The fit record of `target` in `action` (the first one, in the unlikely case of two), or None."""
     slot, path = target_key(target)
-    for record in getattr(action, "quatcurve_fits", ()):
+    records = getattr(action, "quatcurve_fits", ())
+    index = _record_index
+    if index is not None and len(records):
+        count = len(records)
+        known = index.get(action.as_pointer())
+        if known is None or known[0] != count:
+            known = index[action.as_pointer()] = (count, _index_records(records))
+        i = known[1].get((slot, path))
+        if i is None:
+            return None
+        record = records[i]
+        if record.owner_path == path and record.slot == slot:
+            return record
+        del index[action.as_pointer()]  # cannot happen within the block's rules: scan, as without it
+    for record in records:
         if record.owner_path == path and record.slot == slot:
             return record
     return None
+
+
+def _index_records(records):
+    found = {}
+    for i, record in enumerate(records):
+        found.setdefault((record.slot, record.owner_path), i)
+    return found
 
 
 def key_eases(action, target, frames):
@@ -381,8 +425,13 @@ def store_record(keys, settings):
     """The target's fit record: method, settings, and the signature and frames of its animator keys."""
     record = find_record(keys.action, keys.target)
     if record is None:
-        record = keys.action.quatcurve_fits.add()
+        records = keys.action.quatcurve_fits
+        record = records.add()
         record.slot, record.owner_path = target_key(keys.target)
+        known = _record_index.get(keys.action.as_pointer()) if _record_index is not None else None
+        if known is not None and known[0] == len(records) - 1:  # the index learns the new record
+            known[1].setdefault((record.slot, record.owner_path), len(records) - 1)
+            _record_index[keys.action.as_pointer()] = (len(records), known[1])
     record.method = settings.method
     for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
         setattr(record, name, getattr(settings, name))
@@ -470,6 +519,13 @@ def fit(found, settings, only_changed=False):
     result = FitResult(settings)
     # Blender is read on the main thread; the planning (native curve, sampling, fit_keys without the
     # GIL) runs on worker threads over targets (reduce.parallel_map: same results on any count).
+    with record_index():
+        _fit(found, settings, only_changed, result)
+    result.seconds = time.perf_counter() - start
+    return result
+
+
+def _fit(found, settings, only_changed, result):
     work = []
     for target in found:
         keys = read_animator_keys(target)
@@ -490,8 +546,6 @@ def fit(found, settings, only_changed=False):
                                            math.degrees(plan.max_error), notes=plan.notes))
     for plan in plans:
         write_plan(plan)
-    result.seconds = time.perf_counter() - start
-    return result
 
 
 def unfit(found):

@@ -256,6 +256,11 @@ def refit_action(action):
     its record's settings; the others are left untouched. Returns the names refitted. A target that
     cannot be fitted now (a NaN key, one key left, a modifier added) is left as it is and noted in
     STATS.errors."""
+    with fit.record_index():
+        return _refit_action(action)
+
+
+def _refit_action(action):
     global _busy
     done = []
     t0 = time.perf_counter()

@@ -353,3 +353,38 @@ def test_path_rule_breaks_are_reported(scene):
     assert "path rule: Ease: SPLINE_C2 frames 2-102: path" in lines and "the path rule allows" in lines
     assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=0.1) == {"FINISHED"}
     assert "path rule" not in bpy.context.scene.quatcurve_fit.last_lines
+
+
+def test_record_index_finds_what_a_scan_finds(scene):
+    """find_record inside record_index() (an index of each action's records) gives the record a scan
+    gives: the first of two with the same target, None for a target without one or a renamed bone, a
+    record added by store_record, and after a record is removed; nothing is kept after the block."""
+    rig = add_rig("Rig", bones=("B0", "B1", "B2", "B3"))
+    for pb in rig.pose.bones:
+        key(pb, "rotation_quaternion", [(1, (1, 0, 0, 0)), (11, (0.7071, 0.7071, 0, 0))], interpolation="BEZIER")
+    found = [fit.targets.Target(rig, name) for name in ("B0", "B1", "B2")]
+    fit.fit(found, fit.FitSettings(method="SLERP"))
+    action = fcurves.active_action(rig)
+    slot = fcurves.slot_identifier(rig) or ""
+    twin = action.quatcurve_fits.add()  # a second record of B1 (a script could add one): the first counts
+    twin.slot, twin.owner_path, twin.method = slot, rig.pose.bones["B1"].path_from_id(), "TCB"
+
+    def scan(target):
+        return next((i for i, r in enumerate(action.quatcurve_fits)
+                     if (r.slot, r.owner_path) == fit.target_key(target)), None)
+
+    def index_of(record):
+        return None if record is None else next(i for i, r in enumerate(action.quatcurve_fits) if r == record)
+
+    everyone = [fit.targets.Target(rig, pb.name) for pb in rig.pose.bones]
+    with fit.record_index():
+        assert [index_of(fit.find_record(action, t)) for t in everyone] == [scan(t) for t in everyone] == [0, 1, 2, None]
+        assert fit.find_record(action, everyone[1]).method == "SLERP"
+        fit.store_record(fit.read_animator_keys(everyone[3]), fit.FitSettings(method="SQUAD"))
+        assert index_of(fit.find_record(action, everyone[3])) == 4 == scan(everyone[3])
+        action.quatcurve_fits.remove(0)  # outside the block's rules, still found right
+        assert [index_of(fit.find_record(action, t)) for t in everyone] == [scan(t) for t in everyone] == [None, 0, 1, 3]
+        rig.pose.bones["B2"].name = "B2 renamed"
+        assert fit.find_record(action, fit.targets.Target(rig, "B2 renamed")) is None
+    assert fit._record_index is None
+    assert fit.find_record(action, fit.targets.Target(rig, "B3")).method == "SQUAD"
