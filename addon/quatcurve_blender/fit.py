@@ -274,24 +274,37 @@ def read_animator_keys(target):
         types = fcurves.read_key_types(curve)
         selected = fcurves.read_key_selection(curve)
         mine = types != KEY_TYPE_GENERATED
-        frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
-        order = np.argsort(frames, kind="stable")
-        frames, values, types, selected = frames[order], values[order], types[order], selected[order]
+        if not mine.all():
+            frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
+        # Keys in strictly increasing frames from a finite one (as Blender keeps them: no NaN among
+        # them) need no sort and hold no two on one frame: the stable sort and the duplicate pass
+        # below would leave them as they are.
+        increasing = bool(len(frames) and np.isfinite(frames[0]) and (frames[1:] > frames[:-1]).all())
+        if not increasing:
+            order = np.argsort(frames, kind="stable")
+            frames, values, types, selected = frames[order], values[order], types[order], selected[order]
         bad = ~np.isfinite(values)
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
             raise FitError("%s: %s[%d] is %s at frame %s" % (target.name, prop, c, values[k], targets.num(frames[k])))
-        same = np.flatnonzero(frames[1:] == frames[:-1])
-        for k in same:
-            if values[k] != values[k + 1]:
-                raise FitError("%s: %s[%d] has two different keys on frame %s (%s and %s)" % (
-                    target.name, prop, c, targets.num(frames[k]), targets.num(round(float(values[k]), 6)),
-                    targets.num(round(float(values[k + 1]), 6))))
-        keep = np.r_[True, frames[1:] != frames[:-1]]
-        per_channel.append((frames[keep], values[keep], types[keep], selected[keep]))
-    if not any(p is not None for p in per_channel):
+        if not increasing:
+            same = np.flatnonzero(frames[1:] == frames[:-1])
+            for k in same:
+                if values[k] != values[k + 1]:
+                    raise FitError("%s: %s[%d] has two different keys on frame %s (%s and %s)" % (
+                        target.name, prop, c, targets.num(frames[k]), targets.num(round(float(values[k]), 6)),
+                        targets.num(round(float(values[k + 1]), 6))))
+            keep = np.r_[True, frames[1:] != frames[:-1]]
+            frames, values, types, selected = frames[keep], values[keep], types[keep], selected[keep]
+        per_channel.append((frames, values, types, selected, increasing))
+    keyed = [p for p in per_channel if p is not None]
+    if not keyed:
         raise FitError("%s: no rotation keys on %s (rotation mode %s)" % (target.name, prop, mode))
-    frames = np.unique(np.concatenate([p[0] for p in per_channel if p is not None]))
+    first = keyed[0][0]
+    if all(p[4] for p in keyed) and all(p[0].tobytes() == first.tobytes() for p in keyed[1:]):
+        frames = np.array(first)  # channels keyed together (the usual case): np.unique's answer
+    else:
+        frames = np.unique(np.concatenate([p[0] for p in keyed]))
     K = len(frames)
     values = np.empty((K, count))
     types = np.full(K, -1, dtype=np.int64)
@@ -300,6 +313,12 @@ def read_animator_keys(target):
     for c, p in enumerate(per_channel):
         if p is None:
             values[:, c] = current[c]
+            continue
+        if p[4] and len(p[0]) == K:  # K increasing frames among the K of the union: all of them
+            values[:, c] = p[1]
+            selected[c] = p[3]
+            unset = types < 0
+            types[unset] = p[2][unset]
             continue
         where = np.searchsorted(frames, p[0])
         own = np.zeros(K, dtype=bool)
