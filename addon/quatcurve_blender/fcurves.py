@@ -42,8 +42,15 @@ def rotation_property(mode):
     raise ValueError("unknown rotation mode %r" % (mode,))
 
 
+_ENUM_VALUES = {}  # (struct, prop, identifier) → value: RNA's enum items never change in a session
+
+
 def _enum_value(struct, prop, identifier):
-    return struct.bl_rna.properties[prop].enum_items[identifier].value
+    key = (struct, prop, identifier)
+    value = _ENUM_VALUES.get(key)
+    if value is None:
+        value = _ENUM_VALUES[key] = struct.bl_rna.properties[prop].enum_items[identifier].value
+    return value
 
 
 # ---- actions ------------------------------------------------------------------------------------
@@ -568,14 +575,28 @@ def read_key_types(fcurve):
     return _get_enum(fcurve.keyframe_points, "type", len(fcurve.keyframe_points)).astype(np.int64)
 
 
+# Key types are the raw values 0 .. _KEY_TYPE_COUNT - 1 (0 when they are not: then every write is read back).
+_KEY_TYPE_VALUES = sorted(item.value for item in bpy.types.Keyframe.bl_rna.properties["type"].enum_items)
+_KEY_TYPE_COUNT = len(_KEY_TYPE_VALUES) if _KEY_TYPE_VALUES == list(range(len(_KEY_TYPE_VALUES))) else 0
+
+
 def write_key_types(fcurve, types):
     """Sets every key's type from raw values, in bulk where Blender takes it, key by key otherwise
-    (checked by reading back, as for handle types)."""
+    (checked by reading back, as for handle types; once the bulk write of types known to Blender was
+    read back right, such writes are not read back again)."""
     points = fcurve.keyframe_points
     n = len(points)
     types = np.asarray(types, dtype=np.int64)
     points.foreach_set("type", types.astype(KEY_ENUM_DTYPE))
-    if n and not np.array_equal(_get_enum(points, "type", n), types):
+    if not n:
+        return
+    known = bool(types.min() >= 0 and types.max() < _KEY_TYPE_COUNT)
+    if known and _BULK_ENUM.get("set type"):
+        return
+    read_back = np.array_equal(_get_enum(points, "type", n), types)
+    if known and read_back:
+        _BULK_ENUM["set type"] = True
+    if not read_back:
         items = {item.value: item.identifier for item in bpy.types.Keyframe.bl_rna.properties["type"].enum_items}
         for point, t in zip(points, types):
             point.type = items[int(t)]

@@ -182,10 +182,11 @@ def set_key_eases(action, target, frames, ease_in, ease_out):
     for i in reversed(range(len(items))):
         if items[i].owner_path == path and items[i].slot == slot:
             items.remove(i)
-    for f, a, b in zip(frames, ease_in, ease_out):
-        if a or b:
-            item = items.add()
-            item.slot, item.owner_path, item.frame, item.ease_in, item.ease_out = slot, path, float(f), a, b
+    n = min(len(frames), len(ease_in), len(ease_out))
+    for k in np.flatnonzero((np.asarray(ease_in[:n]) != 0) | (np.asarray(ease_out[:n]) != 0)):
+        f, a, b = frames[k], ease_in[k], ease_out[k]
+        item = items.add()
+        item.slot, item.owner_path, item.frame, item.ease_in, item.ease_out = slot, path, float(f), a, b
 
 
 def carry_eases(old_frames, new_frames, ease_in, ease_out):
@@ -423,10 +424,12 @@ def write_plan(plan):
     selection kept) and the generated keys; then the fit record and the eases are stored."""
     keys = plan.keys
     channels = fcurves.Channels.of(keys.target.id_data, keys.action, create=True)
-    group = channels.group_of(keys.path)
+    group = False  # the group of the channels' F-curves, read when a missing one is made
     for c, (frames, values, left, right, types) in enumerate(plan.channels):
         curve = keys.curves[c] if c < len(keys.curves) else None
         if curve is None:
+            if group is False:
+                group = channels.group_of(keys.path)
             curve = channels.new_fcurve(keys.path, c, group=group)
         fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
         fcurves.write_key_types(curve, types)
@@ -456,7 +459,7 @@ def store_record(keys, settings):
         setattr(record, name, getattr(settings, name))
     record.prop = keys.prop
     record.signature = keys.signature()
-    record.key_frames = " ".join(repr(float(f)) for f in keys.frames)
+    record.key_frames = " ".join(map(repr, np.asarray(keys.frames, dtype=np.float64).tolist()))
 
 
 def settings_of(record):
