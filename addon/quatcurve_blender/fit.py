@@ -277,6 +277,9 @@ def read_animator_keys(target):
         mine = types != KEY_TYPE_GENERATED
         if not mine.all():
             frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
+        if not len(frames):  # only generated keys: no pose of the animator's on this channel
+            per_channel.append((frames, values, types, selected, False))
+            continue
         # Keys in strictly increasing frames from a finite one (as Blender keeps them: no NaN among
         # them) need no sort and hold no two on one frame: the stable sort and the duplicate pass
         # below would leave them as they are.
@@ -301,6 +304,10 @@ def read_animator_keys(target):
     keyed = [p for p in per_channel if p is not None]
     if not keyed:
         raise FitError("%s: no rotation keys on %s (rotation mode %s)" % (target.name, prop, mode))
+    if not any(len(p[0]) for p in keyed):
+        raise FitError("%s: no animator keys on %s: only keys a fit generated are left, and there is no "
+                       "pose to fit through (key a pose, or Unmark Fitted Rotation to keep them as they are)"
+                       % (target.name, prop))
     first = keyed[0][0]
     if all(p[4] for p in keyed) and all(p[0].tobytes() == first.tobytes() for p in keyed[1:]):
         frames = np.array(first)  # channels keyed together (the usual case): np.unique's answer

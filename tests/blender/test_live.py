@@ -353,3 +353,35 @@ def test_undo_after_a_live_refit_restores_the_file_exactly(tmp_path):
     assert verdict["undo_restored"] and verdict["still_restored"], verdict["differences"]
     assert verdict["refits_after_undo"] == 1, "live mode refitted after undo: %s" % verdict
     assert verdict["redo_refitted"] and verdict["refits_after_redo"] == 2, verdict
+
+
+def test_only_generated_keys_left_is_noted_not_raised(fitted):
+    # The animator deletes every key of their own: only the fit's generated keys are left, which are
+    # no poses to fit through. The refit leaves the target as it is and notes why.
+    prop_path = fitted.path_from_id("rotation_quaternion")
+    for curve in fcurves.Channels.of(fitted).find_all(prop_path, 4):
+        points = curve.keyframe_points
+        for i in reversed(range(len(points))):
+            if fcurves.read_key_types(curve)[i] != fit.KEY_TYPE_GENERATED:
+                points.remove(points[i])
+    state = digest(fitted)
+    update()
+    assert live.STATS.refits == 0 and digest(fitted) == state
+    assert any("Quat: no animator keys on rotation_quaternion" in e for e in live.STATS.errors), live.STATS.errors
+    select_objects(fitted)
+    with pytest.raises(RuntimeError, match="Quat: no animator keys on rotation_quaternion"):
+        bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL)
+
+
+def test_a_channel_left_with_generated_keys_only_is_read_where_the_others_are_keyed(fitted):
+    # One channel's own keys deleted: its values at the animator's frames are Blender's evaluation of
+    # what is left (the generated keys), as for a channel not keyed on a frame; the target is refitted.
+    curve = fcurves.Channels.of(fitted).find(fitted.path_from_id("rotation_quaternion"), 2)
+    points = curve.keyframe_points
+    for i in reversed(range(len(points))):
+        if fcurves.read_key_types(curve)[i] != fit.KEY_TYPE_GENERATED:
+            points.remove(points[i])
+    update()
+    assert live.STATS.refits == 1 and not live.STATS.errors, live.STATS
+    frames, _ = animator_keys(fitted)
+    np.testing.assert_array_equal(frames, [f for f, _ in QUAT_KEYS])
