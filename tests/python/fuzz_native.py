@@ -1472,6 +1472,124 @@ def build_curve(method, d: Draw) -> Case:
     return Case(call, max(k, 1) + m, check, must_fail, m * 32, inputs)
 
 
+
+# ==== the bake queue (bake.hpp) ==================================================================
+
+def draw_bake_job(d: Draw):
+    """Arguments of a BakeJob — keys of any rotation mode (sometimes poisoned or of the wrong width),
+    a method and its options, an output mode and a reference (none, a row, one per frame, of the
+    wrong width, non-finite) — as (args, kwargs). Whether it is refused is not predicted: the
+    oracle is the same curve made and sampled through Curve (curve_keys)."""
+    rng = d.rng
+    k = d.count(small=30, huge=3_000, label="keys")
+    times = increasing_times(rng, k, d.pick(TIME_MODES, "time_mode"))
+    keys_mode = d.pick(("QUATERNION",) + ORDERS + ("AXIS_ANGLE", "QUATERNIONS"), "keys_mode")
+    if keys_mode in ORDERS:
+        values = angles(rng, (k,), d.pick(("calm", "extreme"), "angle_level"))
+    else:
+        values = quats(rng, (k,), d.pick(("calm", "extreme"), "quat_level"))
+        if keys_mode == "AXIS_ANGLE":
+            values = axis_angle_rows(rng, values)
+    if d.chance(0.1, "poison") and k:
+        poison(rng, values, "angles" if keys_mode in ORDERS else "quat", keys_mode in ORDERS)
+    if d.chance(0.05, "wrong_width") and k:
+        values = values[:, :3] if values.shape[1] == 4 else np.concatenate([values, values[:, :1]], 1)
+    method = d.pick(tuple(qc.METHODS), "method")
+    kwargs, _ = draw_options(d, method, k)
+    mode = d.pick(MODES, "mode")
+    width = _channel_count(mode)
+    kind = d.pick(("none", "none", "row", "rows", "wide", "nan"), "reference")
+    reference = {"none": None, "row": fill(rng, (width,), "calm"), "rows": fill(rng, (3, width), "calm"),
+                 "wide": np.zeros(width + 1), "nan": np.full(width, NAN)}[kind]
+    args = [times, values, keys_mode, method, mode, reference]
+    maybe_junk(d, args, [(), (4,)], ["times", "values"], "")
+    return args, kwargs
+
+
+def curve_keys(frames, times, values, keys_mode, method, mode, reference, **kwargs):
+    """The oracle of a BakeJob: (Curve.sample_keys(frames, mode, reference), Curve.path_rule_breaks())
+    of the same curve made through Curve, or the ValueError / TypeError it raises."""
+    try:
+        if keys_mode in ORDERS:
+            curve = qc.Curve.from_euler(times, values, order=keys_mode, method=method, **kwargs)
+        elif keys_mode == "AXIS_ANGLE":
+            curve = qc.Curve.from_axis_angle(times, values, method=method, **kwargs)
+        elif keys_mode == "QUATERNION":
+            curve = qc.Curve(times, values, method=method, **kwargs)
+        else:
+            raise ValueError("keys mode %r" % (keys_mode,))
+        return curve.sample_keys(frames, mode, reference), curve.path_rule_breaks()
+    except (ValueError, TypeError) as error:
+        return error
+
+
+def build_bake_job(fn, d):
+    args, kwargs = draw_bake_job(d)
+
+    def check(job):
+        expect(type(job).__name__ == "BakeJob", f"result {type(job).__name__}")
+
+    return Case(lambda: fn(*args, **kwargs), max(np.size(args[1]), 1), check, "", 0, (args, kwargs))
+
+
+def build_bake_queue(fn, d):
+    """A queue of drawn jobs on 0-3 worker threads: every job must give exactly what its curve made
+    through Curve gives, bit for bit (keys and path-rule breaks), or fail where that fails; a job
+    BakeJob refuses must be one Curve refuses too."""
+    rng = d.rng
+    drawn = [draw_bake_job(d) for _ in range(d.pick((1, 2, 3, 5), "jobs"))]
+    m = d.count(small=300, huge=20_000, label="frames")
+    frames = np.sort(rng.uniform(-20.0, 120.0, m))
+    if d.chance(0.1, "unsorted") and m > 1:
+        frames = frames[::-1].copy()
+    if d.chance(0.05, "frame_poison") and m:
+        frames[rng.integers(0, m)] = rng.choice(POISON_VALUES)
+    threads, window = d.pick((0, 1, 2, 3), "threads"), d.pick((1, 2, 8), "window")
+    made = []
+
+    def call():
+        jobs, results = [], []
+        for args, kwargs in drawn:
+            try:
+                jobs.append(qc.BakeJob(*args, **kwargs))
+                made.append(True)
+            except (ValueError, TypeError):
+                made.append(False)
+        queue = fn(frames, jobs, threads=threads, window=window)
+        expect(len(queue) == len(jobs) and queue.remaining == len(jobs), "BakeQueue length")
+        for _ in jobs:
+            try:
+                results.append(next(queue))
+            except ValueError as error:
+                results.append(error)
+        expect(queue.remaining == 0, "BakeQueue.remaining after every job")
+        try:
+            next(queue)
+            raise Violation("BakeQueue gave more results than jobs")
+        except StopIteration:
+            pass
+        return results
+
+    def check(results):
+        results = iter(results)
+        for (args, kwargs), was_made in zip(drawn, made):
+            want = curve_keys(frames, *args, **kwargs)
+            if not was_made:
+                expect(isinstance(want, Exception), "BakeJob refused keys Curve takes")
+                continue
+            got = next(results)
+            if isinstance(want, Exception):
+                expect(isinstance(got, Exception), f"the queue took keys Curve refuses ({want})")
+                continue
+            expect(not isinstance(got, Exception), f"the queue refused keys Curve takes: {got}")
+            keys, breaks = got
+            expect(keys.dtype == np.float32 and keys.shape == want[0].shape, f"keys {keys.dtype} {keys.shape}")
+            expect(keys.tobytes() == want[0].tobytes(), "keys differ from Curve.sample_keys")
+            expect(np.array_equal(breaks, want[1]), "path-rule breaks differ from Curve.path_rule_breaks")
+
+    rows = sum(max(np.size(a[1]), 1) for a, _ in drawn) + m
+    return Case(call, rows, check, "", 32 * m * len(drawn), {"jobs": drawn, "frames": frames, "threads": threads})
+
 # ==== channels (channels.hpp) ====================================================================
 
 MODES = ("QUATERNION",) + ORDERS + ("AXIS_ANGLE",)
@@ -1611,6 +1729,8 @@ REGISTRY.update({
     "fit_keys": build_fit,
     "fit_through_keys": build_fit_through_keys,
     "blender_evaluate": build_blender_evaluate,
+    "BakeJob": build_bake_job,
+    "BakeQueue": build_bake_queue,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
