@@ -15,6 +15,9 @@ the machine is shared, so only ratios measured in the same run mean anything.
           the whole call, and the bake's own work inside it (BakeResult.seconds: reading the
           sources, computing, writing the keys), which ends where the limit's writes end — before
           the view-layer update bpy.ops runs after every operator.
+          Then `--repeat` more bakes with timers around their stages (StageTimes): reading the
+          sources, copying the source action, writing the keys, the rest; reading + copying + the
+          limit's writes is the floor of the bake's own work, printed as a ratio to the limit.
 - limit:  the same number of LINEAR keys written the plainest bulk way, arrays prepared beforehand:
           on a fresh action of the same rig, per bone four new F-curves (in the bone's group, as a
           bake puts them) and per F-curve keyframe_points.add(n), foreach_set('co'),
@@ -52,7 +55,7 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import fcurves, native, reduce  # noqa: E402
+from quatcurve_blender import bake, fcurves, native, reduce  # noqa: E402
 import rigs  # noqa: E402
 
 BONES = 100
@@ -246,6 +249,55 @@ def profile(label, call, top=25):
     print("\n".join(line for line in text.getvalue().splitlines() if line.strip())[:6000])
 
 
+class StageTimes:
+    """Wall time spent in named functions of the add-on during a call: wraps them while active
+    (the wrappers cost ~1 µs a call, a few hundred calls per bake)."""
+
+    def __init__(self, stages):
+        self.stages = stages  # label → (owner, function name)
+        self.seconds = dict.fromkeys(stages, 0.0)
+        self._saved = []
+
+    def _wrap(self, label, real):
+        def timed_call(*args, **kwargs):
+            begin = time.perf_counter()
+            try:
+                return real(*args, **kwargs)
+            finally:
+                self.seconds[label] += time.perf_counter() - begin
+        return timed_call
+
+    def __enter__(self):
+        for label, (owner, name) in self.stages.items():
+            real = getattr(owner, name)
+            self._saved.append((owner, name, real))
+            setattr(owner, name, self._wrap(label, real))
+        return self
+
+    def __exit__(self, *exc):
+        for owner, name, real in reversed(self._saved):
+            setattr(owner, name, real)
+
+
+def bake_stages(rig, original, repeat):
+    """Where the bake's own work goes: best of `repeat` instrumented bakes (by own work), each stage's
+    seconds — reading the sources (bake.prepare), copying the source action, writing the keys (add +
+    foreach_set, as the limit does) — and the rest (making the F-curves, waiting for the native
+    workers, Python glue)."""
+    best = None
+    for _ in range(repeat):
+        stages = StageTimes({"read": (bake, "prepare"), "copy": (fcurves, "copy_action"),
+                             "write keys": (fcurves, "write_packed")})
+        with stages:
+            _, own, _, baked = run_bake(rig, original)
+        drop(baked)
+        if best is None or own < best[0]:
+            best = own, dict(stages.seconds)
+    own, seconds = best
+    seconds["other"] = own - sum(seconds.values())
+    return own, seconds
+
+
 def main():
     repeat, want_profile, threads = options()
     reduce.THREADS = threads
@@ -275,6 +327,9 @@ def main():
         profile("bake", lambda: run_bake(rig, original))
         baked = fcurves.active_action(rig)
         profile("reduce", lambda: run_reduce(rig, baked))
+    drop(baked)
+    own_staged, stages = bake_stages(rig, original, repeat)
+    baked = run_bake(rig, original)[3]  # the reduce's source again
     del arrays
     bake_s, own_s, limit_s, updated_s, reduce_s = (min(bakes), min(owns), min(limits), min(updated_limits),
                                                    min(reduces))
@@ -300,6 +355,10 @@ def main():
           % (own_s / limit_s))
     print("  bake / (limit+action+update): %.2f  (both into a new action the rig plays, until Blender has "
           "evaluated the new keys, as bpy.ops does after every operator)" % (bake_s / updated_s))
+    print("  bake's own work, instrumented (best of %d, %.3f s): %s" % (
+        repeat, own_staged, ", ".join("%s %.3f" % kv for kv in stages.items())))
+    print("    reading + copying + the limit's writes: %.2f x the limit (the floor of the bake's own work)"
+          % ((stages["read"] + stages["copy"] + limit_s) / limit_s))
     print("  bake vs nla.bake:     %.0fx  (bone-frames per second)" % nla_ratio)
     print("  reduce / bake:        %.2f   (target <= 1.0); %s keys -> %s"
           % (reduce_s / bake_s, f"{keys:,}", f"{reduced_keys:,}"))
