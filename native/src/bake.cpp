@@ -55,16 +55,24 @@ BakeQueue::BakeQueue(std::vector<double> frames, std::vector<BakeJob> jobs, std:
     if (window_ < 1) throw InvalidArgument("window: must be at least 1");
     threads = std::min(threads, jobs_.size());
     workers_.reserve(threads);
-    for (std::size_t i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
+    try {
+        for (std::size_t i = 0; i < threads; ++i) workers_.emplace_back([this] { work(); });
+    } catch (...) {  // no thread to be had (std::system_error): stop the ones started, as the destructor would
+        stop();
+        throw;
+    }
 }
 
-BakeQueue::~BakeQueue() {
+BakeQueue::~BakeQueue() { stop(); }
+
+void BakeQueue::stop() {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         stopping_ = true;
     }
     room_.notify_all();
     for (std::thread& worker : workers_) worker.join();
+    workers_.clear();
 }
 
 std::size_t BakeQueue::remaining() const {

@@ -78,6 +78,7 @@ private:
         std::exception_ptr error;
     };
     void work();
+    void stop();   // no more jobs started; running ones finish; workers joined
 
     const std::vector<double> frames_;
     std::vector<BakeJob> jobs_;
