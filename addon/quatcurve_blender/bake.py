@@ -132,6 +132,7 @@ class TargetResult:
     keys_written: int
     action: str
     notes: list = field(default_factory=list)
+    max_error_deg: float = None  # the key reduction's measured bound (tolerance > 0), else None
 
 
 @dataclass
@@ -314,7 +315,8 @@ class BakePlan:
             result.keys_written += count
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
                                                len(item.source.frames), count, action.name,
-                                               item.source.notes + item.notes))
+                                               item.source.notes + item.notes,
+                                               None if item.reduced is None else math.degrees(item.reduced.max_error)))
         self.seconds += time.perf_counter() - begin
         result.seconds = self.seconds
         return result

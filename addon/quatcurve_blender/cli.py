@@ -24,6 +24,7 @@ A missing or unreadable IN.blend given *before* `--python` is refused by Blender
 import argparse
 import contextlib
 import fnmatch
+import math
 import os
 import sys
 import time
@@ -31,7 +32,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
+    from . import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, reduce, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -40,7 +41,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, reduce, targets
 
 import bpy
 
@@ -77,11 +78,22 @@ def build_parser():
                            "orientation-curve method (the quatcurve.bake operator without the UI), optionally\n"
                            "comparing the methods first (the quatcurve.compare operator); or, with --fit,\n"
                            "shape their own rotation keys so that Blender plays the method (the\n"
-                           "quatcurve.fit operator).")
+                           "quatcurve.fit operator); or, with --reduce, keep as few of their keys as a\n"
+                           "tolerance allows (the quatcurve.reduce operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
                         "blender -b IN.blend --python cli.py -- ...)")
+    add_task_arguments(p)
+    g = p.add_argument_group("output", "One of them is required.")
+    g.add_argument("--output", metavar="OUT.blend", help="the baked (fitted) file (IN.blend is not changed)")
+    g.add_argument("--in-place", action="store_true", help="overwrite IN.blend with the baked (fitted) file")
+    return p
 
+
+def add_task_arguments(p):
+    """The options that choose the operation and its settings (everything but the input and the
+    output), added to `p`: the CLI's parser and `batch`'s share them. Returns their destinations."""
+    before = {a.dest for a in p._actions}
     g = p.add_argument_group("targets", "Default: every object and pose bone of the active scene with "
                                         "rotation animation.")
     g.add_argument("--objects", action="append", metavar="PATTERN",
@@ -112,6 +124,17 @@ def build_parser():
                    help="fit instead of bake; uses --method, --tension, --continuity, --bias, "
                         "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
 
+    g = p.add_argument_group("reduce", "Instead of baking (the quatcurve.reduce operator): the targets' rotation "
+                                       "keys are replaced by as few keys as --tolerance allows (default 0.1°), "
+                                       "measured at every frame and original key.")
+    g.add_argument("--reduce", action="store_true",
+                   help="reduce instead of bake; uses --tolerance, --reduce-keys, --synchronized, "
+                        "--no-new-action")
+    g.add_argument("--reduce-keys", dest="reduce_interpolation", choices=reduce.INTERPOLATIONS, default="BEZIER",
+                   help="interpolation of the kept keys (default BEZIER: the fewest keys)")
+    g.add_argument("--synchronized", action="store_true",
+                   help="the same key frames on every rotation channel of a target")
+
     g = p.add_argument_group("bake")
     g.add_argument("--rotation-mode", choices=bake.OUTPUT_MODES, default="KEEP", metavar="MODE",
                    help="rotation mode of the baked keys: %s (default KEEP: each target's own mode)"
@@ -122,7 +145,8 @@ def build_parser():
     g.add_argument("--tolerance", type=float, default=None, metavar="DEGREES",
                    help="bake: 0 (default): a key every STEP frames; above 0: as few keys as this angular "
                         "bound allows (key reduction). --fit: largest error of Blender's playback against "
-                        "the method, above 0 (default 0.05)")
+                        "the method, above 0 (default 0.05). --reduce: largest error against the original "
+                        "(default 0.1)")
     g.add_argument("--no-new-action", dest="new_action", action="store_false",
                    help="replace the rotation curves in the targets' actions (default: bake into a new "
                         "action named after the original, which is kept unchanged)")
@@ -143,11 +167,7 @@ def build_parser():
                    default="BEZIER",
                    help="key type of the Blender Euler/quaternion curves compared (default BEZIER: "
                         "Blender's auto-clamped default)")
-
-    g = p.add_argument_group("output", "One of them is required.")
-    g.add_argument("--output", metavar="OUT.blend", help="the baked (fitted) file (IN.blend is not changed)")
-    g.add_argument("--in-place", action="store_true", help="overwrite IN.blend with the baked (fitted) file")
-    return p
+    return [a.dest for a in p._actions if a.dest not in before]
 
 
 def blender_args(argv):
@@ -161,8 +181,21 @@ def split_patterns(values):
     return [p.strip() for v in values or () for p in v.split(",") if p.strip()]
 
 
+def refuse_options(args, table, why):
+    """UsageError naming the options of `table` ((dest, default, flag), argparse defaults: what is not
+    given) that were given."""
+    given = [flag for name, default, flag in table if getattr(args, name) != default]
+    if given:
+        raise UsageError("%s: %s" % (", ".join(given), why))
+
+
+# Options only --reduce uses.
+REDUCE_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"))
+
+
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
+    refuse_options(args, REDUCE_ONLY, "not an option of a bake (they are --reduce's)")
     if args.tolerance is None:
         args.tolerance = 0.0
     frame_range = tuple(args.frame_range) if args.frame_range else (None, None)
@@ -180,16 +213,13 @@ def bake_settings(args):
 NOT_FOR_FIT = (("rotation_mode", "KEEP", "--rotation-mode"), ("frame_range", None, "--frame-range"),
                ("step", 1.0, "--step"), ("new_action", True, "--no-new-action"), ("compare", False, "--compare"),
                ("report", None, "--report"), ("all_euler_orders", False, "--all-euler-orders"),
-               ("key_interpolation", "BEZIER", "--compare-keys"))
+               ("key_interpolation", "BEZIER", "--compare-keys")) + REDUCE_ONLY
 
 
 def fit_settings(args):
     """FitSettings from the arguments (the operator's defaults where not given), checked by fit's own
     check; bake-only options and methods fit does not have are a UsageError."""
-    given = [flag for name, default, flag in NOT_FOR_FIT if getattr(args, name) != default]
-    if given:
-        raise UsageError("%s: not an option of --fit (it fits the keys in their own actions and modes)"
-                         % ", ".join(given))
+    refuse_options(args, NOT_FOR_FIT, "not an option of --fit (it fits the keys in their own actions and modes)")
     if args.method not in fit.METHODS:
         raise UsageError("--method %s cannot be fitted (--fit methods: %s)" % (args.method, ", ".join(fit.METHODS)))
     defaults = fit.FitSettings()
@@ -201,6 +231,30 @@ def fit_settings(args):
     try:
         fit.check_settings(settings)
     except fit.FitError as error:
+        raise UsageError(str(error)) from None
+    return settings
+
+
+# Options that mean nothing to a reduction: it keeps each target's keys' own mode and curve.
+NOT_FOR_REDUCE = (("method", "SLERP", "--method"), ("tension", 0.0, "--tension"), ("continuity", 0.0, "--continuity"),
+                  ("bias", 0.0, "--bias"), ("shortest_path", True, "--no-shortest-path"),
+                  ("clamped", True, "--no-clamp"), ("rotation_mode", "KEEP", "--rotation-mode"),
+                  ("frame_range", None, "--frame-range"), ("step", 1.0, "--step"), ("compare", False, "--compare"),
+                  ("report", None, "--report"), ("subframes", None, "--subframes"),
+                  ("all_euler_orders", False, "--all-euler-orders"), ("key_interpolation", "BEZIER", "--compare-keys"))
+
+
+def reduce_settings(args):
+    """ReduceSettings from the arguments (the operator's defaults where not given), checked by reduce's
+    own check; options of other operations are a UsageError."""
+    refuse_options(args, NOT_FOR_REDUCE, "not an option of --reduce (it reduces the keys as Blender plays them)")
+    defaults = reduce.ReduceSettings()
+    settings = reduce.ReduceSettings(
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        interpolation=args.reduce_interpolation, synchronized=args.synchronized, new_action=args.new_action)
+    try:
+        reduce.check_settings(settings)
+    except reduce.ReduceError as error:
         raise UsageError(str(error)) from None
     return settings
 
@@ -385,90 +439,185 @@ def save_atomically(path):
                 os.remove(leftover)
 
 
+# ---- tasks: what is done to the open file ----------------------------------------------------------
+
+class Outcome:
+    """What a task did, in the terms every task shares (batch's records): the targets' names, rotation
+    keys before and after (as the task counts them), and the largest error measured after the
+    operation by the task's own check, in degrees (None where the task has no bound: a bake with
+    tolerance 0 writes the method's samples themselves)."""
+
+    def __init__(self, targets, keys_before, keys_after, max_error_deg):
+        self.targets = list(targets)
+        self.keys_before = int(keys_before)
+        self.keys_after = int(keys_after)
+        self.max_error_deg = None if max_error_deg is None else float(max_error_deg)
+
+
+class Task:
+    """One operation of the command line. Made from the parsed arguments, it checks its settings
+    before any file is opened (UsageError); then, on the open file, `apply` works on the chosen
+    targets and prints what it did, and `save` writes the output .blend (and any file of its own,
+    named after it). `cli` runs one task on one file; `batch` runs the same task on many files, one
+    after the other in each process. A new operation is a Task subclass added to TASKS."""
+    flag = None       # the option that chooses it (None: the default, bake)
+    verb = "bake"
+
+    def __init__(self, args):
+        self.args = args
+
+    def check_output(self, output):
+        """Checks the paths of the task's own files, derived from the output .blend."""
+
+    def apply(self, chosen, source, output):
+        """Works on `chosen` (targets.Target) in the open file; prints; returns the task's result."""
+        raise NotImplementedError
+
+    def outcome(self, result):
+        raise NotImplementedError
+
+    def save(self, result, output):
+        save_atomically(output)
+        print("saved %s" % output)
+
+
+class BakeTask(Task):
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = bake_settings(args)
+        want_compare = args.compare or args.report is not None
+        self.comparing = compare_settings(args) if want_compare else None
+        self.report = None
+        self.report_file = None
+
+    def check_output(self, output):
+        if self.comparing is not None:
+            self.report_file = report_path(self.args, output)
+
+    def apply(self, chosen, source, output):
+        settings, scene = self.settings, bpy.context.scene
+        report = compare.compare(chosen, self.comparing) if self.comparing is not None else None
+        result = bake.bake(chosen, settings)
+        scene.frame_set(scene.frame_current)  # re-evaluate with the baked curves, as the operator does
+        if hasattr(scene, "quatcurve"):
+            bake_ops.store_result(scene.quatcurve, result)
+        if report is not None and hasattr(scene, "quatcurve_compare"):
+            compare_ops.store_result(scene.quatcurve_compare, report)
+        print("quatcurve %s (Blender %s): %s, frames %g..%g step %g, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, settings.method, result.frame_start,
+            result.frame_end, settings.step, os.path.basename(source), "in place" if source == output else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        self.report = report
+        return result
+
+    def outcome(self, result):
+        errors = [t.max_error_deg for t in result.targets if t.max_error_deg is not None]
+        # keys_written counts the keys of every channel: count the source's the same way.
+        before = sum(t.source_keys * (4 if t.source_mode in ("QUATERNION", "AXIS_ANGLE") else 3)
+                     for t in result.targets)
+        return Outcome([t.name for t in result.targets], before, result.keys_written,
+                       max(errors) if errors else None)
+
+    def save(self, result, output):
+        report = self.report
+        if report is not None:  # the plots as PNG files, then packed from them into the .blend saved next
+            compare.save_plots(report, self.report_file)
+        super().save(result, output)
+        if report is not None:
+            path, pngs = compare.write_report(report, self.report_file)
+            print("compare: %s; wrote %s and %d plot%s" % (report.summary(), path, len(pngs),
+                                                            "" if len(pngs) == 1 else "s"))
+
+
+class FitTask(Task):
+    flag, verb = "fit", "fit"
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = fit_settings(args)
+
+    def apply(self, chosen, source, output):
+        settings, scene = self.settings, bpy.context.scene
+        result = fit.fit(chosen, settings)
+        scene.frame_set(scene.frame_current)  # re-evaluate with the fitted curves, as the operator does
+        if hasattr(scene, "quatcurve_fit"):
+            scene.quatcurve_fit.last_summary = result.summary()
+            scene.quatcurve_fit.last_lines = "\n".join(result.lines())
+        print("quatcurve %s (Blender %s): fit %s, tolerance %g°, %d subframes, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+            settings.subframes, os.path.basename(source), "in place" if source == output else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        return result
+
+    def outcome(self, result):
+        fitted = result.fitted
+        return Outcome([t.name for t in result.targets], sum(t.animator_keys for t in result.targets),
+                       sum(t.animator_keys + t.generated_keys for t in result.targets),
+                       max([t.max_error_deg for t in fitted] or [0.0]))
+
+
+class ReduceTask(Task):
+    flag, verb = "reduce", "reduce"
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = reduce_settings(args)
+
+    def apply(self, chosen, source, output):
+        settings, scene = self.settings, bpy.context.scene
+        result = reduce.reduce(chosen, settings)
+        scene.frame_set(scene.frame_current)
+        if hasattr(scene, "quatcurve_reduce"):
+            scene.quatcurve_reduce.last_summary = result.summary()
+            scene.quatcurve_reduce.last_lines = "\n".join(result.lines())
+        print("quatcurve %s (Blender %s): reduce, tolerance %g°, %s keys, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, settings.tolerance, settings.interpolation,
+            os.path.basename(source), "in place" if source == output else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        return result
+
+    def outcome(self, result):
+        return Outcome([t.name for t in result.targets], result.keys_before, result.keys_after,
+                       result.max_error_deg)
+
+
+# The operations, chosen by their option; BakeTask when none is given.
+TASKS = (FitTask, ReduceTask)
+
+
+def task_of(args):
+    """The Task the arguments ask for, its settings checked (UsageError)."""
+    chosen = [cls for cls in TASKS if getattr(args, cls.flag)]
+    if len(chosen) > 1:
+        raise UsageError("%s exclude each other" % " and ".join("--" + cls.flag.replace("_", "-") for cls in chosen))
+    return (chosen[0] if chosen else BakeTask)(args)
+
+
 # ---- main -------------------------------------------------------------------------------------------
 
 def run(args):
-    if args.fit:
-        return run_fit(args)
-    settings = bake_settings(args)
-    want_compare = args.compare or args.report is not None
-    comparing = compare_settings(args) if want_compare else None
+    task = task_of(args)
     source = input_path(args)
     output = output_path(args, source)
-    report_file = report_path(args, output) if want_compare else None
+    task.check_output(output)
     native.require()
     open_input(source)
     registered = register_addon()
     try:
-        return bake_and_save(args, settings, comparing, source, output, report_file)
+        scene = bpy.context.scene
+        chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
+        result = task.apply(chosen, source, output)
+        task.save(result, output)
+        return EXIT_OK
     finally:
         if registered:
             addon.unregister()
-
-
-def bake_and_save(args, settings, comparing, source, output, report_file):
-    scene = bpy.context.scene
-    chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
-
-    report = None
-    if comparing is not None:
-        report = compare.compare(chosen, comparing)
-    result = bake.bake(chosen, settings)
-    scene.frame_set(scene.frame_current)  # re-evaluate with the baked curves, as the operator does
-    if hasattr(scene, "quatcurve"):
-        bake_ops.store_result(scene.quatcurve, result)
-    if report is not None and hasattr(scene, "quatcurve_compare"):
-        compare_ops.store_result(scene.quatcurve_compare, report)
-
-    print("quatcurve %s (Blender %s): %s, frames %g..%g step %g, %s → %s" % (
-        native.require().__version__, bpy.app.version_string, settings.method, result.frame_start, result.frame_end, settings.step,
-        os.path.basename(source), "in place" if args.in_place else output))
-    for line in result.lines():
-        print("  " + line)
-    print("total: " + result.summary())
-    if report is not None:  # the plots as PNG files, then packed from them into the .blend saved next
-        compare.save_plots(report, report_file)
-    save_atomically(output)
-    print("saved %s" % output)
-    if report is not None:
-        path, pngs = compare.write_report(report, report_file)
-        print("compare: %s; wrote %s and %d plot%s" % (report.summary(), path, len(pngs),
-                                                        "" if len(pngs) == 1 else "s"))
-    return EXIT_OK
-
-
-def run_fit(args):
-    """--fit: the same checks and output handling as a bake; the work is fit.fit."""
-    settings = fit_settings(args)
-    source = input_path(args)
-    output = output_path(args, source)
-    native.require()
-    open_input(source)
-    registered = register_addon()
-    try:
-        return fit_and_save(args, settings, source, output)
-    finally:
-        if registered:
-            addon.unregister()
-
-
-def fit_and_save(args, settings, source, output):
-    scene = bpy.context.scene
-    chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
-    result = fit.fit(chosen, settings)
-    scene.frame_set(scene.frame_current)  # re-evaluate with the fitted curves, as the operator does
-    if hasattr(scene, "quatcurve_fit"):
-        scene.quatcurve_fit.last_summary = result.summary()
-        scene.quatcurve_fit.last_lines = "\n".join(result.lines())
-    print("quatcurve %s (Blender %s): fit %s, tolerance %g°, %d subframes, %s → %s" % (
-        native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
-        settings.subframes, os.path.basename(source), "in place" if args.in_place else output))
-    for line in result.lines():
-        print("  " + line)
-    print("total: " + result.summary())
-    save_atomically(output)
-    print("saved %s" % output)
-    return EXIT_OK
 
 
 def main(argv=None):
