@@ -5,7 +5,8 @@ small BVH clip (Blender's importer), a corrupt file and a file without rotation 
 Covered: a local run on two workers (records checked against batch.schema.json, outputs opened,
 inputs unchanged), resuming and --force, byte-identical records apart from timings, a worker killed
 with SIGKILL from outside mid-run and a rerun, a Blender that crashes on one file, a kill between
-the output's temporary file and its rename, and bad arguments (exit status 2, checked in this
+the output's temporary file and its rename, a Slurm job array on a one-node cluster started here
+(collected results equal the local run's; a rerun submits only the unfinished files), and bad arguments (exit status 2, checked in this
 process: nothing is started for them)."""
 
 import hashlib
@@ -24,6 +25,7 @@ import jsonschema
 import pytest
 
 from quatcurve_blender import batch, fcurves
+from slurm_cluster import Cluster, Unavailable
 
 ADDON_DIR = os.path.dirname(os.path.dirname(os.path.abspath(batch.__file__)))
 SCRIPT = os.path.join(ADDON_DIR, "quatcurve_blender", "batch.py")
@@ -153,13 +155,13 @@ def first_run(library, tmp_path_factory):
     out = tmp_path_factory.mktemp("batch-out") / "out"
     before = tree_digests(library)
     proc = run_batch(["--reduce", "--tolerance", "0.05", "--jobs", "2", "--output", out, library])
-    return out, proc, before
+    return out, proc, before, without_timings(out)
 
 
 # ---- tests ------------------------------------------------------------------------------------------
 
 def test_local_run(first_run, library):
-    out, proc, before = first_run
+    out, proc, before, _ = first_run
     assert proc.returncode == 1, (proc.stdout, proc.stderr)  # two files failed
     assert tree_digests(library) == before  # inputs never written
     records, summary = read_results(out)
@@ -192,7 +194,7 @@ def test_local_run(first_run, library):
 
 
 def test_resume_force_and_deterministic(first_run, library, tmp_path):
-    out, _, _ = first_run
+    out, _, _, _ = first_run
     again = run_batch(["--reduce", "--tolerance", "0.05", "--jobs", "2", "--output", out, library])
     assert again.returncode == 1
     records, summary = read_results(out)
@@ -275,6 +277,51 @@ def test_crash_on_one_file_and_kill_during_save(library, tmp_path):
     assert (out / "a.blend").is_file() and not [n for n in os.listdir(out) if batch.TEMPORARY.match(n)]
     records, _ = read_results(out)
     assert records["a.blend"]["status"] == "done" and records["b.blend"]["status"] == "skipped"
+
+
+@pytest.fixture
+def cluster(tmp_path_factory):
+    """A one-node Slurm cluster for one test (slurm_cluster.py); skipped with the reason where it
+    cannot start."""
+    started = Cluster(tmp_path_factory.mktemp("slurm"))
+    try:
+        started.start()
+    except Unavailable as why:
+        started.stop()
+        pytest.skip("no Slurm cluster here: %s" % why)
+    yield started
+    started.stop()
+
+
+def submitted_job(proc):
+    found = re.search(r"submitted Slurm job (\d+)", proc.stdout)
+    assert found, (proc.stdout, proc.stderr)
+    return found.group(1)
+
+
+def test_slurm_array(first_run, library, cluster, tmp_path):
+    """The library through `--slurm` (3 array tasks of up to 2 files), `--collect`: the same records
+    as the local run apart from timings. A rerun submits only the two failed files."""
+    out = tmp_path / "out"
+    args = ["--reduce", "--tolerance", "0.05", "--slurm", "--chunk", "2", "--sbatch=--time=00:10:00",
+            "--output", out, library]
+    proc = run_batch(args, SLURM_CONF=cluster.conf)
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    assert "5 to do in 3 array tasks of up to 2" in proc.stdout
+    cluster.wait(submitted_job(proc))
+    collected = run_batch(["--collect", out], SLURM_CONF=cluster.conf)
+    assert collected.returncode == 1, (collected.stdout, collected.stderr)  # two files failed
+    assert "files  done  skipped  failed" in collected.stdout
+    assert without_timings(out) == first_run[3]
+    records, summary = read_results(out)
+    assert summary["missing"] == 0 and summary["done"] == 3
+
+    again = run_batch(args, SLURM_CONF=cluster.conf)
+    assert again.returncode == 0 and "2 to do in 1 array task of up to 2, 3 skipped" in again.stdout, again.stdout
+    cluster.wait(submitted_job(again))
+    assert run_batch(["--collect", out], SLURM_CONF=cluster.conf).returncode == 1
+    records, summary = read_results(out)
+    assert summary["skipped"] == 3 and summary["failed"] == 2 and summary["missing"] == 0
 
 
 @pytest.mark.parametrize("name,args,fragment", [
