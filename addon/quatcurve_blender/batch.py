@@ -112,10 +112,14 @@ def build_parser():
                    help="files per array task (default 20)")
     g.add_argument("--sbatch", action="append", default=[], metavar="ARG",
                    help="an argument for sbatch, repeatable: --sbatch=--partition=anim --sbatch=--time=2:00:00")
+    g.add_argument("--plan", action="store_true",
+                   help="only write the chunked plan for another farm manager (Flamenco) and print its path "
+                        "and chunk count: each farm task runs --run-chunk PLAN K, then --collect DIR")
     g.add_argument("--collect", metavar="DIR",
                    help="merge the finished array tasks' records in DIR into results.jsonl and summary.json")
     p.add_argument("--worker", metavar="PLAN", help=argparse.SUPPRESS)
-    p.add_argument("--run-chunk", nargs=2, metavar=("PLAN", "K"), help=argparse.SUPPRESS)
+    p.add_argument("--run-chunk", nargs=2, metavar=("PLAN", "K"),
+                   help="run chunk K of a plan written by --slurm or --plan (what each farm task runs)")
     return p, task_options
 
 
@@ -598,8 +602,10 @@ def slurm_script(plan, plan_path):
             % (PROG, env, " ".join(shlex.quote(a) for a in plan["launcher"]), shlex.quote(plan_path)))
 
 
-def submit_slurm(args, plan):
-    """Plans, records the skipped files, and submits the pending ones as an sbatch array."""
+def plan_chunks(args, plan):
+    """Records the skipped files, splits the pending ones into chunks of --chunk files, saves the
+    plan and the per-chunk script (DIR/.quatcurve-batch/slurm/chunk.sh, $SLURM_ARRAY_TASK_ID: the
+    chunk). Returns (plan path, script path)."""
     part = PartFile(plan, run_name())
     try:
         pending, skipped = pending_files(plan, args.force, part)
@@ -609,17 +615,35 @@ def submit_slurm(args, plan):
     plan["chunks"] = [pending[i:i + args.chunk] for i in range(0, len(pending), args.chunk)]
     plan["run"] = run_name()
     plan_path = save_plan(plan)
-    print("quatcurve batch: %s %d files, %d to do in %d array task%s of up to %d, %d skipped" % (
-        plan["operation"], len(plan["files"]), len(pending), len(plan["chunks"]),
-        "" if len(plan["chunks"]) == 1 else "s", args.chunk, skipped), flush=True)
-    if not plan["chunks"]:
-        merge(plan, remove_parts=False)
-        return EXIT_OK
     folder = state_dir(plan["output"], "slurm")
     script = os.path.join(folder, "chunk.sh")
     with open(script, "w", encoding="utf-8") as f:
         f.write(slurm_script(plan, plan_path))
     os.chmod(script, 0o755)
+    print("quatcurve batch: %s %d files, %d to do in %d chunk%s of up to %d, %d skipped" % (
+        plan["operation"], len(plan["files"]), len(pending), len(plan["chunks"]),
+        "" if len(plan["chunks"]) == 1 else "s", args.chunk, skipped), flush=True)
+    return plan_path, script
+
+
+def write_farm_plan(args, plan):
+    """--plan: the chunked plan for another farm manager (Flamenco: farm/flamenco/quatcurve-batch.js),
+    whose tasks run `--run-chunk PLAN K` for K in 0..chunks-1, then `--collect DIR`."""
+    plan_path, _ = plan_chunks(args, plan)
+    print("plan: %s" % plan_path)
+    print("chunks: %d" % len(plan["chunks"]))
+    if not plan["chunks"]:
+        merge(plan, remove_parts=False)
+    return EXIT_OK
+
+
+def submit_slurm(args, plan):
+    """Plans, records the skipped files, and submits the pending ones as an sbatch array."""
+    plan_path, script = plan_chunks(args, plan)
+    if not plan["chunks"]:
+        merge(plan, remove_parts=False)
+        return EXIT_OK
+    folder = os.path.dirname(script)
     command = ["sbatch", "--parsable", "--array=0-%d" % (len(plan["chunks"]) - 1), "--job-name=quatcurve-batch",
                "--output=%s" % os.path.join(folder, "%A_%a.log")] + list(args.sbatch) + [script]
     try:
@@ -777,8 +801,12 @@ def main(argv=None):
             return collect(args.collect)
         plan = make_plan(args, task_options, {name: parser.get_default(name) for name in task_options}, argv)
         os.makedirs(plan["output"], exist_ok=True)
+        if args.slurm and args.plan:
+            raise UsageError("--slurm and --plan exclude each other")
         if args.slurm:
             return submit_slurm(args, plan)
+        if args.plan:
+            return write_farm_plan(args, plan)
         return run_local(args, plan)
     except UsageError as error:
         return cli.fail(EXIT_USAGE, str(error))

@@ -307,7 +307,7 @@ def test_slurm_array(first_run, library, cluster, tmp_path):
             "--output", out, library]
     proc = run_batch(args, SLURM_CONF=cluster.conf)
     assert proc.returncode == 0, (proc.stdout, proc.stderr)
-    assert "5 to do in 3 array tasks of up to 2" in proc.stdout
+    assert "5 to do in 3 chunks of up to 2" in proc.stdout
     cluster.wait(submitted_job(proc))
     collected = run_batch(["--collect", out], SLURM_CONF=cluster.conf)
     assert collected.returncode == 1, (collected.stdout, collected.stderr)  # two files failed
@@ -317,11 +317,27 @@ def test_slurm_array(first_run, library, cluster, tmp_path):
     assert summary["missing"] == 0 and summary["done"] == 3
 
     again = run_batch(args, SLURM_CONF=cluster.conf)
-    assert again.returncode == 0 and "2 to do in 1 array task of up to 2, 3 skipped" in again.stdout, again.stdout
+    assert again.returncode == 0 and "2 to do in 1 chunk of up to 2, 3 skipped" in again.stdout, again.stdout
     cluster.wait(submitted_job(again))
     assert run_batch(["--collect", out], SLURM_CONF=cluster.conf).returncode == 1
     records, summary = read_results(out)
     assert summary["skipped"] == 3 and summary["failed"] == 2 and summary["missing"] == 0
+
+
+def test_plan_for_a_farm(library, tmp_path, capsys):
+    """--plan (for Flamenco: farm/flamenco/quatcurve-batch.js) writes the chunked plan and the
+    per-chunk script without running anything (in this process)."""
+    out = tmp_path / "out"
+    assert batch.main(["batch", "--plan", "--chunk", "2", "--reduce", "--output", str(out), str(library)]) == 0
+    printed = capsys.readouterr().out
+    plan_path = out / batch.STATE / "plan.json"
+    assert "plan: %s" % plan_path in printed and "chunks: 3" in printed
+    plan = batch.load_plan(plan_path)
+    assert plan["chunks"] == [[0, 1], [2, 3], [4]]
+    assert [f["input"] for f in plan["files"]] == sorted(EXPECTED)
+    with open(out / batch.STATE / "slurm" / "chunk.sh") as f:
+        assert '--run-chunk %s "$SLURM_ARRAY_TASK_ID"' % plan_path in f.read()
+    assert not (out / "results.jsonl").exists()
 
 
 @pytest.mark.parametrize("name,args,fragment", [
