@@ -151,6 +151,8 @@ def expand_inputs(arguments, output_dir):
             bases.append(os.sep.join(parts[:first]) or os.sep)
             found = []
             for match in sorted(glob.glob(path, recursive=True)):
+                if any(match == folder or match.startswith(folder + os.sep) for folder in skip):
+                    continue  # the outputs of an earlier run
                 if os.path.isdir(match):
                     found += _walk(match, skip)
                 elif _is_input(os.path.basename(match)):
@@ -273,7 +275,8 @@ def load_plan(path):
 def new_record(plan, entry, digest):
     return {"input": entry["input"], "output": entry["output"], "operation": plan["operation"],
             "options": plan["options"], "digest": digest, "status": "failed", "targets": [],
-            "keys_before": 0, "keys_after": 0, "max_error_deg": None, "reason": None, "seconds": 0.0}
+            "keys_before": 0, "keys_after": 0, "max_error_deg": None, "reason": None, "seconds": 0.0,
+            "phase_seconds": {}}
 
 
 def read_records(output):
@@ -338,7 +341,7 @@ def pending_files(plan, force, part):
         entry["digest"] = digest
         record = latest.get(entry["input"])
         if not force and finished(record, plan, entry, digest):
-            part.add(dict(record, status="skipped", seconds=0.0))
+            part.add(dict(record, status="skipped", seconds=0.0, phase_seconds={}))
             skipped += 1
         else:
             pending.append(index)
@@ -398,8 +401,11 @@ class Worker:
 
     def give(self, index):
         self.index, self.started = index, time.perf_counter()
-        self.process.stdin.write(b"%d\n" % index)
-        self.process.stdin.flush()
+        try:
+            self.process.stdin.write(b"%d\n" % index)
+            self.process.stdin.flush()
+        except OSError:  # it has already ended: its end of output tells, and the file fails
+            pass
 
     def close_input(self):
         try:
@@ -459,7 +465,8 @@ def run_files(plan, plan_path, indices, jobs, part, process_per_file=False, out=
         elif code < 0:
             record["reason"] = "the Blender process ended with %s while working on this file" % signal_name(-code)
         else:
-            record["reason"] = "the Blender process ended with exit status %d while working on this file" % code
+            record["reason"] = "the Blender process ended with exit status %d while working on this file%s" % (
+                code, last_line(worker.log.name))
         record["seconds"] = round(time.perf_counter() - worker.started, 3)
         remove_output(plan, entry)
         report(record)
@@ -499,6 +506,17 @@ def run_files(plan, plan_path, indices, jobs, part, process_per_file=False, out=
     return records
 
 
+def last_line(log):
+    """': <the last line of a worker's log>', or '' (a worker that ended by itself said why there)."""
+    try:
+        with open(log, "rb") as f:
+            f.seek(max(0, os.path.getsize(log) - 4096))
+            lines = [line.strip() for line in f.read().decode("utf-8", "replace").splitlines() if line.strip()]
+    except OSError:
+        return ""
+    return ": " + lines[-1] if lines else ""
+
+
 def remove_output(plan, entry):
     """A failed file leaves no output (an older one would contradict its record)."""
     path = os.path.join(plan["output"], entry["output"])
@@ -523,8 +541,11 @@ def summarize(plan, records, seconds=None, jobs=None):
     worst = max(errors, key=lambda e: e[0]) if errors else (None, None)
     counts = {status: sum(r["status"] == status for r in records) for status in ("done", "skipped", "failed")}
     work = sum(r["seconds"] for r in records)
+    phases = {phase: round(sum(r["phase_seconds"].get(phase, 0.0) for r in records), 3)
+              for phase in ("load", "task", "save")}
     done_files = counts["done"] + counts["failed"]
     timing = {"seconds": None if seconds is None else round(seconds, 3), "work_seconds": round(work, 3),
+              "phase_seconds": phases,
               "jobs": jobs,
               "files_per_second": round(done_files / seconds, 4) if seconds and done_files else None}
     return {"format": FORMAT + "-summary", "version": VERSION, "operation": plan["operation"],
@@ -547,6 +568,10 @@ def summary_table(summary):
            "-" if t["files_per_second"] is None else "%.2f" % t["files_per_second"])
     widths = [max(len(a), len(b)) for a, b in zip(head, row)]
     lines = ["  ".join(h.rjust(w) for h, w in zip(head, widths)), "  ".join(c.rjust(w) for c, w in zip(row, widths))]
+    phases = t["phase_seconds"]
+    if any(phases.values()):
+        lines.append("work: %.1f s (loading %.1f s, %s %.1f s, saving %.1f s)" % (
+            t["work_seconds"], phases["load"], summary["operation"], phases["task"], phases["save"]))
     if summary["worst_input"]:
         lines.append("worst error: %s" % summary["worst_input"])
     if summary["missing"]:
@@ -729,19 +754,23 @@ def work_on(plan, task, args, index):
     record = new_record(plan, entry, entry.get("digest"))
     output = os.path.join(plan["output"], entry["output"])
     fault = os.environ.get(FAULT, "")
+    phases = {}
     try:
         if fault == "crash:" + entry["input"]:
             os.kill(os.getpid(), signal.SIGKILL)
         load_input(entry["path"])
+        phases["load"] = time.perf_counter() - begin
         scene = bpy.context.scene
         chosen = cli.select_targets(scene.objects, cli.split_patterns(args.objects), cli.split_patterns(args.bones))
         os.makedirs(os.path.dirname(output), exist_ok=True)
         task.check_output(output)
         result = task.apply(chosen, entry["path"], output)
         outcome = task.outcome(result)
+        phases["task"] = time.perf_counter() - begin - phases["load"]
         if fault == "kill-in-save:" + entry["input"]:
             cli.os.replace = lambda *a: os.kill(os.getpid(), signal.SIGKILL)
         task.save(result, output)
+        phases["save"] = time.perf_counter() - begin - phases["load"] - phases["task"]
         record.update(status="done", targets=outcome.targets, keys_before=outcome.keys_before,
                       keys_after=outcome.keys_after,
                       max_error_deg=None if outcome.max_error_deg is None else round(outcome.max_error_deg, 6))
@@ -754,6 +783,7 @@ def work_on(plan, task, args, index):
     if record["status"] == "failed":
         remove_output(plan, entry)
     record["seconds"] = round(time.perf_counter() - begin, 3)
+    record["phase_seconds"] = {k: round(v, 3) for k, v in phases.items()}
     return record
 
 

@@ -1,5 +1,6 @@
-"""Batch baking and fitting from the command line: bake (and optionally compare), or fit (`--fit`),
-the rotations in a .blend file without Blender's UI.
+"""Baking, fitting and key reduction from the command line: bake (and optionally compare), fit
+(`--fit`) or reduce (`--reduce`) the rotations in a .blend file without Blender's UI. Many files at
+once: batch.py runs the same operations.
 
     blender --background --python addon/quatcurve_blender/cli.py -- [options] IN.blend
     blender --background IN.blend --python addon/quatcurve_blender/cli.py -- [options]
@@ -13,7 +14,8 @@ succeeded. IN.blend is only written with --in-place; the output is saved to a te
 same folder and renamed over the target, so it is either complete or untouched.
 
 This module parses arguments and selects targets by name or glob pattern; the work is done by the
-functions the operators call (bake.bake, compare.compare / save_plots / write_report, fit.fit).
+functions the operators call (bake.bake, compare.compare / save_plots / write_report, fit.fit,
+reduce.reduce), each wrapped in a Task (BakeTask, FitTask, ReduceTask) that batch.py reuses.
 
 When Blender runs this file as a script (`--python cli.py`) it is not inside its package: the
 add-on's parent folder is put on sys.path and the package is imported (and registered) by name.
@@ -24,7 +26,6 @@ A missing or unreadable IN.blend given *before* `--python` is refused by Blender
 import argparse
 import contextlib
 import fnmatch
-import math
 import os
 import sys
 import time
@@ -69,6 +70,7 @@ examples:
       --output out/baked.blend in.blend
   blender -b --python addon/quatcurve_blender/cli.py -- --fit --method SQUAD --tolerance 0.01 \\
       --objects 'Rig' --output fitted.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --reduce --tolerance 0.1 --output reduced.blend in.blend
 """
 
 

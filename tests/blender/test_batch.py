@@ -104,10 +104,10 @@ def read_results(out):
 
 
 def without_timings(out):
-    """results.jsonl with every record's 'seconds' removed, as text."""
+    """results.jsonl with every record's timings ('seconds', 'phase_seconds') removed, as text."""
     with open(os.path.join(out, "results.jsonl"), encoding="utf-8") as f:
-        return "".join(json.dumps({k: v for k, v in json.loads(line).items() if k != "seconds"}, sort_keys=True) + "\n"
-                       for line in f)
+        return "".join(json.dumps({k: v for k, v in json.loads(line).items() if k not in ("seconds", "phase_seconds")},
+                                  sort_keys=True) + "\n" for line in f)
 
 
 def make_shot(path, name, degrees):
@@ -255,7 +255,8 @@ def test_killed_worker_then_rerun(library, tmp_path):
 
 
 def test_crash_on_one_file_and_kill_during_save(library, tmp_path):
-    """A Blender that dies on one file (QUATCURVE_BATCH_FAULT=crash:…) fails only that file; a kill
+    """A Blender that dies on one file (QUATCURVE_BATCH_FAULT=crash:…) fails only that file, so does
+    one that takes longer than --timeout; a kill
     between the temporary output and its rename leaves the output path absent (the temporary is
     removed by the next run, which completes the file)."""
     out = tmp_path / "out"
@@ -266,6 +267,11 @@ def test_crash_on_one_file_and_kill_during_save(library, tmp_path):
     records, _ = read_results(out)
     assert records["a.blend"]["status"] == "failed" and records["b.blend"]["status"] == "done"
     assert records["a.blend"]["reason"] == "the Blender process ended with SIGKILL while working on this file"
+
+    proc = run_batch(["--jobs", "1", "--timeout", "0.01", "--output", out, shots / "a.blend"])
+    assert proc.returncode == 1
+    records, _ = read_results(out)
+    assert records["a.blend"]["reason"] == "took longer than --timeout 0.01 s: its Blender process was stopped"
 
     proc = run_batch(["--jobs", "1", "--output", out] + inputs, QUATCURVE_BATCH_FAULT="kill-in-save:a.blend")
     assert proc.returncode == 1

@@ -271,6 +271,19 @@ def test_fit_that_fails_exits_1_and_saves_nothing(addon, tmp_path):
     assert not out.exists()
 
 
+def test_reduce(addon, source_blend, tmp_path):
+    """--reduce on Turn: the reduce operator's work and summary, the input unchanged."""
+    before = digest(source_blend)
+    out = tmp_path / "reduced.blend"
+    proc = run_cli(["--reduce", "--tolerance", "0.05", "--objects", "Turn", "--output", out, source_blend])
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert any("reduce, tolerance 0.05°, BEZIER keys" in line for line in lines), proc.stdout
+    assert any(line.strip().startswith("Turn (XYZ): 6 → ") for line in lines), proc.stdout
+    assert any(line.startswith("total: 1 target, rotation keys 6 → ") for line in lines), proc.stdout
+    assert digest(source_blend) == before and out.is_file()
+
+
 BAD_ARGUMENTS = [
     # (id, arguments with {IN} {OUT} {TMP}, exit status, words in the message)
     ("missing-input", ["--output", "{OUT}", "{TMP}/missing.blend"], 2, "no such file"),
@@ -287,6 +300,10 @@ BAD_ARGUMENTS = [
     ("fit-bake-option", ["--fit", "--step", "2", "--rotation-mode", "XYZ", "--output", "{OUT}", "{IN}"], 2,
      "--rotation-mode, --step: not an option of --fit"),
     ("output-unwritable", ["--output", "/proc/quatcurve-cli-test.blend", "{IN}"], (1, 2), "writ"),
+    ("fit-and-reduce", ["--fit", "--reduce", "--output", "{OUT}", "{IN}"], 2, "--fit and --reduce exclude each other"),
+    ("reduce-method", ["--reduce", "--method", "SQUAD", "--output", "{OUT}", "{IN}"], 2,
+     "--method: not an option of --reduce"),
+    ("bake-reduce-option", ["--synchronized", "--output", "{OUT}", "{IN}"], 2, "--synchronized: not an option of a bake"),
 ]
 
 
