@@ -31,6 +31,7 @@ untouched; the operator's UNDO flag makes the write one undo step.
 import contextlib
 import hashlib
 import math
+import re
 import time
 from dataclasses import dataclass, field
 
@@ -85,8 +86,8 @@ def check_settings(settings):
         raise FitError("subframes %r: must be a whole number from 1 to 64" % (settings.subframes,))
 
 
-def curve_options(settings, ease_in=None, ease_out=None):
-    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease)."""
+def curve_options(settings, ease_in=None, ease_out=None, turns=None):
+    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease and turns)."""
     options = {}
     if settings.method == "SLERP":
         options["shortest_path"] = bool(settings.shortest_path)
@@ -98,6 +99,8 @@ def curve_options(settings, ease_in=None, ease_out=None):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
     if ease_out is not None and np.any(ease_out):
         options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
+    if turns is not None and np.any(turns):
+        options["turns"] = np.asarray(turns, dtype=np.float64)
     return options
 
 
@@ -201,6 +204,87 @@ def carry_eases(old_frames, new_frames, ease_in, ease_out):
         if j.size:
             out_in[k], out_out[k] = ease_in[j[0]], ease_out[j[0]]
     return out_in, out_out
+
+
+# ---- per-key turns -----------------------------------------------------------------------------------
+# Full turns of the segment leaving a key (quaternion targets): Action.quatcurve_turns, by frame, as
+# the eases; the curve turns (quatcurve.Curve(turns=...)) and the fit inserts the keys Blender needs
+# to play it.
+
+def key_turns(action, target, frames):
+    """The turns of the key `frames` from the action's turn records (0 where none)."""
+    slot, path = target_key(target)
+    turns = np.zeros(len(frames))
+    for item in getattr(action, "quatcurve_turns", ()):
+        if item.owner_path == path and item.slot == slot:
+            k = np.flatnonzero(np.abs(np.asarray(frames) - item.frame) < 1e-4)
+            if k.size:
+                turns[k[0]] = item.turns
+    return turns
+
+
+def set_key_turns(action, target, frames, turns):
+    """Replaces the target's turn records by one per key frame with non-zero turns."""
+    items = getattr(action, "quatcurve_turns", None)
+    if items is None:
+        return
+    slot, path = target_key(target)
+    for i in reversed(range(len(items))):
+        if items[i].owner_path == path and items[i].slot == slot:
+            items.remove(i)
+    if turns is None:
+        return
+    for k in np.flatnonzero(np.asarray(turns[:len(frames)]) != 0):
+        item = items.add()
+        item.slot, item.owner_path, item.frame, item.turns = slot, path, float(frames[k]), int(turns[k])
+
+
+def turns_message(message, frames):
+    """The native curve's message about turns with key indices given as frames."""
+    if not message.startswith("turns["):
+        return message
+    return re.sub(r"\bkey (\d+)", lambda m: "the key at frame %s" % targets.num(frames[int(m.group(1))])
+                  if int(m.group(1)) < len(frames) else m.group(0), message)
+
+
+def set_turns(found, turns):
+    """Sets the turns of the segment leaving each selected animator key of each fitted quaternion
+    target and refits it with its settings and eases (the last key has no segment: its selection is
+    ignored). Returns the number of keys set. Raises FitError naming target and key frame (Euler and
+    axis-angle targets, targets not fitted, no selected key, a still segment without an axis to turn
+    about) before anything is written."""
+    if not math.isfinite(turns) or int(turns) != turns or abs(turns) > 10000:
+        raise FitError("turns %r: must be a whole number from -10000 to 10000" % (turns,))
+    plans, changed = [], 0
+    with record_index():
+        for target in found:
+            keys = read_animator_keys(target)
+            if keys.is_euler:
+                raise FitError("%s: rotation mode %s: Euler keys already keep their turns (key the angle: 0° → 450° "
+                               "turns once more); turns are for quaternion keys" % (keys.name, keys.mode))
+            if keys.is_axis_angle:
+                raise FitError("%s: rotation mode AXIS_ANGLE: axis-angle keys already keep their turns in the angle "
+                               "channel (key 90° → 450° to turn once more); turns are for quaternion keys" % keys.name)
+            record = find_record(keys.action, target)
+            if record is None:
+                raise FitError("%s: not fitted (fit it first: turns are part of the fit)" % keys.name)
+            chosen = keys.selected.any(axis=0)
+            chosen[-1:] = False
+            if not chosen.any():
+                continue
+            ease_in, ease_out, old = refit_eases(keys, record)
+            new = old.copy()
+            new[chosen] = turns
+            changed += int(chosen.sum())
+            plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
+            if plan is not None:
+                plans.append(plan)
+        if not plans:
+            raise FitError("no selected rotation key with a segment after it on a fitted target (select the key "
+                           "that starts the segment to turn)")
+        for plan in plans:
+            write_plan(plan)
+    return changed
 
 
 # ---- reading the animator's keys ---------------------------------------------------------------------
@@ -358,6 +442,7 @@ class FitPlan:
     ease_in: np.ndarray
     ease_out: np.ndarray
     notes: list = field(default_factory=list)
+    turns: np.ndarray = None
 
 
 def path_notes(name, curve, frames, method):
@@ -366,12 +451,12 @@ def path_notes(name, curve, frames, method):
     return ["path rule: " + b.text() for b in path_rule.breaks(curve, frames, name, method)]
 
 
-def curve_of(keys, settings, ease_in=None, ease_out=None):
+def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The native curve of the settings' method through the animator's keys, and the key values the
     fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
     their turns kept by the curve)."""
     qc = native.require()
-    options = curve_options(settings, ease_in, ease_out)
+    options = curve_options(settings, ease_in, ease_out, turns)
     try:
         if keys.is_euler:
             return qc.Curve.from_euler(keys.frames, keys.values, order=keys.mode, method=settings.method,
@@ -390,14 +475,14 @@ def curve_of(keys, settings, ease_in=None, ease_out=None):
                            % (keys.name, targets.num(keys.frames[k])))
         curve = qc.Curve(keys.frames, keys.values, method=settings.method, **options)
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.name, e)) from None
+        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
     # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
     at_keys = curve.sample(keys.frames)
     signs = np.where(np.sum(at_keys * keys.values, axis=1) < 0, -1.0, 1.0)
     return curve, keys.values * signs[:, None]
 
 
-def plan_target(keys, settings, ease_in=None, ease_out=None):
+def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The fitted keys of one target (nothing written). Fewer than two keys: None."""
     qc = native.require()
     K = len(keys.frames)
@@ -405,7 +490,8 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         return None
     ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
     ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
-    curve, key_values = curve_of(keys, settings, ease_in, ease_out)
+    turns = np.zeros(K) if turns is None else np.asarray(turns, float)
+    curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
     # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
     try:
         t, forced, fitted = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode,
@@ -422,7 +508,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method))
+                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method), turns)
 
 
 def write_plan(plan):
@@ -447,6 +533,7 @@ def write_plan(plan):
         fcurves.write_key_selection(curve, chosen)
     store_record(keys, plan.settings)
     set_key_eases(keys.action, keys.target, keys.frames, plan.ease_in, plan.ease_out)
+    set_key_turns(keys.action, keys.target, keys.frames, plan.turns)
     keys.target.id_data.update_tag(refresh={"TIME"})
 
 
@@ -481,15 +568,17 @@ def record_frames(record):
 
 
 def refit_eases(keys, record=None):
-    """The (ease_in, ease_out) of the target's keys from the action's records; keys moved in time
-    since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
+    """The (ease_in, ease_out, turns) of the target's keys from the action's records; keys moved in
+    time since `record` (as many as then) keep their ease and turns. Reads Blender data: main thread."""
     ease_in, ease_out = key_eases(keys.action, keys.target, keys.frames)
+    turns = key_turns(keys.action, keys.target, keys.frames)
     if record is not None and record.key_frames:
         old = record_frames(record)
         if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
             o_in, o_out = key_eases(keys.action, keys.target, old)
             ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
-    return ease_in, ease_out
+            turns = carry_eases(old, keys.frames, key_turns(keys.action, keys.target, old), turns)[0]
+    return ease_in, ease_out, turns
 
 
 def plan_refit(keys, settings, record=None):
@@ -588,6 +677,7 @@ def unfit(found):
             continue
         action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
         set_key_eases(action, target, [], [], [])
+        set_key_turns(action, target, [], [])
         names.append(target.name)
     return names
 
