@@ -471,7 +471,12 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
         return None
     ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
     ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
-    turns = np.zeros(K) if turns is None else np.asarray(turns, float)
+    # Turns are for quaternion keys: Euler and axis-angle keys carry their turns in their angles, and
+    # their channels, kept as keyed at the keys, could not add one (a target whose mode changed since
+    # its turns were set plays its keys' own turns).
+    if turns is None or keys.mode != "QUATERNION":
+        turns = np.zeros(K)
+    turns = np.asarray(turns, float)
     curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
     # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
     try:

@@ -214,3 +214,24 @@ def test_undo_restores_the_keys_and_the_turns(tmp_path):
     assert verdict["changed"], "set_turns changed nothing, so undo proves nothing"
     assert verdict["turns_after"] == [[1.0, 2]]
     assert verdict["restored"], verdict["differences"]
+
+
+def test_turns_apply_to_quaternion_keys_only(scene):
+    """A target whose rotation mode changed to Euler after its turns were set plays its Euler keys' own
+    turns: the stored turns are not added (the Euler channels, kept as keyed, could not add one)."""
+    qc = native.require()
+    obj = spin_object("Switched")
+    select_keys(obj, {1})
+    assert bpy.ops.quatcurve.set_turns(turns=1) == {"FINISHED"}
+    angles = [(1, (0.0, 0.0, 0.0)), (13, (0.0, 0.0, math.pi / 2)), (21, (0.3, 0.2, 1.0))]
+    obj.rotation_mode = "XYZ"
+    key(obj, "rotation_euler", angles, interpolation="BEZIER")
+    assert bpy.ops.quatcurve.fit(method="SLERP", tolerance=TOL) == {"FINISHED"}
+    frames = np.array([f for f, _ in angles], float)
+    want = qc.Curve.from_euler(frames, np.array([a for _, a in angles]), "XYZ", "SLERP").sample(check_times(1, 21))
+    got = []
+    for t in check_times(1, 21):
+        scene.frame_set(int(t), subframe=float(t - int(t)))
+        got.append(obj.matrix_world.to_quaternion()[:])
+    err = np.degrees(angles_between(np.array(got), want))
+    assert err.max() <= TOL + 1e-3, "max %.4f° at frame %s" % (err.max(), check_times(1, 21)[err.argmax()])
