@@ -21,12 +21,13 @@ animator who wants to keep an inserted key changes its type to Keyframe.
 Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
 keys' signature — what live mode compares), per key ease in / ease out (`Action.quatcurve_eases`)
 and, for quaternion targets, per key turns (`Action.quatcurve_turns`: extra full turns of the segment
-leaving the key, set_turns), both by frame and carried along when keys move. Rotation modes: quaternion, the six Euler orders (turns
-over 180° between Euler keys are kept, as the bake keeps them) and axis-angle (the angle channel's
-turns are kept too: 0° → 720° spins twice, as Blender's own channels do; inserted keys continue the
-animator's angle and axis side, and the axis length may drift between keys, as Blender normalizes
-it). Everything is read and computed before anything is written, so an error leaves the file
-untouched; the operator's UNDO flag makes the write one undo step.
+leaving the key, set_turns), both by frame and carried along when keys move. Rotation modes:
+quaternion, the six Euler orders (turns over 180° between Euler keys are kept, as the bake keeps
+them) and axis-angle (the angle channel's turns are kept too: 0° → 720° spins twice, as Blender's
+own channels do; inserted keys continue the animator's angle and axis side, and the axis length may
+drift between keys, as Blender normalizes it). Everything is read and computed before anything is
+written, so an error leaves the file untouched; the operator's UNDO flag makes the write one undo
+step.
 """
 
 import contextlib
