@@ -19,29 +19,32 @@ JITTER (the documented stand-in). A refit replaces every marked key and keeps ev
 animator who wants to keep an inserted key changes its type to Keyframe.
 
 Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
-keys' signature — what live mode compares) and per key ease in / ease out (`Action.quatcurve_eases`,
-by frame, carried along when keys move). Rotation modes: quaternion, the six Euler orders (turns
-over 180° between Euler keys are kept, as the bake keeps them) and axis-angle (the angle channel's
-turns are kept too: 0° → 720° spins twice, as Blender's own channels do; inserted keys continue the
-animator's angle and axis side, and the axis length may drift between keys, as Blender normalizes
-it). Everything is read and computed before anything is written, so an error leaves the file
-untouched; the operator's UNDO flag makes the write one undo step.
+keys' signature — what live mode compares), per key ease in / ease out (`Action.quatcurve_eases`)
+and, for quaternion targets, per key turns (`Action.quatcurve_turns`: extra full turns of the segment
+leaving the key, set_turns), both by frame and carried along when keys move. Rotation modes:
+quaternion, the six Euler orders (turns over 180° between Euler keys are kept, as the bake keeps
+them) and axis-angle (the angle channel's turns are kept too: 0° → 720° spins twice, as Blender's
+own channels do; inserted keys continue the animator's angle and axis side, and the axis length may
+drift between keys, as Blender normalizes it). Everything is read and computed before anything is
+written, so an error leaves the file untouched; the operator's UNDO flag makes the write one undo
+step.
 """
 
 import contextlib
 import hashlib
 import math
+import re
 import time
 from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
 
-from . import fcurves, native, path_rule, targets
-from .reduce import parallel_map
+from . import fcurves, methods, native, path_rule, targets
+from .workers import parallel_map
 from .targets import TargetError
 
-METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+METHODS = methods.CURVE_METHODS
 # Raw Keyframe.type values (foreach_get/foreach_set): KEYFRAME 0, EXTREME 1, BREAKDOWN 2, JITTER 3,
 # MOVING_HOLD 4, GENERATED 5 (4.2+).
 KEY_TYPE_KEYFRAME = 0
@@ -85,19 +88,15 @@ def check_settings(settings):
         raise FitError("subframes %r: must be a whole number from 1 to 64" % (settings.subframes,))
 
 
-def curve_options(settings, ease_in=None, ease_out=None):
-    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease)."""
-    options = {}
-    if settings.method == "SLERP":
-        options["shortest_path"] = bool(settings.shortest_path)
-    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
-        options["clamped"] = bool(settings.clamped)
-    if settings.method == "TCB":
-        options.update(tension=settings.tension, continuity=settings.continuity, bias=settings.bias)
+def curve_options(settings, ease_in=None, ease_out=None, turns=None):
+    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease and turns)."""
+    options = methods.options(settings.method, settings)
     if ease_in is not None and np.any(ease_in):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
     if ease_out is not None and np.any(ease_out):
         options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
+    if turns is not None and np.any(turns):
+        options["turns"] = np.asarray(turns, dtype=np.float64)
     return options
 
 
@@ -203,26 +202,106 @@ def carry_eases(old_frames, new_frames, ease_in, ease_out):
     return out_in, out_out
 
 
+# ---- per-key turns -----------------------------------------------------------------------------------
+# Full turns of the segment leaving a key (quaternion targets): Action.quatcurve_turns, by frame, as
+# the eases; the curve turns (quatcurve.Curve(turns=...)) and the fit inserts the keys Blender needs
+# to play it.
+
+def key_turns(action, target, frames):
+    """The turns of the key `frames` from the action's turn records (0 where none)."""
+    slot, path = target_key(target)
+    turns = np.zeros(len(frames))
+    for item in getattr(action, "quatcurve_turns", ()):
+        if item.owner_path == path and item.slot == slot:
+            k = np.flatnonzero(np.abs(np.asarray(frames) - item.frame) < 1e-4)
+            if k.size:
+                turns[k[0]] = item.turns
+    return turns
+
+
+def set_key_turns(action, target, frames, turns):
+    """Replaces the target's turn records by one per key frame with non-zero turns."""
+    items = getattr(action, "quatcurve_turns", None)
+    if items is None:
+        return
+    slot, path = target_key(target)
+    for i in reversed(range(len(items))):
+        if items[i].owner_path == path and items[i].slot == slot:
+            items.remove(i)
+    if turns is None:
+        return
+    for k in np.flatnonzero(np.asarray(turns[:len(frames)]) != 0):
+        item = items.add()
+        item.slot, item.owner_path, item.frame, item.turns = slot, path, float(frames[k]), int(turns[k])
+
+
+def turns_message(message, frames):
+    """The native curve's message about turns with key indices given as frames."""
+    if not message.startswith("turns["):
+        return message
+    return re.sub(r"\bkey (\d+)", lambda m: "the key at frame %s" % targets.num(frames[int(m.group(1))])
+                  if int(m.group(1)) < len(frames) else m.group(0), message)
+
+
+def set_turns(found, turns):
+    """Sets the turns of the segment leaving each selected animator key of each fitted quaternion
+    target and refits it with its settings and eases (the last key has no segment: its selection is
+    ignored). Returns the number of keys set. Raises FitError naming target and key frame (Euler and
+    axis-angle targets, targets not fitted, no selected key, a still segment without an axis to turn
+    about) before anything is written."""
+    if not math.isfinite(turns) or int(turns) != turns or abs(turns) > 10000:
+        raise FitError("turns %r: must be a whole number from -10000 to 10000" % (turns,))
+    plans, changed = [], 0
+    with record_index():
+        for target in found:
+            keys = read_animator_keys(target)
+            if keys.is_euler:
+                raise FitError("%s: rotation mode %s: Euler keys already keep their turns (key the angle: 0° → 450° "
+                               "turns once more); turns are for quaternion keys" % (keys.name, keys.mode))
+            if keys.is_axis_angle:
+                raise FitError("%s: rotation mode AXIS_ANGLE: axis-angle keys already keep their turns in the angle "
+                               "channel (key 90° → 450° to turn once more); turns are for quaternion keys" % keys.name)
+            record = find_record(fcurves.active_action(target.id_data), target)
+            if record is None:
+                raise FitError("%s: not fitted (fit it first: turns are part of the fit)" % keys.name)
+            chosen = keys.selected.any(axis=0)
+            chosen[-1:] = False
+            if not chosen.any():
+                continue
+            ease_in, ease_out, old = refit_eases(keys, target, record)
+            new = old.copy()
+            new[chosen] = turns
+            changed += int(chosen.sum())
+            plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
+            if plan is not None:
+                plans.append((plan, target))
+        if not plans:
+            raise FitError("no selected rotation key with a segment after it on a fitted target (select the key "
+                           "that starts the segment to turn)")
+        for plan, target in plans:
+            write_plan(plan, target)
+    return changed
+
+
 # ---- reading the animator's keys ---------------------------------------------------------------------
 
 @dataclass(eq=False)
 class AnimatorKeys:
-    """A target's own rotation keys (every key not marked as generated).
+    """A target's own rotation keys (every key not marked as generated), as plain arrays: planning
+    runs on worker threads and never sees Blender data.
 
-    frames (K,): the union of the channels' animator key frames (channels keyed separately, e.g. with
-    "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types (K,) raw
-    keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
-    target: object
+    name: the target's name (for messages); mode, prop, path: its rotation mode, property and F-curve
+    data path; frames (K,): the union of the channels' animator key frames (channels keyed separately,
+    e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
+    (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
+    name: str
     mode: str
     prop: str
     path: str
-    action: object
-    curves: list
     frames: np.ndarray
     values: np.ndarray
     types: np.ndarray
     selected: np.ndarray
-    name: str = ""   # the target's name, read on the main thread (planning may run on a worker)
 
     @property
     def is_euler(self):
@@ -338,8 +417,7 @@ def read_animator_keys(target):
         if (~own).any():  # this channel has no key of its own there: Blender's evaluation
             values[~own, c] = fcurves.evaluate(curves[c], frames[~own])
     types[types < 0] = KEY_TYPE_KEYFRAME
-    return AnimatorKeys(target, mode, prop, path, action, list(curves), frames, values, types, selected,
-                        target.name)
+    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected)
 
 
 # ---- the fit ------------------------------------------------------------------------------------------
@@ -358,6 +436,7 @@ class FitPlan:
     ease_in: np.ndarray
     ease_out: np.ndarray
     notes: list = field(default_factory=list)
+    turns: np.ndarray = None
 
 
 def path_notes(name, curve, frames, method):
@@ -366,38 +445,26 @@ def path_notes(name, curve, frames, method):
     return ["path rule: " + b.text() for b in path_rule.breaks(curve, frames, name, method)]
 
 
-def curve_of(keys, settings, ease_in=None, ease_out=None):
+def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The native curve of the settings' method through the animator's keys, and the key values the
     fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
     their turns kept by the curve)."""
-    qc = native.require()
-    options = curve_options(settings, ease_in, ease_out)
+    options = curve_options(settings, ease_in, ease_out, turns)
     try:
-        if keys.is_euler:
-            return qc.Curve.from_euler(keys.frames, keys.values, order=keys.mode, method=settings.method,
-                                       **options), keys.values
-        if keys.is_axis_angle:
-            zero = np.flatnonzero(~np.any(keys.values[:, 1:], axis=1))
-            if zero.size:
-                raise FitError("%s: %s[1..3] (the axis) is zero at frame %s: no rotation axis defined"
-                               % (keys.name, keys.prop, targets.num(keys.frames[zero[0]])))
-            return qc.Curve.from_axis_angle(keys.frames, keys.values, method=settings.method,
-                                            **options), keys.values
-        norms = np.linalg.norm(keys.values, axis=1)
-        if (norms == 0).any():
-            k = int(np.flatnonzero(norms == 0)[0])
-            raise FitError("%s: the quaternion is zero at frame %s (no rotation defined)"
-                           % (keys.name, targets.num(keys.frames[k])))
-        curve = qc.Curve(keys.frames, keys.values, method=settings.method, **options)
+        curve = targets.build_curve(keys.mode, keys.frames, keys.values, settings.method, keys.name, **options)
+    except TargetError as e:
+        raise FitError(str(e)) from None
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.name, e)) from None
+        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
+    if keys.is_euler or keys.is_axis_angle:
+        return curve, keys.values  # their turns are kept by the curve
     # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
     at_keys = curve.sample(keys.frames)
     signs = np.where(np.sum(at_keys * keys.values, axis=1) < 0, -1.0, 1.0)
     return curve, keys.values * signs[:, None]
 
 
-def plan_target(keys, settings, ease_in=None, ease_out=None):
+def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The fitted keys of one target (nothing written). Fewer than two keys: None."""
     qc = native.require()
     K = len(keys.frames)
@@ -405,7 +472,13 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         return None
     ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
     ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
-    curve, key_values = curve_of(keys, settings, ease_in, ease_out)
+    # Turns are for quaternion keys: Euler and axis-angle keys carry their turns in their angles, and
+    # their channels, kept as keyed at the keys, could not add one (a target whose mode changed since
+    # its turns were set plays its keys' own turns).
+    if turns is None or keys.mode != "QUATERNION":
+        turns = np.zeros(K)
+    turns = np.asarray(turns, float)
+    curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
     # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
     try:
         t, forced, fitted = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode,
@@ -422,18 +495,20 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method))
+                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method), turns)
 
 
-def write_plan(plan):
-    """Writes one target's fitted keys into its action, in place: the rotation F-curves' keys are
-    replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
+def write_plan(plan, target):
+    """Writes one target's fitted keys into its active action, in place: the rotation F-curves' keys
+    are replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
     selection kept) and the generated keys; then the fit record and the eases are stored."""
     keys = plan.keys
-    channels = fcurves.Channels.of(keys.target.id_data, keys.action, create=True)
+    action = fcurves.active_action(target.id_data)
+    channels = fcurves.Channels.of(target.id_data, action, create=True)
+    found = channels.find_all(keys.path, len(plan.channels))
     group = False  # the group of the channels' F-curves, read when a missing one is made
     for c, (frames, values, left, right, types) in enumerate(plan.channels):
-        curve = keys.curves[c] if c < len(keys.curves) else None
+        curve = found[c]
         if curve is None:
             if group is False:
                 group = channels.group_of(keys.path)
@@ -445,22 +520,26 @@ def write_plan(plan):
         on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
         chosen[on_key] = keys.selected[c, at[on_key]]
         fcurves.write_key_selection(curve, chosen)
-    store_record(keys, plan.settings)
-    set_key_eases(keys.action, keys.target, keys.frames, plan.ease_in, plan.ease_out)
-    keys.target.id_data.update_tag(refresh={"TIME"})
+    store_record(keys, plan.settings, target, action)
+    set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
+    set_key_turns(action, target, keys.frames, plan.turns)
+    target.id_data.update_tag(refresh={"TIME"})
 
 
-def store_record(keys, settings):
-    """The target's fit record: method, settings, and the signature and frames of its animator keys."""
-    record = find_record(keys.action, keys.target)
+def store_record(keys, settings, target, action=None):
+    """The target's fit record in `action` (default: its active action): method, settings, and the
+    signature and frames of its animator keys."""
+    if action is None:
+        action = fcurves.active_action(target.id_data)
+    record = find_record(action, target)
     if record is None:
-        records = keys.action.quatcurve_fits
+        records = action.quatcurve_fits
         record = records.add()
-        record.slot, record.owner_path = target_key(keys.target)
-        known = _record_index.get(keys.action.as_pointer()) if _record_index is not None else None
+        record.slot, record.owner_path = target_key(target)
+        known = _record_index.get(action.as_pointer()) if _record_index is not None else None
         if known is not None and known[0] == len(records) - 1:  # the index learns the new record
             known[1].setdefault((record.slot, record.owner_path), len(records) - 1)
-            _record_index[keys.action.as_pointer()] = (len(records), known[1])
+            _record_index[action.as_pointer()] = (len(records), known[1])
     record.method = settings.method
     for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
         setattr(record, name, getattr(settings, name))
@@ -480,21 +559,20 @@ def record_frames(record):
     return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
 
 
-def refit_eases(keys, record=None):
-    """The (ease_in, ease_out) of the target's keys from the action's records; keys moved in time
-    since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
-    ease_in, ease_out = key_eases(keys.action, keys.target, keys.frames)
+def refit_eases(keys, target, record=None):
+    """The (ease_in, ease_out, turns) of the target's keys from its active action's records; keys
+    moved in time since `record` (as many as then) keep their ease and turns. Reads Blender data:
+    main thread."""
+    action = fcurves.active_action(target.id_data)
+    ease_in, ease_out = key_eases(action, target, keys.frames)
+    turns = key_turns(action, target, keys.frames)
     if record is not None and record.key_frames:
         old = record_frames(record)
         if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
-            o_in, o_out = key_eases(keys.action, keys.target, old)
+            o_in, o_out = key_eases(action, target, old)
             ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
-    return ease_in, ease_out
-
-
-def plan_refit(keys, settings, record=None):
-    """plan_target with the target's eases (fit and live mode)."""
-    return plan_target(keys, settings, *refit_eases(keys, record))
+            turns = carry_eases(old, keys.frames, key_turns(action, target, old), turns)[0]
+    return ease_in, ease_out, turns
 
 
 # ---- the task -------------------------------------------------------------------------------------------
@@ -547,7 +625,7 @@ def fit(found, settings, only_changed=False):
     start = time.perf_counter()
     result = FitResult(settings)
     # Blender is read on the main thread; the planning (native curve, sampling, fit_keys without the
-    # GIL) runs on worker threads over targets (reduce.parallel_map: same results on any count).
+    # GIL) runs on worker threads over targets (workers.parallel_map: same results on any count).
     with record_index():
         _fit(found, settings, only_changed, result)
     result.seconds = time.perf_counter() - start
@@ -558,23 +636,23 @@ def _fit(found, settings, only_changed, result):
     work = []
     for target in found:
         keys = read_animator_keys(target)
-        record = find_record(keys.action, target)
+        record = find_record(fcurves.active_action(target.id_data), target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        work.append((keys, refit_eases(keys, record)))
-    planned = parallel_map(lambda item: plan_target(item[0], settings, *item[1]), work)
+        work.append((target, keys, refit_eases(keys, target, record)))
+    planned = parallel_map(lambda item: plan_target(item[1], settings, *item[2]), work)
     plans = []
-    for (keys, _), plan in zip(work, planned):
+    for (target, keys, _), plan in zip(work, planned):
         if plan is None:
             result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (
                                                    len(keys.frames), "" if len(keys.frames) == 1 else "s")))
             continue
-        plans.append(plan)
+        plans.append((plan, target))
         result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), plan.generated_count,
                                            math.degrees(plan.max_error), notes=plan.notes))
-    for plan in plans:
-        write_plan(plan)
+    for plan, target in plans:
+        write_plan(plan, target)
 
 
 def unfit(found):
@@ -588,6 +666,7 @@ def unfit(found):
             continue
         action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
         set_key_eases(action, target, [], [], [])
+        set_key_turns(action, target, [], [])
         names.append(target.name)
     return names
 
