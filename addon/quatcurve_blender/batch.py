@@ -842,6 +842,8 @@ def main(argv=None):
         return cli.fail(EXIT_USAGE, str(error))
     except (RuntimeError, OSError) as error:
         return cli.fail(EXIT_FAILURE, str(error))
+    except KeyboardInterrupt:  # the finished files' records are on disk: a rerun goes on from there
+        return cli.fail(EXIT_FAILURE, "interrupted: run the same command again to do the files not yet done")
     except Exception as error:
         if os.environ.get("QUATCURVE_DEBUG"):
             import traceback
