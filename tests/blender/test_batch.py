@@ -1,6 +1,7 @@
 """`quatcurve batch` (addon/quatcurve_blender/batch.py), run as a subprocess under the same Blender as
 the tests; its workers are that Blender too. A tiny library: two .blend shots with rotation keys, a
-small BVH clip (Blender's importer), a corrupt file and a file without rotation animation.
+small BVH clip, a glTF and an FBX clip (Blender's importers), a corrupt file and a file without
+rotation animation.
 
 Covered: a local run on two workers (records checked against batch.schema.json, outputs opened,
 inputs unchanged), resuming and --force, byte-identical records apart from timings, a worker killed
@@ -123,7 +124,8 @@ def make_shot(path, name, degrees):
 
 def make_library(root):
     """lib/shots/a.blend, lib/shots/b.blend, lib/shots/still.blend (no animation), lib/shots/bad.blend
-    (not a .blend), lib/clips/walk.bvh (24 frames, 2 joints)."""
+    (not a .blend), lib/clips/walk.bvh (24 frames, 2 joints), lib/clips/spin.glb and lib/clips/roll.fbx
+    (an animated empty through Blender's glTF and FBX exporters)."""
     shots, clips = root / "shots", root / "clips"
     shots.mkdir(parents=True)
     clips.mkdir()
@@ -136,11 +138,15 @@ def make_library(root):
     motion = "".join("0 0 0 %g %g %g %g %g %g\n" % (3 * i, 40 * math.sin(i / 4), i, 0, 2 * i, 30 * math.cos(i / 5))
                      for i in range(24))
     (clips / "walk.bvh").write_text(BVH + motion)
+    make_shot(shots / "spin.blend", "Spin", (0, 90, 30))  # exported, then removed: the glTF and FBX clips
+    bpy.ops.export_scene.gltf(filepath=str(clips / "spin.glb"), export_format="GLB")
+    bpy.ops.export_scene.fbx(filepath=str(clips / "roll.fbx"), bake_anim=True)
+    (shots / "spin.blend").unlink()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     return root
 
 
-EXPECTED = {"clips/walk.bvh": "done", "shots/a.blend": "done", "shots/b.blend": "done",
+EXPECTED = {"clips/roll.fbx": "done", "clips/spin.glb": "done", "clips/walk.bvh": "done", "shots/a.blend": "done", "shots/b.blend": "done",
             "shots/bad.blend": "failed", "shots/still.blend": "failed"}
 
 
@@ -176,12 +182,12 @@ def test_local_run(first_run, library):
             assert 0 <= record["max_error_deg"] <= 0.05 + 1e-6
             assert 0 < record["keys_after"] <= record["keys_before"]
     assert records["clips/walk.bvh"]["targets"] == ["walk/Hips", "walk/Spine"]
-    assert summary["done"] == 3 and summary["failed"] == 2 and summary["files"] == 5
+    assert summary["done"] == 5 and summary["failed"] == 2 and summary["files"] == 7
     assert summary["keys_before"] == sum(r["keys_before"] for r in records.values() if r["status"] == "done")
     # a progress line per file, the summary table
     progress = [line for line in proc.stdout.splitlines() if line.startswith("[")]
-    assert len(progress) == 5, proc.stdout
-    assert any(re.match(r"^\[\d/5\] shots/a\.blend: done, \d+ → \d+ keys, \d\.\d{3}°, \d+\.\d s", line)
+    assert len(progress) == 7, proc.stdout
+    assert any(re.match(r"^\[\d/7\] shots/a\.blend: done, \d+ → \d+ keys, \d\.\d{3}°, \d+\.\d s", line)
                for line in progress), progress
     assert "files  done  skipped  failed" in proc.stdout
     assert "failed: shots/bad.blend: " in proc.stdout
@@ -200,8 +206,8 @@ def test_resume_force_and_deterministic(first_run, library, tmp_path):
     records, summary = read_results(out)
     assert {k: r["status"] for k, r in records.items()} == dict(EXPECTED, **{
         k: "skipped" for k, v in EXPECTED.items() if v == "done"})
-    assert summary["skipped"] == 3 and summary["done"] == 0
-    assert "2 to do, 3 skipped" in again.stdout
+    assert summary["skipped"] == 5 and summary["done"] == 0
+    assert "2 to do, 5 skipped" in again.stdout
     # --force redoes everything and gives the first run's records, apart from timings
     forced = tmp_path / "forced"
     shutil.copytree(out, forced)
@@ -306,28 +312,28 @@ def submitted_job(proc):
 
 
 def test_slurm_array(first_run, library, cluster, tmp_path):
-    """The library through `--slurm` (3 array tasks of up to 2 files), `--collect`: the same records
+    """The library through `--slurm` (4 array tasks of up to 2 files), `--collect`: the same records
     as the local run apart from timings. A rerun submits only the two failed files."""
     out = tmp_path / "out"
     args = ["--reduce", "--tolerance", "0.05", "--slurm", "--chunk", "2", "--sbatch=--time=00:10:00",
             "--output", out, library]
     proc = run_batch(args, SLURM_CONF=cluster.conf)
     assert proc.returncode == 0, (proc.stdout, proc.stderr)
-    assert "5 to do in 3 chunks of up to 2" in proc.stdout
+    assert "7 to do in 4 chunks of up to 2" in proc.stdout
     cluster.wait(submitted_job(proc))
     collected = run_batch(["--collect", out], SLURM_CONF=cluster.conf)
     assert collected.returncode == 1, (collected.stdout, collected.stderr)  # two files failed
     assert "files  done  skipped  failed" in collected.stdout
     assert without_timings(out) == first_run[3]
     records, summary = read_results(out)
-    assert summary["missing"] == 0 and summary["done"] == 3
+    assert summary["missing"] == 0 and summary["done"] == 5
 
     again = run_batch(args, SLURM_CONF=cluster.conf)
-    assert again.returncode == 0 and "2 to do in 1 chunk of up to 2, 3 skipped" in again.stdout, again.stdout
+    assert again.returncode == 0 and "2 to do in 1 chunk of up to 2, 5 skipped" in again.stdout, again.stdout
     cluster.wait(submitted_job(again))
     assert run_batch(["--collect", out], SLURM_CONF=cluster.conf).returncode == 1
     records, summary = read_results(out)
-    assert summary["skipped"] == 3 and summary["failed"] == 2 and summary["missing"] == 0
+    assert summary["skipped"] == 5 and summary["failed"] == 2 and summary["missing"] == 0
 
 
 def test_plan_for_a_farm(library, tmp_path, capsys):
@@ -337,9 +343,9 @@ def test_plan_for_a_farm(library, tmp_path, capsys):
     assert batch.main(["batch", "--plan", "--chunk", "2", "--reduce", "--output", str(out), str(library)]) == 0
     printed = capsys.readouterr().out
     plan_path = out / batch.STATE / "plan.json"
-    assert "plan: %s" % plan_path in printed and "chunks: 3" in printed
+    assert "plan: %s" % plan_path in printed and "chunks: 4" in printed
     plan = batch.load_plan(plan_path)
-    assert plan["chunks"] == [[0, 1], [2, 3], [4]]
+    assert plan["chunks"] == [[0, 1], [2, 3], [4, 5], [6]]
     assert [f["input"] for f in plan["files"]] == sorted(EXPECTED)
     with open(out / batch.STATE / "slurm" / "chunk.sh") as f:
         assert '--run-chunk %s "$SLURM_ARRAY_TASK_ID"' % plan_path in f.read()
@@ -357,10 +363,15 @@ def test_plan_for_a_farm(library, tmp_path, capsys):
     ("reduce-method", ["--reduce", "--method", "SQUAD", "--output", "{OUT}", "{LIB}"], "not an option of --reduce"),
     ("jobs", ["--jobs", "0", "--output", "{OUT}", "{LIB}"], "--jobs 0"),
     ("collect-nothing", ["--collect", "{OUT}"], "no batch plan"),
+    ("same-output", ["--output", "{OUT}", "{TMP}/same"], "inputs spin.bvh and spin.fbx would both be saved as spin.blend"),
 ])
 def test_bad_arguments(library, tmp_path, capsys, name, args, fragment):
     """Checked by the coordinator before any worker starts: run in this process."""
-    args = [a.replace("{OUT}", str(tmp_path / "out")).replace("{LIB}", str(library)) for a in args]
+    (tmp_path / "same").mkdir()
+    for name in ("spin.bvh", "spin.fbx"):
+        (tmp_path / "same" / name).write_bytes(b"")
+    args = [a.replace("{OUT}", str(tmp_path / "out")).replace("{LIB}", str(library)).replace("{TMP}", str(tmp_path))
+            for a in args]
     assert batch.main(["batch"] + args) == 2
     captured = capsys.readouterr()
     errors = [line for line in captured.err.splitlines() if line.startswith("quatcurve: error:")]
