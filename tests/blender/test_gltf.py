@@ -273,6 +273,19 @@ def default_export(path):
     return GltfFile(str(path))
 
 
+def import_gltf(path):
+    """Blender's glTF importer. 3.4's uses np.bool, gone from numpy 1.24 (Debian 12's) to 2.0: the
+    alias of bool is given back for the call."""
+    patched = "bool" not in vars(np)
+    if patched:
+        np.bool = bool
+    try:
+        return bpy.ops.import_scene.gltf(filepath=str(path))
+    finally:
+        if patched:
+            del np.bool
+
+
 def fit_all(method, tolerance=FIT_TOLERANCE):
     """quatcurve.fit on every object, then on every pose bone (the operator, as an animator runs it)."""
     scene = bpy.context.scene
@@ -319,7 +332,7 @@ def test_export_plays_blenders_motion_with_few_keys(animated, tmp_path):
     assert not glob.glob(str(tmp_path / ".quatcurve-*"))
 
 
-@pytest.mark.parametrize("method", ["SQUAD", "TCB"])
+@pytest.mark.parametrize("method", ["SQUAD", "SPLINE_C2"])
 def test_fitted_targets_export_their_method(animated, tmp_path, method):
     """Fitted targets (AUTO): the file plays the fit's method (Blender plays it within FIT_TOLERANCE)."""
     fit_all(method)
@@ -365,7 +378,7 @@ def test_round_trip_through_blenders_importer_and_fit(animated, tmp_path):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = FPS, 1.0
-    assert bpy.ops.import_scene.gltf(filepath=str(out)) == {"FINISHED"}
+    assert import_gltf(out) == {"FINISHED"}
     objects = [o for o in scene.objects if o.animation_data and o.animation_data.action]
     rig = next(o for o in scene.objects if o.type == "ARMATURE")
     select_objects(*[o for o in objects if o.type != "ARMATURE"])
