@@ -179,14 +179,9 @@ def node_targets(doc, scene):
 def playback(target, frames):
     """(N, 4) the rotation (w, x, y, z) Blender plays from the target's rotation channels at `frames`:
     its active action's F-curves in its rotation mode evaluated by Blender (an unkeyed channel holds
-    its value)."""
-    mode = target.owner.rotation_mode
-    prop, count = fcurves.rotation_property(mode)
-    channels = fcurves.Channels.of(target.id_data)
-    found = channels.find_all(target.data_path(prop), count) if channels is not None else [None] * count
-    found = [f if f is not None and fcurves.key_count(f) else None for f in found]
-    values = targets.evaluate_channels(target, prop, found, frames)
-    return targets.channels_to_quats(mode, values, target.name, frames)
+    its value; with no active action, the NLA strips playing on it)."""
+    action = fcurves.active_action(target.id_data)
+    return targets.playback(target, action).quats(np.asarray(frames, dtype=np.float64))
 
 
 def reference(target, settings):
@@ -201,7 +196,7 @@ def reference(target, settings):
     fit_settings = fit.settings_of(record) if record is not None else fit.FitSettings()
     if settings.method != "AUTO":
         fit_settings.method = settings.method
-    eases = fit.refit_eases(keys, record)
+    eases = fit.refit_eases(keys, target, record)
     curve, _ = fit.curve_of(keys, fit_settings, *eases)
     how = "%s through %d keys%s" % (fit_settings.method, len(keys.frames), " (fitted)" if record is not None else "")
     return curve.sample, how

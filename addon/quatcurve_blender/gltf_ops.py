@@ -5,19 +5,13 @@ each target's curve (gltf.py)."""
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from . import gltf, native
+from . import fit, gltf, methods, native
 from .targets import TargetError
 
 METHOD_ITEMS = (
     ("AUTO", "Auto", "Fitted targets: their fit's method; others: what Blender plays"),
     ("BLENDER", "Blender's Playback", "What Blender plays, for every target"),
-    ("SLERP", "Slerp", "Slerp through each target's keys"),
-    ("NLERP", "Nlerp", "Nlerp through each target's keys"),
-    ("SQUAD", "Squad", "Squad through each target's keys"),
-    ("CATMULL_ROM", "Catmull-Rom", "Catmull-Rom through each target's keys"),
-    ("TCB", "TCB", "TCB through each target's keys (a fitted target's tension, continuity, bias)"),
-    ("SPLINE_C2", "C2 Spline", "C2 spline through each target's keys"),
-)
+) + methods.enum_items(fit.METHODS)
 
 
 class QUATCURVE_OT_export_gltf(bpy.types.Operator, ExportHelper):

@@ -61,12 +61,15 @@ def accessor(doc, binary, index):
 
 def spec_slerp(a, b, t):
     """glTF 2.0 Appendix C: a = arccos(|v_k·v_k+1|), s = sign(v_k·v_k+1),
-    v_t = sin(a(1-t))/sin(a)·v_k + s·sin(a·t)/sin(a)·v_k+1 (component order does not matter)."""
+    v_t = sin(a(1-t))/sin(a)·v_k + s·sin(a·t)/sin(a)·v_k+1 (component order does not matter), on
+    the keys normalized (float32 storage leaves |v| ≠ 1 by ~1e-7, enough to take |v_k·v_k+1| past 1
+    between close keys); keys closer than 1e-9 rad: the formula's limit, (1 − t)·v_k + s·t·v_k+1."""
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
     d = float(np.dot(a, b))
     s = 1.0 if d >= 0 else -1.0
     angle = math.acos(min(1.0, abs(d)))
     if angle < 1e-9:
-        return a
+        return (1 - t) * a + s * t * b
     return math.sin(angle * (1 - t)) / math.sin(angle) * a + s * math.sin(angle * t) / math.sin(angle) * b
 
 
@@ -156,7 +159,7 @@ def blender_worlds(names, times):
             obj = scene.objects[obj_name]
             m = obj.matrix_world @ obj.pose.bones[bone].matrix if bone else obj.matrix_world
             out[n].append(gltf_world(m))
-    scene.frame_set(FIRST)
+    scene.frame_set(int(times[0]))
     return out
 
 
@@ -178,15 +181,15 @@ def check_times(points=5):
 
 def exporter_frames(want, sampled, times):
     """`want` turned into each node's own axes: the exporter turns a joint's axes by a fixed rotation K
-    (glTF world = C·R·C⁻¹·K; K = 1 for objects), taken from the default export at the first time and
-    checked at every whole frame against it (within 0.001°)."""
+    (glTF world = C·R·C⁻¹·K; K = 1 for objects), taken from the exporter's own sampled file
+    (exact_export) at the first time and checked at every whole frame against it (within 0.001°)."""
     out = {}
     for n, rotations in want.items():
         k = rotations[0].inverted() @ sampled.world(n.partition("/")[2] or n, times[0] / FPS)
         out[n] = [r @ k for r in rotations]
-        for t, r in zip(times, out[n]):
-            if t == int(t):
-                assert angle(sampled.world(n.partition("/")[2] or n, t / FPS), r) < 1e-3, (n, t)
+    whole = [k for k, t in enumerate(times) if t == int(t)]
+    errors = file_error(sampled, {n: [r[k] for k in whole] for n, r in out.items()}, [times[k] for k in whole])
+    assert max(errors.values()) < 1e-3, errors
     return out
 
 
@@ -286,6 +289,17 @@ def import_gltf(path):
             del np.bool
 
 
+def exact_export(path):
+    """The exporter sampling every frame with no key removed, the active actions as one animation
+    (the options the running Blender has): the exporter's own node rotations at every frame."""
+    have = bpy.ops.export_scene.gltf.get_rna_type().properties
+    options = {k: v for k, v in dict(export_force_sampling=True, export_optimize_animation_size=False,
+                                     export_animation_mode="ACTIVE_ACTIONS", export_nla_strips=False).items()
+               if k in have}
+    assert bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", **options) == {"FINISHED"}
+    return GltfFile(str(path))
+
+
 def fit_all(method, tolerance=FIT_TOLERANCE):
     """quatcurve.fit on every object, then on every pose bone (the operator, as an animator runs it)."""
     scene = bpy.context.scene
@@ -306,7 +320,7 @@ def test_export_plays_blenders_motion_with_few_keys(animated, tmp_path):
     times = check_times()
     want = blender_worlds(NAMES, times)
     sampled = default_export(tmp_path / "default.glb")
-    want = exporter_frames(want, sampled, times)
+    want = exporter_frames(want, exact_export(tmp_path / "exact.glb"), times)
     out = tmp_path / "curve.glb"
     assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
     ours = GltfFile(str(out))
@@ -338,7 +352,7 @@ def test_fitted_targets_export_their_method(animated, tmp_path, method):
     fit_all(method)
     times = check_times(points=4)
     sampled = default_export(tmp_path / "default.glb")
-    want = exporter_frames(blender_worlds(NAMES, times), sampled, times)
+    want = exporter_frames(blender_worlds(NAMES, times), exact_export(tmp_path / "exact.glb"), times)
     out = tmp_path / "fitted.glb"
     assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
     ours = GltfFile(str(out))
@@ -356,12 +370,10 @@ def test_method_given_exports_that_curve(animated, tmp_path):
     once fitted, within FIT_TOLERANCE), not Blender's own interpolation."""
     out = tmp_path / "squad.glb"
     times = check_times(points=4)
-    sampled = default_export(tmp_path / "default.glb")
-    before = exporter_frames(blender_worlds(NAMES, times), sampled, times)
+    before = exporter_frames(blender_worlds(NAMES, times), exact_export(tmp_path / "exact.glb"), times)
     assert bpy.ops.quatcurve.export_gltf(filepath=str(out), method="SQUAD", tolerance=TOLERANCE) == {"FINISHED"}
     fit_all("SQUAD")
-    sampled = default_export(tmp_path / "default-fitted.glb")
-    want = exporter_frames(blender_worlds(NAMES, times), sampled, times)
+    want = exporter_frames(blender_worlds(NAMES, times), exact_export(tmp_path / "exact-fitted.glb"), times)
     errors = file_error(GltfFile(str(out)), want, times)
     assert max(errors.values()) <= TOLERANCE + FIT_TOLERANCE + 1e-4, errors
     # Blender's own Bezier interpolation is another curve: the file is not it.
@@ -464,3 +476,35 @@ def test_error_after_the_exporter_ran_leaves_the_old_file(animated, tmp_path):
     assert "Rig/Foot" in str(error.value) and "zero" in str(error.value) and "60" in str(error.value)
     assert out.read_bytes() == b"old"
     assert not glob.glob(str(tmp_path / ".quatcurve-*"))
+
+
+@pytest.mark.parametrize("clip", ["mocapbank.bvh", "freebvh.bvh"])
+def test_motion_capture_keys_and_size_against_the_default_export(scene, tmp_path, clip):
+    """Real motion capture (a key on every frame, every bone): every node's rotation in the file stays
+    within the tolerance of Blender's playback at every frame and 4 subframes (the first 60 frames),
+    with fewer rotation keys than the default export."""
+    import sys
+    from conftest import ROOT, SHARED
+    path = os.path.join(SHARED, "data", "mocap", clip)
+    if not os.path.exists(path):
+        pytest.skip("motion-capture clip %s not found (../shared/data/mocap/)" % path)
+    sys.path.insert(0, os.path.join(ROOT, "build_scripts"))
+    import demo_scene
+    rig = demo_scene.import_bvh(path)
+    first, last = (int(round(f)) for f in rig.animation_data.action.frame_range)
+    scene.frame_start, scene.frame_end = first, last
+    sampled = default_export(tmp_path / "default.glb")
+    exact = exact_export(tmp_path / "exact.glb")
+    out = tmp_path / "curve.glb"
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
+    ours = GltfFile(str(out))
+    times = [f + k / 5 for f in range(first, first + 60) for k in range(5)]
+    names = ["%s/%s" % (rig.name, pb.name) for pb in rig.pose.bones]
+    want = exporter_frames(blender_worlds(names, times), exact, times)
+    errors = file_error(ours, want, times)
+    print("\nmotion capture %s (%d bones, frames %d..%d), Blender %s: rotation keys %d (default export %d), "
+          "file %d bytes (default %d), max error %.4f° (frames %d..%d and 4 subframes each)" % (
+              clip, len(rig.pose.bones), first, last, bpy.app.version_string, ours.rotation_keys,
+              sampled.rotation_keys, ours.size, sampled.size, max(errors.values()), first, first + 59))
+    assert max(errors.values()) <= TOLERANCE + 1e-4, errors
+    assert ours.rotation_keys < sampled.rotation_keys

@@ -12,12 +12,13 @@ DEG = np.pi / 180.0
 
 
 def spec_slerp(a, b, t):
-    """glTF's slerp of unit 4-vectors a, b (any component order) at t."""
+    """glTF's slerp of 4-vectors a, b (any component order; normalized first) at t."""
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
     d = float(np.dot(a, b))
     s = 1.0 if d >= 0 else -1.0
     angle = np.arccos(min(1.0, abs(d)))
     if angle < 1e-12:
-        return a
+        return (1 - t) * a + s * t * b
     return np.sin(angle * (1 - t)) / np.sin(angle) * a + s * np.sin(angle * t) / np.sin(angle) * b
 
 
