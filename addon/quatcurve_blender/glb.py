@@ -33,6 +33,7 @@ class Document:
     def __init__(self, json_doc, views):
         self.json = json_doc
         self.views = views
+        self._packed = None  # the buffer view add_accessor(packed=True) appends to
 
     def accessor_array(self, index):
         """Accessor `index` (float32, tightly packed) as a (count, components) float64 array."""
@@ -53,13 +54,21 @@ class Document:
         self.views.append(data)
         return len(self.views) - 1
 
-    def set_accessor(self, index, values, kind, bounds=False, view=None):
+    def set_accessor(self, index, values, kind, bounds=False, view=None, packed=False):
         """Accessor `index` holds `values` (float32, shape (count, components of `kind`)), in buffer
-        view `view` (its content replaced) or a new one; min/max written when `bounds` (required for
-        animation inputs), removed otherwise."""
+        view `view` (its content replaced), appended to the one view that packed accessors share
+        (`packed`: one view entry for many small accessors), or in a new view; min/max (required for
+        animation inputs) written when `bounds`, removed otherwise."""
         values = np.ascontiguousarray(values, dtype="<f4").reshape(len(values), COMPONENTS[kind])
         data = values.tobytes()
-        if view is None:
+        offset = 0
+        if packed:
+            if self._packed is None:
+                self._packed = self._new_view(b"")
+            view, offset = self._packed, len(self.views[self._packed])  # float32: 4-byte aligned
+            self.views[view] += data
+            self.json["bufferViews"][view]["byteLength"] = len(self.views[view])
+        elif view is None:
             view = self._new_view(data)
         else:
             self.views[view] = data
@@ -71,15 +80,17 @@ class Document:
         for key in ("byteOffset", "normalized", "sparse", "min", "max"):
             acc.pop(key, None)
         acc.update(bufferView=view, componentType=FLOAT, count=len(values), type=kind)
-        if bounds:
-            acc["min"] = [float(x) for x in values.min(axis=0)]
-            acc["max"] = [float(x) for x in values.max(axis=0)]
+        if offset:
+            acc["byteOffset"] = offset
+        if bounds:  # the shortest decimal of each float32 (reads back as the same float32)
+            acc["min"] = [float(str(x)) for x in values.min(axis=0)]
+            acc["max"] = [float(str(x)) for x in values.max(axis=0)]
         return index
 
-    def add_accessor(self, values, kind, bounds=False):
-        """A new accessor holding `values` in a new buffer view; returns its index."""
+    def add_accessor(self, values, kind, bounds=False, packed=False):
+        """A new accessor holding `values` in a new buffer view (or the packed one); returns its index."""
         self.json.setdefault("accessors", []).append({})
-        return self.set_accessor(len(self.json["accessors"]) - 1, values, kind, bounds)
+        return self.set_accessor(len(self.json["accessors"]) - 1, values, kind, bounds, packed=packed)
 
 
 def read(path):

@@ -294,19 +294,39 @@ def rewrite(doc, scene, settings, fps):
             times, quats, error, how = planned
             results.append(SamplerResult(anim.get("name", ""), name, target.name, count, len(times), error, how))
             plans.append((sampler, times, quats))
+    # Key times already stored (the exporter's inputs, and ours as they are written): samplers with
+    # the same times share one input accessor (still motion keeps its first and last sample).
+    inputs = {}
+    for anim in doc.json.get("animations", []):
+        for sampler in anim["samplers"]:
+            try:
+                inputs.setdefault(doc.accessor_array(sampler["input"]).astype("<f4").tobytes(), sampler["input"])
+            except glb.GlbError:
+                pass
     for sampler, times, quats in plans:
         sampler["interpolation"] = "LINEAR"
+        known = inputs.get(np.asarray(times, dtype="<f4").tobytes())
+        if known is not None:
+            users[sampler["input"]] -= 1
+            sampler["input"] = known
+            users[known] = users.get(known, 0) + 1
         for key, values, kind, bounds in (("input", times, "SCALAR", True), ("output", quats, "VEC4", False)):
+            if key == "input" and known is not None:
+                continue
             old = sampler[key]
             users[old] -= 1
             view = doc.json["accessors"][old].get("bufferView")
             if users[old] == 0:  # this sampler was its last user: the accessor (and its own view) is reused
                 users[old] = 1
+                for stale in [b for b, i in inputs.items() if i == old]:  # its old times are gone
+                    del inputs[stale]
                 own = view if view is not None and view_users.get(view) == 1 else None
-                doc.set_accessor(old, values, kind, bounds=bounds, view=own)
+                doc.set_accessor(old, values, kind, bounds=bounds, view=own, packed=own is None)
             else:
-                sampler[key] = doc.add_accessor(values, kind, bounds=bounds)
+                sampler[key] = doc.add_accessor(values, kind, bounds=bounds, packed=True)
                 users[sampler[key]] = 1
+            if key == "input":
+                inputs[np.asarray(values, dtype="<f4").tobytes()] = sampler[key]
     return results
 
 
