@@ -59,7 +59,7 @@ MAX_SAMPLES = 2_000_000  # per target; refused before sampling
 REPORT_FORMAT = "quatcurve-compare"
 REPORT_VERSION = 1
 
-# The recommendation (see recommend and README "Compare"):
+# The recommendation (see recommend and docs/compare.md):
 # smooth at the keys: the largest angular velocity jump at a key is at most this fraction of the mean
 # keyed speed (the keyed arcs over the keyed frames);
 SMOOTH_JUMP_FRACTION = 0.1
@@ -433,7 +433,7 @@ def _compress_frames(frames, limit=50):
 
 
 def recommend(comparison):
-    """The recommendation for one target (README "Compare", "The recommendation"):
+    """The recommendation for one target (docs/compare.md, "The recommendation"):
 
     1. eligible: the engine methods that pass through the keys (within KEY_TOLERANCE_DEG of SLERP
        at every key frame), obey the path rule in every key segment, do not drift where the keys
