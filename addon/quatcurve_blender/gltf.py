@@ -6,11 +6,11 @@ specification) that stay within the tolerance of the target's curve.
     print(result.summary())
 
 The curve of each target (object or pose bone):
-  AUTO     a fitted target: its fit's method (and settings, eases) through the animator's keys; any
+  AUTO     a fitted target: its fit's method (and settings, eases, turns) through the animator's keys; any
            other target: what Blender plays (its rotation F-curves evaluated by Blender).
   BLENDER  what Blender plays, for every target.
   a method (SLERP, SQUAD, ...): that method through the target's keys (a fitted target keeps its fit's
-           other settings and eases).
+           other settings, eases and turns).
 
 The glTF node's rotation is not the target's channel rotation: the exporter converts axes (Y up) and
 expresses bones relative to their parent's rest pose. For a node whose rotation comes from its
@@ -196,8 +196,10 @@ def reference(target, settings):
     fit_settings = fit.settings_of(record) if record is not None else fit.FitSettings()
     if settings.method != "AUTO":
         fit_settings.method = settings.method
-    eases = fit.refit_eases(keys, target, record)
-    curve, _ = fit.curve_of(keys, fit_settings, *eases)
+    ease_in, ease_out, turns = fit.refit_eases(keys, target, record)
+    if keys.mode != "QUATERNION":
+        turns = None  # as the fit: Euler and axis-angle keys carry their turns in their angles
+    curve, _ = fit.curve_of(keys, fit_settings, ease_in, ease_out, turns)
     how = "%s through %d keys%s" % (fit_settings.method, len(keys.frames), " (fitted)" if record is not None else "")
     return curve.sample, how
 

@@ -508,3 +508,37 @@ def test_motion_capture_keys_and_size_against_the_default_export(scene, tmp_path
               sampled.rotation_keys, ours.size, sampled.size, max(errors.values()), first, first + 59))
     assert max(errors.values()) <= TOLERANCE + 1e-4, errors
     assert ours.rotation_keys < sampled.rotation_keys and ours.size < sampled.size
+
+
+def test_fitted_spin_with_turns_plays_the_methods_curve(scene, tmp_path):
+    """A fitted quaternion object whose first segment turns twice more (quatcurve.set_turns): the file
+    plays the method's own curve (the native Curve with the same keys, options and turns) within the
+    tolerance at every frame and 4 subframes, spins included (slerp needs a key every < 180°)."""
+    from quatcurve_blender import fcurves, fit, native
+    scene.render.fps, scene.render.fps_base = FPS, 1.0
+    keys = [(1, (1.0, 0.0, 0.0, 0.0)), (13, (math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))), (21, (0.5, 0.5, 0.5, 0.5))]
+    obj = bpy.data.objects.new("Spin", None)
+    scene.collection.objects.link(obj)
+    obj.rotation_mode = "QUATERNION"
+    key(obj, "rotation_quaternion", keys, interpolation="BEZIER")
+    select_objects(obj)
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=FIT_TOLERANCE) == {"FINISHED"}
+    for curve in fcurves.Channels.of(obj).find_all("rotation_quaternion", 4):
+        for p in curve.keyframe_points:
+            p.select_control_point = p.select_left_handle = p.select_right_handle = p.co[0] == 1
+    assert bpy.ops.quatcurve.set_turns(turns=2) == {"FINISHED"}
+    out = tmp_path / "spin.glb"
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
+    frames = np.array([f for f, _ in keys], float)
+    options = fit.curve_options(fit.FitSettings(method="SQUAD"), turns=np.array([2.0, 0.0, 0.0]))
+    curve = native.require().Curve.from_channels(frames, np.array([v for _, v in keys]), "QUATERNION", "SQUAD",
+                                                 **options)
+    ours = GltfFile(str(out))
+    node = ours.node("Spin")
+    times = [f + k / 5 for f in range(1, 21) for k in range(5)] + [21]
+    want = [C @ Quaternion(q) @ C.inverted() for q in curve.sample(np.array(times))]
+    worst = max(angle(ours.local(node, t / FPS), w) for t, w in zip(times, want))
+    print("\nSQUAD with 2 turns, Blender %s: %d rotation keys, max error %.4f° against the native curve"
+          % (bpy.app.version_string, ours.rotation_keys, worst))
+    assert worst <= TOLERANCE + 1e-4
+    assert ours.rotation_keys >= 6  # 810° in the first segment: at least 5 slerp segments
