@@ -31,6 +31,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
+import bpy
 import numpy as np
 
 from . import fcurves, fit, native, targets
@@ -184,13 +185,38 @@ def _has_keys(channels, path, count):
         c is not None and fcurves.key_count(c) for c in channels.find_all(path, count))
 
 
-def _action_slot(target, action, path, count):
-    """(Channels, slot identifier, note) of `target` in `action` for `path`: the slot the target plays
-    the action through (active or NLA); else (≥ 4.4) the slot named like the target's, or the only slot
-    animating `path`. (None, '', note) when no slot animates it, or when that is ambiguous."""
+def players():
+    """{(action pointer, slot identifier or ''): {object names}}: who plays which action (as its active
+    action or in an NLA strip), through which slot (≥ 4.4; '' before)."""
+    found = {}
+    for obj in bpy.data.objects:
+        anim = obj.animation_data
+        if anim is None:
+            continue
+        uses = [(anim.action, getattr(anim, "action_slot", None))] if anim.action is not None else []
+        uses += [(strip.action, getattr(strip, "action_slot", None)) for track in anim.nla_tracks
+                 for strip in track.strips if strip.action is not None]
+        for action, slot in uses:
+            key = (action.as_pointer(), slot.identifier if fcurves.SLOTTED and slot is not None else "")
+            found.setdefault(key, set()).add(obj.name)
+    return found
+
+
+def _action_slot(target, action, path, count, played_by):
+    """(Channels, slot identifier, note) of `target` in `action` for `path`, or (None, '', note):
+    - the slot the target plays the action through (active or NLA), if it animates `path`;
+    - else a slot no other object plays: the one named like the target's slot, or — for a pose bone,
+      whose path names the bone — the only such slot animating `path` (an action of a motion library
+      made for another copy of the rig). An object's path ('rotation_euler') names no object, so an
+      unplayed action is taken for an object only through a slot named like its own.
+    `played_by`: players()."""
     id_data = target.id_data
+    mine = id_data.name
     if not fcurves.SLOTTED:
-        if getattr(action, "id_root", "OBJECT") not in ("OBJECT", ""):
+        users = played_by.get((action.as_pointer(), ""), set())
+        if getattr(action, "id_root", "OBJECT") not in ("OBJECT", "") or (users and mine not in users):
+            return None, "", ""
+        if not users and target.bone is None:
             return None, "", ""
         channels = fcurves.Channels.of_slot(action)
         return (channels, "", "") if _has_keys(channels, path, count) else (None, "", "")
@@ -203,12 +229,16 @@ def _action_slot(target, action, path, count):
     for slot in fcurves.action_slots(action):
         if getattr(slot, "target_id_type", "OBJECT") not in ("OBJECT", "UNSPECIFIED"):
             continue
+        if played_by.get((action.as_pointer(), slot.identifier)):
+            continue  # another object's animation
         channels = fcurves.Channels.of_slot(action, slot)
         if _has_keys(channels, path, count):
             found.append((slot, channels))
     exact = [f for f in found if f[0].identifier == identifier]
     if exact:
         return exact[0][1], exact[0][0].identifier, ""
+    if target.bone is None:
+        return None, "", ""
     if len(found) == 1:
         return found[0][1], found[0][0].identifier, ""
     if found:
@@ -218,12 +248,10 @@ def _action_slot(target, action, path, count):
     return None, "", ""
 
 
-def target_actions(target, which, mode):
+def target_actions(target, which, mode, played_by):
     """[(action, Channels, slot identifier)] to convert for `target` (rotation mode `mode`), and notes.
     ACTIVE: its active action (no active action but NLA strips: ConvertError). ALL: every action in the
-    file animating the mode's rotation channels of the target."""
-    import bpy
-
+    file animating the mode's rotation channels of the target (see _action_slot). played_by: players()."""
     prop, count = fcurves.rotation_property(mode)
     path = target.data_path(prop)
     notes = []
@@ -235,7 +263,7 @@ def target_actions(target, which, mode):
         channels = fcurves.Channels.of(target.id_data, action) if action is not None else None
         others = 0
         for other in bpy.data.actions:
-            if other != action and _action_slot(target, other, path, count)[0] is not None:
+            if other != action and _action_slot(target, other, path, count, played_by)[0] is not None:
                 others += 1
         if others:
             notes.append("%s: %d other action%s animate%s its %s: %s no longer play%s as before in the new mode "
@@ -248,7 +276,7 @@ def target_actions(target, which, mode):
         return [(action, channels, fcurves.slot_identifier(target.id_data) or "")], notes
     found = []
     for action in sorted(bpy.data.actions, key=lambda a: a.name):
-        channels, slot, note = _action_slot(target, action, path, count)
+        channels, slot, note = _action_slot(target, action, path, count, played_by)
         if note:
             notes.append(note)
         if channels is not None:
@@ -401,6 +429,7 @@ def convert(found, settings):
     result = ConvertResult(settings)
     mode = settings.rotation_mode
     work = []
+    played_by = players()
     with fcurves.read_cache():
         for target in found:
             try:
@@ -419,7 +448,7 @@ def convert(found, settings):
                     targets.refuse_drivers(target, prop, count)
                 except TargetError as error:
                     raise ConvertError(str(error)) from None
-            pairs, row.notes = target_actions(target, settings.actions, source_mode)
+            pairs, row.notes = target_actions(target, settings.actions, source_mode, played_by)
             sources = []
             for action, channels, slot in pairs:
                 source = read_source(target, action, channels, slot, source_mode, settings.subframes)

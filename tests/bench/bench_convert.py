@@ -150,7 +150,7 @@ def run_scene(label, build, mode, folder):
     bpy.ops.wm.open_mainfile(filepath=path)
     theirs_line = "Rigify's pose.convert_rotation is not available"
     if enable_rigify():
-        rig = bpy.data.objects[rig.name] if False else next(o for o in bpy.data.objects if o.type == "ARMATURE")
+        rig = next(o for o in bpy.data.objects if o.type == "ARMATURE")
         bpy.context.view_layer.objects.active = rig
         bpy.ops.object.mode_set(mode="POSE")
         select_all_bones(rig, names)

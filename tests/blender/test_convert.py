@@ -189,6 +189,18 @@ def test_active_only_names_the_other_actions(scene):
     assert channel_keys(pb, "rotation_euler", other)[0] is not None  # the other action is left alone
 
 
+def test_all_leaves_other_objects_actions_alone(scene):
+    """Objects share the path 'rotation_euler': ALL on one object never converts another's action."""
+    one, two = add_empty("One", "XYZ"), add_empty("Two", "XYZ")
+    for obj in (one, two):
+        key(obj, "rotation_euler", [(1, (0, 0, 0)), (10, (0, 90, 0))], interpolation="BEZIER", degrees=True)
+    state = fcurves.action_digest(fcurves.active_action(two))
+    select_objects(one)
+    assert bpy.ops.quatcurve.convert(rotation_mode="QUATERNION", actions="ALL") == {"FINISHED"}
+    assert one.rotation_mode == "QUATERNION" and two.rotation_mode == "XYZ"
+    assert fcurves.action_digest(fcurves.active_action(two)) == state
+
+
 def refusal_scene():
     obj = add_empty("Eul", "XYZ")
     key(obj, "rotation_euler", EULER_SPIN, interpolation="BEZIER", degrees=True)
