@@ -218,9 +218,10 @@ def fit_settings(args):
 
 
 # Options that mean nothing to a conversion (argparse defaults: what is not given).
-NOT_FOR_CONVERT = NOT_FOR_FIT + (("fit", False, "--fit"), ("method", "SLERP", "--method"), ("tension", 0.0, "--tension"),
-                                 ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"),
-                                 ("shortest_path", True, "--no-shortest-path"), ("clamped", True, "--no-clamp"))
+NOT_FOR_CONVERT = NOT_FOR_FIT + (
+    ("fit", False, "--fit"), ("method", "SLERP", "--method"), ("tension", 0.0, "--tension"),
+    ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"), ("shortest_path", True, "--no-shortest-path"),
+    ("clamped", True, "--no-clamp"))
 
 
 def convert_settings(args):
@@ -228,7 +229,8 @@ def convert_settings(args):
     convert's own check; options of the other tasks are a UsageError."""
     given = [flag for name, default, flag in NOT_FOR_CONVERT if getattr(args, name) != default]
     if given:
-        raise UsageError("%s: not an option of --convert (it converts the keys in their own actions)" % ", ".join(given))
+        raise UsageError("%s: not an option of --convert (it converts the keys in their own actions)"
+                         % ", ".join(given))
     defaults = convert.ConvertSettings()
     settings = convert.ConvertSettings(
         rotation_mode=args.convert, actions="ALL" if args.all_actions else "ACTIVE",

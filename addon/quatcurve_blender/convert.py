@@ -180,6 +180,20 @@ def read_source(target, action, channels, slot, mode, subframes):
                   times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys)
 
 
+def refuse_drivers(target, modes):
+    """A driver on a rotation channel of the old or the new mode plays instead of any keys: refused."""
+    anim = target.id_data.animation_data
+    if anim is None:
+        return
+    for mode in modes:
+        prop, count = fcurves.rotation_property(mode)
+        path = target.data_path(prop)
+        for i in range(count):
+            if anim.drivers.find(path, index=i) is not None:
+                raise ConvertError("%s: %s[%d] is driven by a driver, which Blender plays instead of keys: "
+                                   "remove the driver first" % (target.name, prop, i))
+
+
 def _has_keys(channels, path, count):
     return channels is not None and any(
         c is not None and fcurves.key_count(c) for c in channels.find_all(path, count))
@@ -442,18 +456,18 @@ def convert(found, settings):
             if source_mode == mode:
                 row.skipped = "already %s: left as it is" % mode
                 continue
-            for checked in (source_mode, mode):
-                prop, count = fcurves.rotation_property(checked)
-                try:
-                    targets.refuse_drivers(target, prop, count)
-                except TargetError as error:
-                    raise ConvertError(str(error)) from None
+            refuse_drivers(target, (source_mode, mode))
             pairs, row.notes = target_actions(target, settings.actions, source_mode, played_by)
             sources = []
+            new_prop, new_count = fcurves.rotation_property(mode)
             for action, channels, slot in pairs:
                 source = read_source(target, action, channels, slot, source_mode, settings.subframes)
-                if source is not None:
-                    sources.append(source)
+                if source is None:
+                    continue
+                sources.append(source)
+                if new_prop != source.prop and _has_keys(channels, target.data_path(new_prop), new_count):
+                    row.notes.append("%s: %s had keys that did not play in %s: replaced by the converted ones"
+                                     % (_where(target, action), new_prop, source_mode))
             work.append((target, row, sources))
     planned = parallel_map(lambda s: plan(s, settings), [s for _, _, sources in work for s in sources])
     plans = iter(planned)
