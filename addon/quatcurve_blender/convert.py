@@ -35,7 +35,7 @@ import bpy
 import numpy as np
 
 from . import fcurves, fit, native, targets
-from .reduce import parallel_map
+from .workers import parallel_map
 from .targets import TargetError
 
 MODES = ("QUATERNION",) + fcurves.EULER_ORDERS + ("AXIS_ANGLE",)
@@ -383,8 +383,8 @@ def _signature(plan, path):
             types = ch_types[mine].astype(np.int64)
         columns.append(ch_values[mine].astype(np.float32).astype(np.float64))
     values = np.stack(columns, axis=1)
-    keys = fit.AnimatorKeys(plan.source.target, plan.mode, plan.prop, path, plan.source.action, [], frames, values,
-                            types, np.zeros((len(columns), len(frames)), dtype=bool), plan.source.name)
+    keys = fit.AnimatorKeys(plan.source.name, plan.mode, plan.prop, path, frames, values, types,
+                            np.zeros((len(columns), len(frames)), dtype=bool))
     return keys.signature()
 
 
