@@ -152,10 +152,7 @@ def read_source(target, action, channels, slot, mode, subframes):
     animator = np.unique(np.concatenate(animator))
     forced_frames = np.union1d(animator, keyed[[0, -1]])
     times = qc.sample_frames(keyed, int(subframes))
-    values = np.empty((len(times), count))
-    current = getattr(target.owner, prop)
-    for c, curve in enumerate(curves):
-        values[:, c] = fcurves.evaluate(curve, times) if curve is not None else current[c]
+    values = targets.evaluate_channels(target, prop, curves, times)
     bad = ~np.isfinite(values)
     if bad.any():
         k, c = np.argwhere(bad)[0]

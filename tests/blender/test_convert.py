@@ -160,20 +160,40 @@ def test_all_actions_of_a_rig(scene):
             key(pb, "rotation_quaternion", [(f, tuple(v)) for f, v in zip((1, 11, 21 + 3 * i, 40), q)],
                 interpolation="BEZIER")
         actions.append(action)
+    # A clip made for another copy of the rig (its object since deleted): its own slot, played by nobody.
+    copy = add_rig("Copy", bones=("B0", "B1"), rotation_mode="QUATERNION")
+    fcurves.new_action(copy, "ClipOfCopy")
+    for pb in copy.pose.bones:
+        key(pb, "rotation_quaternion", [(1, (1, 0, 0, 0)), (9, (0.5, 0.5, 0.5, 0.5)), (30, (0, 0, 1, 0))],
+            interpolation="BEZIER")
+    actions.append(fcurves.active_action(copy))
+    actions[-1].use_fake_user = True
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bpy.data.objects.remove(copy)
+    select_objects(rig)
+    bpy.ops.object.mode_set(mode="POSE")
     owners = {"B0": rig.pose.bones["B0"], "B1": rig.pose.bones["B1"]}
+
+    def play(action):  # each action through its own (only) slot
+        rig.animation_data.action = action
+        if fcurves.SLOTTED:
+            rig.animation_data.action_slot = action.slots[0]
+        return fcurves.Channels.of_slot(action, action.slots[0] if fcurves.SLOTTED else None)
+
     before = []
     for action in actions:
-        fcurves.assign_action(rig, action)
+        play(action)
         before.append(played(owners))
-    fcurves.assign_action(rig, actions[0])
+    play(actions[0])
     select_bones(rig, {"B0", "B1"})
     bpy.ops.quatcurve.convert(rotation_mode="ZXY", tolerance=TOL, actions="ALL")
     for action, was in zip(actions, before):
-        fcurves.assign_action(rig, action)
+        channels = play(action)
         now = played(owners)
-        for name in owners:
-            assert owners[name].rotation_mode == "ZXY"
-            assert channel_keys(owners[name], "rotation_quaternion", action) == [None] * 4, (action.name, name)
+        for name, owner in owners.items():
+            assert owner.rotation_mode == "ZXY"
+            assert channels.find_all(owner.path_from_id("rotation_quaternion"), 4) == [None] * 4, (action.name, name)
+            assert all(c is not None for c in channels.find_all(owner.path_from_id("rotation_euler"), 3))
             err = np.degrees(angles_between(now[name], was[name]))
             assert err.max() <= TOL + 1e-4, "%s %s: %.5f°" % (action.name, name, err.max())
 
