@@ -191,6 +191,24 @@ def refuse_drivers(target, modes):
                                    "remove the driver first" % (target.name, prop, i))
 
 
+def refuse_shared(work, played_by):
+    """An action's channels played by another object (the same action and slot) change for it too: that
+    object must be converted with the target (the same bone of it, for a pose bone), else refused."""
+    converting = {(target.id_data.name, target.bone) for target, _, sources in work if sources}
+    for target, _, sources in work:
+        for source in sources:
+            for other in sorted(played_by.get((source.action.as_pointer(), source.slot), ())):
+                if other == target.id_data.name or (other, target.bone) in converting:
+                    continue
+                obj = bpy.data.objects.get(other)
+                if target.bone is not None and (obj is None or obj.pose is None or target.bone not in obj.pose.bones):
+                    continue
+                raise ConvertError("%s: %s is also played by '%s'%s, which is not being converted: select it too, "
+                                   "or give it an action of its own" % (
+                                       _where(target, source.action), source.prop, other,
+                                       " (bone '%s')" % target.bone if target.bone is not None else ""))
+
+
 def _has_keys(channels, path, count):
     return channels is not None and any(
         c is not None and fcurves.key_count(c) for c in channels.find_all(path, count))
@@ -466,6 +484,7 @@ def convert(found, settings):
                     row.notes.append("%s: %s had keys that did not play in %s: replaced by the converted ones"
                                      % (_where(target, action), new_prop, source_mode))
             work.append((target, row, sources))
+    refuse_shared(work, played_by)
     planned = parallel_map(lambda s: plan(s, settings), [s for _, _, sources in work for s in sources])
     plans = iter(planned)
     for target, row, sources in work:

@@ -222,6 +222,26 @@ def test_all_leaves_other_objects_actions_alone(scene):
     assert fcurves.action_digest(fcurves.active_action(two)) == state
 
 
+def test_an_action_shared_with_an_object_not_converted_is_refused(scene):
+    one, two = add_empty("One", "XYZ"), add_empty("Two", "XYZ")
+    key(one, "rotation_euler", [(1, (0, 0, 0)), (10, (0, 90, 0))], interpolation="BEZIER", degrees=True)
+    fcurves.assign_action(two, fcurves.active_action(one))
+    if fcurves.SLOTTED:
+        two.animation_data.action_slot = one.animation_data.action_slot
+    select_objects(one)
+    state = file_state()
+    with pytest.raises(RuntimeError, match="One \\(action 'OneAction'\\): rotation_euler is also played by 'Two'"):
+        bpy.ops.quatcurve.convert(rotation_mode="QUATERNION")
+    assert file_state() == state
+    select_objects(one, two)  # both: the shared channels convert once, both play them in the new mode
+    before = played({"One": one, "Two": two})
+    assert bpy.ops.quatcurve.convert(rotation_mode="QUATERNION") == {"FINISHED"}
+    after = played({"One": one, "Two": two})
+    assert one.rotation_mode == two.rotation_mode == "QUATERNION"
+    for name in before:
+        assert np.degrees(angles_between(after[name], before[name])).max() <= TOL + 1e-4
+
+
 def refusal_scene():
     obj = add_empty("Eul", "XYZ")
     key(obj, "rotation_euler", EULER_SPIN, interpolation="BEZIER", degrees=True)
