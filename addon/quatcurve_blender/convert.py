@@ -35,7 +35,7 @@ import bpy
 import numpy as np
 
 from . import fcurves, fit, native, targets
-from .workers import parallel_map
+from .workers import parallel_imap
 from .targets import TargetError
 
 MODES = ("QUATERNION",) + fcurves.EULER_ORDERS + ("AXIS_ANGLE",)
@@ -456,36 +456,12 @@ def convert(found, settings):
     check_settings(settings)
     start = time.perf_counter()
     result = ConvertResult(settings)
-    mode = settings.rotation_mode
     work = []
     played_by = players()
     with fcurves.read_cache():
-        for target in found:
-            try:
-                targets.check_editable(target, new_action=False)
-            except TargetError as error:
-                raise ConvertError(str(error)) from None
-            source_mode = target.owner.rotation_mode
-            row = TargetResult(target.name, source_mode, mode)
-            result.targets.append(row)
-            if source_mode == mode:
-                row.skipped = "already %s: left as it is" % mode
-                continue
-            refuse_drivers(target, (source_mode, mode))
-            pairs, row.notes = target_actions(target, settings.actions, source_mode, played_by)
-            sources = []
-            new_prop, new_count = fcurves.rotation_property(mode)
-            for action, channels, slot in pairs:
-                source = read_source(target, action, channels, slot, source_mode, settings.subframes)
-                if source is None:
-                    continue
-                sources.append(source)
-                if new_prop != source.prop and _has_keys(channels, target.data_path(new_prop), new_count):
-                    row.notes.append("%s: %s had keys that did not play in %s: replaced by the converted ones"
-                                     % (_where(target, action), new_prop, source_mode))
-            work.append((target, row, sources))
+        # The main thread reads source after source while worker threads plan the ones read already.
+        planned = list(parallel_imap(lambda s: plan(s, settings), _read(found, settings, played_by, result, work)))
     refuse_shared(work, played_by)
-    planned = parallel_map(lambda s: plan(s, settings), [s for _, _, sources in work for s in sources])
     plans = iter(planned)
     for target, row, sources in work:
         for source in sources:
@@ -496,7 +472,38 @@ def convert(found, settings):
     for target, row, sources in work:
         for _ in sources:
             write_plan(next(plans))
-        target.owner.rotation_mode = mode
+        target.owner.rotation_mode = settings.rotation_mode
         target.id_data.update_tag(refresh={"TIME"})
     result.seconds = time.perf_counter() - start
     return result
+
+
+def _read(found, settings, played_by, result, work):
+    """Yields the Source of every target and action to convert (main thread), noting per target in
+    `result` and `work` (target, TargetResult, [Source])."""
+    mode = settings.rotation_mode
+    new_prop, new_count = fcurves.rotation_property(mode)
+    for target in found:
+        try:
+            targets.check_editable(target, new_action=False)
+        except TargetError as error:
+            raise ConvertError(str(error)) from None
+        source_mode = target.owner.rotation_mode
+        row = TargetResult(target.name, source_mode, mode)
+        result.targets.append(row)
+        if source_mode == mode:
+            row.skipped = "already %s: left as it is" % mode
+            continue
+        refuse_drivers(target, (source_mode, mode))
+        pairs, row.notes = target_actions(target, settings.actions, source_mode, played_by)
+        sources = []
+        work.append((target, row, sources))
+        for action, channels, slot in pairs:
+            source = read_source(target, action, channels, slot, source_mode, settings.subframes)
+            if source is None:
+                continue
+            if new_prop != source.prop and _has_keys(channels, target.data_path(new_prop), new_count):
+                row.notes.append("%s: %s had keys that did not play in %s: replaced by the converted ones"
+                                 % (_where(target, action), new_prop, source_mode))
+            sources.append(source)
+            yield source

@@ -117,6 +117,10 @@ def test_every_mode_plays_as_before_in_a_fresh_blender(scene, mode, tmp_path):
         if old_prop != new_prop:
             assert all(c is None for c in channel_keys(owner, old_prop)), "%s: old channels left" % name
         new = channel_keys(owner)
+        # in a group (Rigify's converter, for one, finds a bone's channels by group)
+        groups = {c.group.name if c.group else None
+                  for c in fcurves.Channels.of(owner.id_data).find_all(owner.path_from_id(new_prop), len(new))}
+        assert None not in groups and len(groups) == 1, (name, groups)
         animator = np.unique(np.concatenate([k[0] for k in source_keys[name] if k is not None]))
         for frames, values, types, selected in new:
             generated = types == fit.KEY_TYPE_GENERATED
