@@ -277,6 +277,28 @@ def test_bad_input_is_refused_and_nothing_changes(scene, fault):
     assert obj.rotation_mode == "XYZ"
 
 
+def test_zero_quaternion_is_refused_naming_the_frame(scene):
+    obj = add_empty("Quat", "QUATERNION")
+    key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 0, 0, 0)), (13, (0, 0, 1, 0))])
+    select_objects(obj)
+    state = file_state()
+    with pytest.raises(RuntimeError, match="Quat \\(action 'QuatAction'\\): the quaternion is zero at frame 7"):
+        bpy.ops.quatcurve.convert(rotation_mode="XYZ")
+    assert file_state() == state
+
+
+def test_keys_of_the_new_property_that_did_not_play_are_replaced_and_named(scene):
+    obj = add_empty("Eul", "XYZ")
+    key(obj, "rotation_euler", [(1, (0, 0, 0)), (10, (0, 90, 0))], interpolation="BEZIER", degrees=True)
+    key(obj, "rotation_quaternion", [(1, (0, 1, 0, 0)), (30, (0, 0, 1, 0))])  # not played in XYZ
+    select_objects(obj)
+    before = played({"Eul": obj})["Eul"]
+    result = convert.convert([Target(obj)], convert.ConvertSettings("QUATERNION"))
+    assert any("rotation_quaternion had keys that did not play in XYZ" in n for n in result.lines()), result.lines()
+    assert [len(k[0]) for k in channel_keys(obj)] and all(k[0][-1] == 10 for k in channel_keys(obj))
+    assert np.degrees(angles_between(played({"Eul": obj})["Eul"], before)).max() <= TOL + 1e-4
+
+
 @pytest.mark.parametrize("what", ["object", "override", "action"])
 def test_library_data_is_refused(scene, tmp_path, what):
     """A linked object, an override, and a local object playing a linked action (refused with 'ACTIVE'
