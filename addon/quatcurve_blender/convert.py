@@ -77,15 +77,18 @@ def family(mode):
 
 @dataclass(eq=False)
 class Source:
-    """One target's rotation in one action, read: plain arrays, and where the keys live.
+    """One target's rotation in one action, read. Planning uses only the plain arrays and strings (it
+    runs on worker threads); target, action and channels (the Channels holding the keys) are for the
+    writing, on the main thread.
 
-    times (N,): the samples (every 1/subframes frame over the keyed range, and every key); quats (N, 4):
+    where: 'target (action …)' for messages; times (N,): the samples (every 1/subframes frame over the keyed range, and every key); quats (N, 4):
     the rotation Blender plays there; first (C,): the source channels' values at times[0]; forced
     (F,): indices in times of the frames that get a key in the new mode (every animator key frame
     and both ends of the range); types (F,) and selected (F,): their key types and selection;
     source_keys: how many keys the old channels held."""
     target: object
     name: str
+    where: str
     action: object
     channels: object
     slot: str
@@ -100,8 +103,6 @@ class Source:
     types: np.ndarray
     selected: np.ndarray
     source_keys: int
-    record: object = None
-    notes: list = field(default_factory=list)
 
 
 def _where(target, action):
@@ -173,7 +174,7 @@ def read_source(target, action, channels, slot, mode, subframes):
     # F-curves without a group go into the one Blender's keying would make (the bone's name, or
     # "Object Transforms"), where tools that look channels up by group (Rigify's) find them.
     group = channels.group_of(path, count) or (target.bone if target.bone is not None else "Object Transforms")
-    return Source(target, target.name, action, channels, slot, mode, prop, path, group,
+    return Source(target, target.name, where, action, channels, slot, mode, prop, path, group,
                   times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys)
 
 
@@ -346,7 +347,7 @@ def plan(source, settings):
         fitted = qc.fit_keys(source.times, values, source.forced, math.radians(settings.tolerance), mode=mode,
                              interpolation="BEZIER", synchronized=False, min_gap=fit.MIN_KEY_GAP)
     except ValueError as error:
-        raise ConvertError("%s: %s" % (_where(source.target, source.action), error)) from None
+        raise ConvertError("%s: %s" % (source.where, error)) from None
     channels, keys, generated = [], 0, 0
     F = len(source.forced)
     for ch in fitted.channels:
