@@ -520,3 +520,48 @@ def test_undo_restores_the_file_exactly(tmp_path):
         assert r["result"] == ["FINISHED"] and r["changed"], r
         assert r["modes_after_convert"] == [r["mode"]] * 2, r
         assert r["restored"], "ed.undo after converting to %s left differences: %s" % (r["mode"], r["differences"])
+
+
+# ---- random sources ------------------------------------------------------------------------------------
+
+def test_random_sources_play_as_before(scene):
+    """Random keys in a random mode (quaternions of any length, axis-angle spins, Euler beyond 360°), at
+    whole and fractional frames, with random interpolations (Bezier with moved FREE handles, linear,
+    constant, Blender's easing modes), converted to another random mode: Blender's playback within the
+    tolerance at every quarter frame."""
+    rng = np.random.default_rng(2026)
+    interpolations = ("BEZIER", "LINEAR", "CONSTANT", "SINE", "BACK", "ELASTIC")
+    worst = 0.0
+    for case in range(24):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        source, target = (str(m) for m in rng.choice(MODES, 2, replace=False))
+        obj = add_empty("Random", source)
+        prop, count = fcurves.rotation_property(source)
+        frames = np.unique(np.sort(rng.choice(np.arange(1, 60), rng.integers(2, 7), replace=False))
+                           + rng.choice([0, 0.25, 0.5]))
+        for f in frames:
+            if source == "QUATERNION":
+                value = rng.normal(size=4) * rng.choice([1, 0.3, 2])
+            elif source == "AXIS_ANGLE":
+                value = np.r_[rng.uniform(-8, 8), rng.normal(size=3)]
+            else:
+                value = rng.uniform(-4, 4, 3) * rng.choice([1, 2])
+            setattr(obj, prop, value)
+            obj.keyframe_insert(prop, frame=float(f))
+        usual = str(rng.choice(interpolations))
+        for curve in fcurves.Channels.of(obj).fcurves:
+            for p in curve.keyframe_points:
+                p.interpolation = usual if rng.random() < 0.8 else str(rng.choice(interpolations))
+                if rng.random() < 0.3:
+                    p.handle_left_type = p.handle_right_type = "FREE"
+                    p.handle_left[1] += rng.normal()
+                    p.handle_right[1] += rng.normal()
+        select_objects(obj)
+        times = np.arange(math.ceil(frames[0] * 4), math.floor(frames[-1] * 4) + 1) / 4.0
+        before = played({"o": obj}, times)["o"]
+        assert bpy.ops.quatcurve.convert(rotation_mode=target, tolerance=TOL) == {"FINISHED"}
+        err = np.degrees(angles_between(played({"o": obj}, times)["o"], before))
+        assert err.max() <= TOL + 1e-4, "case %d: %s → %s (%s, keys at %s): %.5f° at frame %s" % (
+            case, source, target, usual, frames.tolist(), err.max(), times[err.argmax()])
+        worst = max(worst, err.max())
+    print("[convert random] Blender %s: 24 cases, max %.4f°" % (bpy.app.version_string, worst))
