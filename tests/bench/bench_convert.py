@@ -166,9 +166,10 @@ def run_scene(label, build, mode, folder):
             right = theirs[at_keys].max(axis=0) < 0.01
             between = ("%d bones right at the keys: max %.2f° between them" % (right.sum(), theirs[:, right].max())
                        if right.any() else "no bone right at its keys")
-            theirs_line = ("Rigify: max %.2f° (median bone %.2f°; at its keys %.4f°; %s), %d -> %d keys, %.2f s"
+            theirs_line = ("Rigify: max %.2f° (median bone %.2f°; at its keys %.4f°; %s), %d -> %d keys, %.2f s "
+                           "(quatcurve.convert's time / Rigify's: %.2f)"
                            % (theirs.max(), np.median(theirs.max(axis=0)), theirs[at_keys].max(), between,
-                              keys_before, rotation_keys(rig), theirs_s))
+                              keys_before, rotation_keys(rig), theirs_s, ours_s / max(theirs_s, 1e-9)))
         except RuntimeError as error:
             theirs_line = "Rigify failed: " + " ".join(str(error).split())[:200]
     print("%s (%d bones -> %s, frames %g-%g, %d samples each):\n  quatcurve.convert: max %.4f° (median bone "
