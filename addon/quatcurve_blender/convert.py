@@ -506,5 +506,11 @@ def _read(found, settings, played_by, result, work):
             if new_prop != source.prop and _has_keys(channels, target.data_path(new_prop), new_count):
                 row.notes.append("%s: %s had keys that did not play in %s: replaced by the converted ones"
                                  % (_where(target, action), new_prop, source_mode))
+            record = _find_record(action, slot, _owner_path(target))
+            if record is not None:
+                row.notes.append("%s: fitted (%s, %.3g°): the fit record follows to %s; the converted keys play "
+                                 "within %.3g° of the fitted playback (fit again for the fit's own tolerance)"
+                                 % (_where(target, action), record.method, record.tolerance, new_prop,
+                                    settings.tolerance))
             sources.append(source)
             yield source
