@@ -368,6 +368,26 @@ def test_fitted_target_stays_fitted_and_live(scene):
         live.on_load()
 
 
+def test_a_spun_segment_survives_conversion_to_euler_and_back(scene):
+    """A fitted quaternion target whose segment 1 → 13 turns once more (set_turns): converted to XYZ
+    the spin is in the Euler keys' angles (Z reaches 450° at frame 13); back to QUATERNION it plays the
+    same, and its turn records still describe it (a live refit would play it)."""
+    from test_turns import select_keys, spin_object
+    obj = spin_object("Spin")
+    select_keys(obj, {1})
+    assert bpy.ops.quatcurve.set_turns(turns=1) == {"FINISHED"}
+    before = played({"Spin": obj})["Spin"]
+    for mode in ("XYZ", "QUATERNION"):
+        assert bpy.ops.quatcurve.convert(rotation_mode=mode, tolerance=TOL) == {"FINISHED"}
+        err = np.degrees(angles_between(played({"Spin": obj})["Spin"], before))
+        assert err.max() <= 2 * TOL + 1e-4, "%s: %.5f°" % (mode, err.max())
+        if mode == "XYZ":
+            frames, values = channel_keys(obj)[2][:2]
+            assert abs(math.degrees(values[frames == 13][0]) - 450) < 0.1, np.degrees(values)
+    action, target = fcurves.active_action(obj), Target(obj)
+    np.testing.assert_array_equal(fit.key_turns(action, target, np.array([1, 13, 21.0])), [1, 0, 0])
+
+
 # ---- Rigify -------------------------------------------------------------------------------------------
 
 RIGIFY_KEYS = [(1, (0, 0, 0)), (15, (80, -40, 30)), (35, (-60, 70, 120)), (50, (20, 10, -90))]
