@@ -111,7 +111,12 @@ def read(path):
         at += 8 + size
     if not chunks or chunks[0][0] != CHUNK_JSON:
         raise GlbError("%s: the first chunk is not JSON" % path)
-    doc = json.loads(chunks[0][1].decode("utf-8"))
+    try:
+        doc = json.loads(chunks[0][1].decode("utf-8"))
+    except ValueError as e:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        raise GlbError("%s: the JSON chunk does not read: %s" % (path, e)) from None
+    if not isinstance(doc, dict):
+        raise GlbError("%s: the JSON chunk is not a glTF document" % path)
     binary = next((c for k, c in chunks[1:] if k == CHUNK_BIN), b"")
     buffers = doc.get("buffers", [])
     if len(buffers) > 1 or (buffers and "uri" in buffers[0]):
