@@ -542,3 +542,25 @@ def test_fitted_spin_with_turns_plays_the_methods_curve(scene, tmp_path):
           % (bpy.app.version_string, ours.rotation_keys, worst))
     assert worst <= TOLERANCE + 1e-4
     assert ours.rotation_keys >= 6  # 810° in the first segment: at least 5 slerp segments
+
+
+def test_node_moved_by_a_constraint_keeps_the_exporters_samples(animated, tmp_path):
+    """A node whose rotation is not its channels' alone (here a Damped Track constraint) cannot be
+    rewritten from the channels: it keeps the exporter's sampled rotation, and the result says so;
+    the other nodes are rewritten."""
+    scene = bpy.context.scene
+    euler = scene.objects["Euler"]
+    track = euler.constraints.new("DAMPED_TRACK")
+    track.target = scene.objects["Rig"]
+    exact = exact_export(tmp_path / "exact.glb")
+    out = tmp_path / "curve.glb"
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
+    ours = GltfFile(str(out))
+    kept = channel_data(ours, "rotation")[("Euler", "rotation")]
+    assert kept == channel_data(exact, "rotation")[("Euler", "rotation")]
+    assert len(kept[0]) == LAST - FIRST + 1
+    assert ours.rotation_keys < exact.rotation_keys  # the others are rewritten
+    from quatcurve_blender import gltf
+    result = gltf.export(scene, str(tmp_path / "again.glb"), gltf.ExportSettings(tolerance=TOLERANCE))
+    line = next(text for text in result.lines() if text.startswith("Euler:"))
+    assert "kept as sampled" in line and "1 left as sampled" in result.summary()
