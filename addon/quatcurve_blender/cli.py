@@ -82,7 +82,7 @@ def build_parser():
                            "shape their own rotation keys so that Blender plays the method (the\n"
                            "quatcurve.fit operator); or, with --convert MODE, change their rotation mode\n"
                            "keeping the motion (the quatcurve.convert operator); or, with --gltf, export the\n"
-                           "scene to binary glTF with the fewest rotation keys that play each target's curve\n"
+                           "scene to binary glTF with few rotation keys that play each target's curve\n"
                            "(the quatcurve.export_gltf operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
@@ -119,7 +119,7 @@ def build_parser():
                         "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
 
     g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
-                                     "Blender's glTF exporter, each rotation sampler replaced by the fewest slerp "
+                                     "Blender's glTF exporter, each rotation sampler replaced by few slerp "
                                      "keys within --tolerance (default 0.1°) of the target's curve, checked at "
                                      "--subframes points per frame (default 20). IN.blend is not changed.")
     g.add_argument("--gltf", metavar="OUT.glb", help="the binary glTF file to write")

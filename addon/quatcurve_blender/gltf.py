@@ -1,6 +1,6 @@
 """Export to glTF that plays the curve: Blender's own glTF exporter writes the scene, then every
-rotation sampler it wrote is replaced by the fewest glTF LINEAR keys (slerp, by the glTF
-specification) that stay within the tolerance of the target's curve.
+rotation sampler it wrote is replaced by glTF LINEAR keys (slerp, by the glTF specification) that
+stay within the tolerance of the target's curve, as few as a greedy search finds.
 
     result = gltf.export(bpy.context.scene, "out.glb", gltf.ExportSettings(method="AUTO", tolerance=0.1))
     print(result.summary())
@@ -20,9 +20,9 @@ frame, and A, B are taken from its first sample and checked on every sample (wit
 against Blender's evaluation of the channels there. A node that fails the check (constraints,
 drivers, a parent's non-uniform scale, NLA: anything but the channels moving it) keeps the sampler
 the exporter wrote, and the result says so. The curve, sampled `subframes` times per frame over the
-sampler's frames and mapped by A and B, is then reduced by the native `quatcurve.reduce_slerp` to the
-fewest keys whose slerp stays within the tolerance of every sample (times and quaternions as the file
-stores them, float32). Translations, scales, meshes, skins: as the exporter wrote them.
+sampler's frames and mapped by A and B, is then reduced by the native `quatcurve.reduce_slerp` to
+few keys (a greedy search) whose slerp stays within the tolerance of every sample (times and
+quaternions as the file stores them, float32). Translations, scales, meshes, skins: as the exporter wrote them.
 
 Nothing is written on error: the exporter writes a temporary file next to the output, the rewrite
 another, which is renamed over the output last. Errors raise GltfError naming the target or file.

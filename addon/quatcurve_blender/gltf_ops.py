@@ -1,5 +1,5 @@
 """The `quatcurve.export_gltf` operator (File > Export > glTF That Plays the Curve): the scene through
-Blender's glTF exporter, rotation samplers replaced by the fewest slerp keys within the tolerance of
+Blender's glTF exporter, rotation samplers replaced by few slerp keys within the tolerance of
 each target's curve (gltf.py)."""
 
 import bpy
@@ -15,7 +15,7 @@ METHOD_ITEMS = (
 
 
 class QUATCURVE_OT_export_gltf(bpy.types.Operator, ExportHelper):
-    """Export the scene to binary glTF with the fewest rotation keys that play each target's curve"""
+    """Export the scene to binary glTF with few rotation keys that play each target's curve"""
     bl_idname = "quatcurve.export_gltf"
     bl_label = "Export glTF (QuatCurve)"
     bl_options = {"REGISTER"}
