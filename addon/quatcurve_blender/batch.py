@@ -6,9 +6,9 @@ in a few long-lived Blender processes, locally or as a Slurm job array.
 
 INPUT: files, folders (searched recursively) or glob patterns of .blend, .bvh, .fbx, .glb and .gltf
 files (the last four through Blender's own importers). The operation and its options are the CLI's
-(cli.add_task_arguments, cli.task_of): bake (default), --fit, --reduce, and any task cli.TASKS gains.
-Each input gives DIR/<its path below the inputs' common folder, extension .blend>; inputs are never
-written. Per file one JSON line in DIR/results.jsonl and, at the end, DIR/summary.json (both
+(cli.add_task_arguments, cli.task_of): bake (default), --fit, --reduce, --convert MODE, --gltf, and
+any task cli.TASKS gains. Each input gives DIR/<its path below the inputs' common folder, extension
+.blend> (.glb for --gltf, whose own path argument is then only checked); inputs are never written. Per file one JSON line in DIR/results.jsonl and, at the end, DIR/summary.json (both
 described by batch.schema.json); a summary table is printed.
 
 How the work runs: the coordinator (this module's main) plans the files, then starts --jobs worker
@@ -180,8 +180,8 @@ def expand_inputs(arguments, output_dir):
     return sorted(((path, os.path.relpath(path, root)) for path in unique.values()), key=lambda item: item[1])
 
 
-def output_name(relative):
-    return os.path.splitext(relative)[0] + ".blend"
+def output_name(relative, suffix=".blend"):
+    return os.path.splitext(relative)[0] + suffix
 
 
 def file_digest(path):
@@ -229,7 +229,7 @@ def make_plan(args, task_options, parser_defaults, argv):
     found = expand_inputs(args.inputs, output)
     by_output, files = {}, []
     for path, relative in found:
-        out = output_name(relative)
+        out = output_name(relative, task.output_suffix)
         if out in by_output:
             raise UsageError("inputs %s and %s would both be saved as %s" % (by_output[out], relative, out))
         by_output[out] = relative
@@ -761,7 +761,9 @@ def work_on(plan, task, args, index):
         load_input(entry["path"])
         phases["load"] = time.perf_counter() - begin
         scene = bpy.context.scene
-        chosen = cli.select_targets(scene.objects, cli.split_patterns(args.objects), cli.split_patterns(args.bones))
+        chosen = None
+        if task.selects_targets:
+            chosen = cli.select_targets(scene.objects, cli.split_patterns(args.objects), cli.split_patterns(args.bones))
         os.makedirs(os.path.dirname(output), exist_ok=True)
         task.check_output(output)
         result = task.apply(chosen, entry["path"], output)

@@ -1,5 +1,6 @@
-"""Baking, fitting and key reduction from the command line: bake (and optionally compare), fit
-(`--fit`) or reduce (`--reduce`) the rotations in a .blend file without Blender's UI. Many files at
+"""Baking, fitting, key reduction, rotation-mode conversion and glTF export from the command line:
+bake (and optionally compare), fit (`--fit`), reduce (`--reduce`), convert (`--convert MODE`) the
+rotations in a .blend file, or export it (`--gltf OUT.glb`), without Blender's UI. Many files at
 once: batch.py runs the same operations.
 
     blender --background --python addon/quatcurve_blender/cli.py -- [options] IN.blend
@@ -15,7 +16,8 @@ same folder and renamed over the target, so it is either complete or untouched.
 
 This module parses arguments and selects targets by name or glob pattern; the work is done by the
 functions the operators call (bake.bake, compare.compare / save_plots / write_report, fit.fit,
-reduce.reduce), each wrapped in a Task (BakeTask, FitTask, ReduceTask) that batch.py reuses.
+reduce.reduce, convert.convert, gltf.export), each wrapped in a Task (BakeTask, FitTask, ReduceTask,
+ConvertTask, GltfTask) that batch.py reuses.
 
 When Blender runs this file as a script (`--python cli.py`) it is not inside its package: the
 add-on's parent folder is put on sys.path and the package is imported (and registered) by name.
@@ -26,6 +28,7 @@ A missing or unreadable IN.blend given *before* `--python` is refused by Blender
 import argparse
 import contextlib
 import fnmatch
+import math
 import os
 import sys
 import time
@@ -33,7 +36,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, reduce, targets
+    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, reduce, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -42,7 +45,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, reduce, targets
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, reduce, targets
 
 import bpy
 
@@ -71,6 +74,9 @@ examples:
   blender -b --python addon/quatcurve_blender/cli.py -- --fit --method SQUAD --tolerance 0.01 \\
       --objects 'Rig' --output fitted.blend in.blend
   blender -b --python addon/quatcurve_blender/cli.py -- --reduce --tolerance 0.1 --output reduced.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --convert QUATERNION --all-actions \\
+      --objects 'Rig' --output quaternions.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --gltf out.glb --tolerance 0.1 fitted.blend
 """
 
 
@@ -81,7 +87,10 @@ def build_parser():
                            "comparing the methods first (the quatcurve.compare operator); or, with --fit,\n"
                            "shape their own rotation keys so that Blender plays the method (the\n"
                            "quatcurve.fit operator); or, with --reduce, keep as few of their keys as a\n"
-                           "tolerance allows (the quatcurve.reduce operator).")
+                           "tolerance allows (the quatcurve.reduce operator); or, with --convert MODE, change\n"
+                           "their rotation mode keeping the motion (the quatcurve.convert operator); or, with\n"
+                           "--gltf, export the scene to binary glTF with few rotation keys that play each\n"
+                           "target's curve (the quatcurve.export_gltf operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
                         "blender -b IN.blend --python cli.py -- ...)")
@@ -137,6 +146,25 @@ def add_task_arguments(p):
     g.add_argument("--synchronized", action="store_true",
                    help="the same key frames on every rotation channel of a target")
 
+    g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
+                                     "Blender's glTF exporter, each rotation sampler replaced by few slerp "
+                                     "keys within --tolerance (default 0.1°) of the target's curve, checked at "
+                                     "--subframes points per frame (default 20). IN.blend is not changed.")
+    g.add_argument("--gltf", metavar="OUT.glb", help="the binary glTF file to write")
+    g.add_argument("--gltf-curve", choices=gltf.METHODS, default="AUTO", metavar="CURVE",
+                   help="the curve each rotation sampler plays: AUTO (default: fitted targets their fit's "
+                        "method, others what Blender plays), BLENDER (what Blender plays), or a method "
+                        "through each target's keys: %s" % ", ".join(fit.METHODS))
+
+    g = p.add_argument_group("convert", "Instead of baking (the quatcurve.convert operator): the targets get a new "
+                                        "rotation mode and their rotation keys are converted so that Blender plays "
+                                        "the same motion, within --tolerance (default 0.05°) at --subframes points "
+                                        "per frame (default 4).")
+    g.add_argument("--convert", choices=convert.MODES, metavar="MODE",
+                   help="the new rotation mode: %s" % ", ".join(convert.MODES))
+    g.add_argument("--all-actions", action="store_true",
+                   help="--convert: every action that animates a target's rotation (default: its active action)")
+
     g = p.add_argument_group("bake")
     g.add_argument("--rotation-mode", choices=bake.OUTPUT_MODES, default="KEEP", metavar="MODE",
                    help="rotation mode of the baked keys: %s (default KEEP: each target's own mode)"
@@ -148,7 +176,8 @@ def add_task_arguments(p):
                    help="bake: 0 (default): a key every STEP frames; above 0: as few keys as this angular "
                         "bound allows (key reduction). --fit: largest error of Blender's playback against "
                         "the method, above 0 (default 0.05). --reduce: largest error against the original "
-                        "(default 0.1)")
+                        "(default 0.1). --convert: largest change of the motion (default 0.05). --gltf: "
+                        "largest error of the slerp keys against the curve (default 0.1)")
     g.add_argument("--no-new-action", dest="new_action", action="store_false",
                    help="replace the rotation curves in the targets' actions (default: bake into a new "
                         "action named after the original, which is kept unchanged)")
@@ -243,7 +272,8 @@ NOT_FOR_REDUCE = (("method", "SLERP", "--method"), ("tension", 0.0, "--tension")
                   ("clamped", True, "--no-clamp"), ("rotation_mode", "KEEP", "--rotation-mode"),
                   ("frame_range", None, "--frame-range"), ("step", 1.0, "--step"), ("compare", False, "--compare"),
                   ("report", None, "--report"), ("subframes", None, "--subframes"),
-                  ("all_euler_orders", False, "--all-euler-orders"), ("key_interpolation", "BEZIER", "--compare-keys"))
+                  ("all_euler_orders", False, "--all-euler-orders"), ("key_interpolation", "BEZIER", "--compare-keys"),
+                  ("all_actions", False, "--all-actions"), ("gltf_curve", "AUTO", "--gltf-curve"))
 
 
 def reduce_settings(args):
@@ -258,6 +288,54 @@ def reduce_settings(args):
         reduce.check_settings(settings)
     except reduce.ReduceError as error:
         raise UsageError(str(error)) from None
+    return settings
+
+
+# Options that mean nothing to a conversion (argparse defaults: what is not given).
+NOT_FOR_CONVERT = NOT_FOR_FIT + (
+    ("fit", False, "--fit"), ("method", "SLERP", "--method"), ("tension", 0.0, "--tension"),
+    ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"), ("shortest_path", True, "--no-shortest-path"),
+    ("clamped", True, "--no-clamp"), ("reduce", False, "--reduce"))
+
+
+def convert_settings(args):
+    """ConvertSettings from the arguments (the operator's defaults where not given), checked by
+    convert's own check; options of the other tasks are a UsageError."""
+    refuse_options(args, NOT_FOR_CONVERT, "not an option of --convert (it converts the keys in their own actions)")
+    defaults = convert.ConvertSettings()
+    settings = convert.ConvertSettings(
+        rotation_mode=args.convert, actions="ALL" if args.all_actions else "ACTIVE",
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        convert.check_settings(settings)
+    except convert.ConvertError as error:
+        raise UsageError(str(error)) from None
+    return settings
+
+
+# Options of bake, fit and compare that mean nothing to --gltf (argparse defaults: what is not given).
+NOT_FOR_GLTF = NOT_FOR_FIT + (("fit", False, "--fit"),
+                              ("objects", None, "--objects"), ("bones", None, "--bones"), ("method", "SLERP", "--method"),
+                              ("tension", 0.0, "--tension"), ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"),
+                              ("shortest_path", True, "--no-shortest-path"), ("clamped", True, "--no-clamp"),
+                              ("convert", None, "--convert"), ("all_actions", False, "--all-actions"),
+                              ("reduce", False, "--reduce"))
+
+
+def gltf_settings(args):
+    """ExportSettings from the arguments, checked with the output path by gltf's own check; options of
+    the other tasks are a UsageError."""
+    refuse_options(args, NOT_FOR_GLTF, "not an option of --gltf (it exports the whole scene; choose the curve "
+                                       "with --gltf-curve)")
+    defaults = gltf.ExportSettings()
+    settings = gltf.ExportSettings(
+        method=args.gltf_curve, tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        gltf.check_settings(settings, args.gltf)
+    except gltf.GltfError as error:
+        raise UsageError("--gltf: %s" % error) from None
     return settings
 
 
@@ -464,6 +542,8 @@ class Task:
     after the other in each process. A new operation is a Task subclass added to TASKS."""
     flag = None       # the option that chooses it (None: the default, bake)
     verb = "bake"
+    output_suffix = ".blend"   # what `save` writes (batch names each file's output with it)
+    selects_targets = True     # False: `apply` gets None and works on the whole scene
 
     def __init__(self, args):
         self.args = args
@@ -589,15 +669,76 @@ class ReduceTask(Task):
                        result.max_error_deg)
 
 
+class ConvertTask(Task):
+    flag, verb = "convert", "convert"
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = convert_settings(args)
+
+    def apply(self, chosen, source, output):
+        settings, scene = self.settings, bpy.context.scene
+        result = convert.convert(chosen, settings)
+        scene.frame_set(scene.frame_current)  # re-evaluate in the new modes, as the operator does
+        print("quatcurve %s (Blender %s): convert to %s, tolerance %g°, %d subframes, %s actions, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, settings.rotation_mode, settings.tolerance,
+            settings.subframes, settings.actions.lower(), os.path.basename(source),
+            "in place" if source == output else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        return result
+
+    def outcome(self, result):
+        rows = [a for t in result.converted for a in t.actions]  # (action, before, after, generated, max error °)
+        return Outcome([t.name for t in result.targets], sum(r[1] for r in rows), sum(r[2] for r in rows),
+                       max([r[4] for r in rows] or [0.0]))
+
+
+class GltfTask(Task):
+    """--gltf OUT.glb: the scene exported (gltf.export); no .blend is saved. In a batch, each file's
+    glTF is its output (DIR/<input>.glb) and the path given to --gltf is only checked."""
+    flag, verb = "gltf", "gltf"
+    output_suffix = ".glb"
+    selects_targets = False
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = gltf_settings(args)
+
+    def apply(self, chosen, source, output):
+        settings = self.settings
+        with blender_output_silenced():  # the exporter's progress lines
+            result = gltf.export(bpy.context.scene, output, settings)
+        print("quatcurve %s (Blender %s): glTF, curve %s, tolerance %g°, %d subframes, %s -> %s" % (
+            native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+            settings.subframes, os.path.basename(source), result.filepath))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        return result
+
+    def outcome(self, result):
+        return Outcome(sorted({s.target for s in result.samplers}), result.keys_before, result.keys_after,
+                       math.degrees(result.max_error))
+
+    def save(self, result, output):
+        """gltf.export has written the file (complete or not at all)."""
+
+
 # The operations, chosen by their option; BakeTask when none is given.
-TASKS = (FitTask, ReduceTask)
+TASKS = (GltfTask, ConvertTask, FitTask, ReduceTask)
 
 
 def task_of(args):
     """The Task the arguments ask for, its settings checked (UsageError)."""
-    chosen = [cls for cls in TASKS if getattr(args, cls.flag)]
+    chosen = [cls for cls in TASKS if getattr(args, cls.flag) not in (None, False)]
     if len(chosen) > 1:
         raise UsageError("%s exclude each other" % " and ".join("--" + cls.flag.replace("_", "-") for cls in chosen))
+    if GltfTask not in chosen and args.gltf_curve != "AUTO":
+        raise UsageError("--gltf-curve: an option of --gltf only")
+    if ConvertTask not in chosen and args.all_actions:
+        raise UsageError("--all-actions: an option of --convert only")
     return (chosen[0] if chosen else BakeTask)(args)
 
 
@@ -606,14 +747,22 @@ def task_of(args):
 def run(args):
     task = task_of(args)
     source = input_path(args)
-    output = output_path(args, source)
+    # A task that saves no .blend names its own output (--gltf OUT.glb, checked with its settings).
+    if task.output_suffix == ".blend":
+        output = output_path(args, source)
+    else:
+        refuse_options(args, (("output", None, "--output"), ("in_place", False, "--in-place")),
+                       "not an option of --%s (it writes %s: IN.blend is not changed)" % (task.flag, getattr(args, task.flag)))
+        output = os.path.abspath(getattr(args, task.flag))
     task.check_output(output)
     native.require()
     open_input(source)
     registered = register_addon()
     try:
         scene = bpy.context.scene
-        chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
+        chosen = None
+        if task.selects_targets:
+            chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
         result = task.apply(chosen, source, output)
         task.save(result, output)
         return EXIT_OK

@@ -378,3 +378,27 @@ def test_bad_arguments(library, tmp_path, capsys, name, args, fragment):
     assert len(errors) == 1 and fragment in errors[0], captured.err
     assert "Traceback" not in captured.err
     assert not (tmp_path / "out" / "results.jsonl").exists()
+
+
+def test_convert_and_gltf_are_batch_operations(library, tmp_path):
+    """Every CLI task runs in a batch: --convert MODE saves each .blend, --gltf writes each file's .glb
+    (DIR/<input>.glb; the path given to --gltf is only checked)."""
+    shots = [library / "shots" / "a.blend", library / "shots" / "b.blend"]
+    out = tmp_path / "converted"
+    proc = run_batch(["--convert", "QUATERNION", "--jobs", "1", "--output", out] + shots)
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, summary = read_results(out)
+    assert {k: (r["status"], r["output"], r["operation"]) for k, r in records.items()} == {
+        "a.blend": ("done", "a.blend", "convert"), "b.blend": ("done", "b.blend", "convert")}
+    assert all(r["max_error_deg"] <= 0.05 + 1e-6 for r in records.values())
+    bpy.ops.wm.open_mainfile(filepath=str(out / "a.blend"), load_ui=False)
+    assert bpy.data.objects["A"].rotation_mode == "QUATERNION"
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+
+    out = tmp_path / "gltf"
+    proc = run_batch(["--gltf", tmp_path / "unused.glb", "--jobs", "1", "--output", out] + shots)
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, _ = read_results(out)
+    assert {k: (r["status"], r["output"]) for k, r in records.items()} == {
+        "a.blend": ("done", "a.glb"), "b.blend": ("done", "b.glb")}
+    assert (out / "a.glb").read_bytes()[:4] == b"glTF" and not (tmp_path / "unused.glb").exists()
