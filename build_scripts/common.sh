@@ -83,7 +83,7 @@ load_blenders() {
   for v in $BPY_VERSIONS; do BLENDERS+="bpy-$v $(bpy_python_minor "$v") $(bpy_python "$v")"$'\n'; done
   for minor in $(printf '%s\n' "$PYTHON_MINOR" $(awk '{print $2}' <<< "$BLENDERS") | awk 'NF && !seen[$0]++'); do
     p="$(find_python "$minor")"
-    [ -n "$p" ] && PYTHONS+="$minor $p"$'\n'
+    if [ -n "$p" ]; then PYTHONS+="$minor $p"$'\n'; fi
   done
 }
 
