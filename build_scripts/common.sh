@@ -2,7 +2,6 @@
 # Override any of these from the environment.
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${QUATCURVE_BUILD_DIR:-$ROOT/build}"
-VENV="$ROOT/.venv"
 # The bpy module wheels are large (~400 MB each): their venvs live in a per-user cache shared by
 # every clone, keyed by version, so a fresh clone does not download them again.
 VENV_CACHE="${QUATCURVE_VENV_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/quatcurve}"
@@ -15,8 +14,8 @@ BLENDER_BIN="${QUATCURVE_BLENDER:-/usr/bin/blender}"
 BLENDER_BIN_PYTHON_MINOR="${QUATCURVE_BLENDER_PYTHON_MINOR:-3.11}"
 #   Blender as a Python module, one venv each: the 4.5 LTS and 5.0 (cp311), the 5.2 LTS (cp313).
 BPY_VERSIONS="${QUATCURVE_BPY_VERSIONS-4.5.15 5.0.1 5.2.3}"
-# The primary build: $BUILD_DIR with every test, the root .venv, the python.pytest suite. Each other
-# minor a Blender needs gets a module-only build in $BUILD_DIR/cp<MM> with its own small build venv.
+# The primary build: $BUILD_DIR with every test and the python.pytest suite, its venv $VENV (below).
+# Each other minor a Blender needs gets a module-only build in $BUILD_DIR/cp<MM> and a build venv.
 PYTHON_MINOR="${QUATCURVE_PYTHON_MINOR:-3.11}"
 
 log() { printf '[quatcurve] %s\n' "$*" >&2; }
@@ -65,9 +64,12 @@ python_missing() {
 bpy_python() { echo "$VENV_CACHE/bpy-$1/bin/python"; }
 
 # build_venv MINOR / module_build_dir MINOR: the venv whose interpreter and pybind11 build the module
-# for MINOR, and the build directory of that module.
-build_venv() { if [ "$1" = "$PYTHON_MINOR" ]; then echo "$VENV"; else echo "$ROOT/.venv-cp${1/./}"; fi; }
+# for MINOR (the root .venv is Python 3.11's, Debian 12's own; another minor's is .venv-cp<MM>), and
+# the build directory of that module.
+build_venv() { if [ "$1" = 3.11 ]; then echo "$ROOT/.venv"; else echo "$ROOT/.venv-cp${1/./}"; fi; }
 module_build_dir() { if [ "$1" = "$PYTHON_MINOR" ]; then echo "$BUILD_DIR"; else echo "$BUILD_DIR/cp${1/./}"; fi; }
+# The primary build's venv: the pinned development requirements (numpy, scipy, pytest, pybind11, …).
+VENV="$(build_venv "$PYTHON_MINOR")"
 
 # load_blenders: BLENDERS, one "NAME MINOR COMMAND" line per Blender to test (COMMAND: a blender
 # executable, or a bpy venv's python, which exists once setup.sh has run), and PYTHONS, "MINOR PATH"

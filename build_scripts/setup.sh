@@ -4,7 +4,8 @@
 #   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
 #      Python), Xvfb
 #   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
-#      once the module is built (a .pth file points at build/python)
+#      once the module is built (a .pth file points at build/python). It is Python 3.11's; with
+#      QUATCURVE_PYTHON_MINOR=3.13 the primary build's venv is .venv-cp313 instead.
 #   3. one venv per pinned bpy version in $VENV_CACHE, of the Python that bpy release runs (3.11 or 3.13)
 #   4. for every other Python minor a Blender runs (3.13 for bpy 5.2), a small build venv
 #      .venv-cp<MM> with pybind11, for the module's second build (build.sh)
@@ -56,7 +57,12 @@ echo "$BUILD_DIR/python" > "$site/quatcurve-build.pth"
 load_blenders
 pybind11_req="$(grep -E '^pybind11==' "$ROOT/build_scripts/requirements-dev.txt")"
 for minor in $(python_minors); do
-  [ "$minor" = "$PYTHON_MINOR" ] || pip_env "$minor" "$(build_venv "$minor")" "$pybind11_req"
+  [ "$minor" = "$PYTHON_MINOR" ] && continue
+  venv="$(build_venv "$minor")"
+  # A development venv of that minor (the root .venv, when the primary build is another minor's)
+  # holds the pinned pybind11 already.
+  [ -x "$venv/bin/python" ] && grep -qF -- "$pybind11_req" "$venv/.quatcurve-requirements" 2>/dev/null && continue
+  pip_env "$minor" "$venv" "$pybind11_req"
 done
 for v in $BPY_VERSIONS; do
   minor="$(bpy_python_minor "$v")"
