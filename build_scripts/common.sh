@@ -27,7 +27,7 @@ as_root() {
 }
 
 # bpy_python_minor VERSION: the CPython minor a bpy release on PyPI is built for (Blender follows
-# the VFX reference platform: 3.4–4.0 on 3.10, 4.1–5.0 on 3.11, 5.1 on 3.13).
+# the VFX reference platform: 3.4–4.0 on 3.10, 4.1–5.0 on 3.11, 5.1 and later on 3.13).
 bpy_python_minor() {
   case "$1" in
     3.*|4.0|4.0.*) echo 3.10 ;;
