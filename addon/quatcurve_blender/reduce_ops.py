@@ -22,9 +22,10 @@ def reduce_properties():
     return {
         "tolerance": P.FloatProperty(
             name="Tolerance (°)", default=0.1, min=0.0, soft_max=10.0, precision=3,
-            description="Largest rotation error allowed at every frame and original key, in degrees"),
+            description="How far the reduced rotation may stray from the original, in degrees, checked on every "
+                        "frame and original key (larger: fewer keys)"),
         "interpolation": P.EnumProperty(name="Interpolation", items=INTERPOLATION_ITEMS, default="BEZIER",
-                                        description="Interpolation of the written keys"),
+                                        description="The kind of keys written"),
         "synchronized": P.BoolProperty(
             name="Synchronized", default=False,
             description="Same key frames on every rotation channel of a target (glTF export, hand "
@@ -40,7 +41,9 @@ class QuatCurveReduceSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_reduce: the panel's reduce settings and the last reduction's summary."""
     __annotations__ = dict(
         reduce_properties(),
-        last_summary=bpy.props.StringProperty(name="Last Reduce", default=""),
+        last_summary=bpy.props.StringProperty(name="Last Reduce", default="",
+                                              description="Keys before and after, and the largest error, of the "
+                                                          "last reduction"),
         last_lines=bpy.props.StringProperty(name="Last Reduce Details", default="",
                                             description="One line per target, newline-separated"),
     )
@@ -62,7 +65,7 @@ def draw_settings(layout, settings, max_lines=6):
 
 
 class QUATCURVE_OT_reduce(bpy.types.Operator):
-    """Reduce the rotation keys of the selected objects or pose bones to as few as an angular bound allows"""
+    """Remove rotation keys of the selected objects or pose bones (motion capture, bakes) while the rotation stays within the Tolerance, in degrees; into a new action by default"""
     bl_idname = "quatcurve.reduce"
     bl_label = "Reduce Rotation Keys"
     bl_options = {"REGISTER", "UNDO"}
