@@ -116,10 +116,11 @@ def settings_from(props):
                            clamped=props.clamped, subframes=props.subframes)
 
 
-def draw_settings(layout, settings, context=None, max_lines=6, extra_rows=()):
+def draw_settings(layout, settings, context=None, extra_rows=(), width=40):
     """The panel's fit box: the method and Live on one line, tolerance and the method's options, Fit /
     Unmark, ease, `extra_rows` (functions draw(layout, context) other tools add, see ui.FIT_ROWS),
-    whether the active target is fitted, the last result."""
+    whether the active target is fitted, the last fit's summary (wrapped at `width` characters; a
+    line per target stays in settings.last_lines)."""
     row = layout.row(align=True)
     row.prop(settings, "method", text="")
     row.prop(settings, "live", toggle=True, icon="REC" if settings.live else "PLAY")
@@ -131,9 +132,8 @@ def draw_settings(layout, settings, context=None, max_lines=6, extra_rows=()):
     row.operator("quatcurve.fit", text="Fit Rotation Keys", icon="IPO_EASE_IN_OUT")
     row.operator("quatcurve.unfit", text="", icon="X")
     col = layout.column(align=True)
-    row = col.row(align=True)
-    row.prop(settings, "ease_in", text="Ease In")
-    row.prop(settings, "ease_out", text="Out")
+    col.prop(settings, "ease_in")
+    col.prop(settings, "ease_out")
     col.operator("quatcurve.set_ease", text="Set Ease on Selected Keys")
     for draw in extra_rows:
         draw(layout, context)
@@ -144,8 +144,7 @@ def draw_settings(layout, settings, context=None, max_lines=6, extra_rows=()):
     if settings.last_summary:
         col = layout.column(align=True)
         col.scale_y = 0.8
-        for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
-            col.label(text=line)
+        opsutil.wrapped_labels(col, settings.last_summary, width)
 
 
 def active_status(context):

@@ -49,8 +49,8 @@ class QuatCurveReduceSettings(bpy.types.PropertyGroup):
     )
 
 
-def draw_settings(layout, settings, max_lines=6):
-    """The panel's reduce box: settings, button, last result."""
+def draw_settings(layout, settings, max_lines=6, width=40):
+    """The panel's reduce box: settings, button, last result (wrapped at `width` characters)."""
     col = layout.column(align=True)
     col.prop(settings, "tolerance")
     col.prop(settings, "interpolation", text="")
@@ -61,7 +61,7 @@ def draw_settings(layout, settings, max_lines=6):
         col = layout.column(align=True)
         col.scale_y = 0.8
         for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
-            col.label(text=line)
+            opsutil.wrapped_labels(col, line, width)
 
 
 class QUATCURVE_OT_reduce(bpy.types.Operator):

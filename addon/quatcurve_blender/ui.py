@@ -16,16 +16,7 @@ def draw_status(layout):
     return False
 
 
-def wrapped_labels(layout, text, width):
-    """`text` as labels of at most about `width` characters (Blender's labels do not wrap)."""
-    line = ""
-    for word in text.split():
-        if len(line) + len(word) > width:
-            layout.label(text=line)
-            line = ""
-        line = (line + " " + word).strip()
-    if line:
-        layout.label(text=line)
+wrapped_labels = opsutil.wrapped_labels
 
 
 def draw_bake_settings(layout, settings):
@@ -45,7 +36,7 @@ def draw_bake_settings(layout, settings):
     layout.prop(settings, "new_action")
 
 
-def draw_last_result(layout, settings, max_lines=8):
+def draw_last_result(layout, settings, max_lines=8, width=40):
     """Summary of the last bake: targets, keys written, seconds, and one line per target."""
     if not settings.last_summary:
         return
@@ -59,7 +50,7 @@ def draw_last_result(layout, settings, max_lines=8):
     col = box.column(align=True)
     col.scale_y = 0.8
     for line in lines[:max_lines]:
-        col.label(text=line)
+        wrapped_labels(col, line, width)
     if len(lines) > max_lines:
         col.label(text="… and %d more" % (len(lines) - max_lines))
 
@@ -69,17 +60,22 @@ def draw_compare_settings(layout, settings):
     col = layout.column(align=True)
     col.prop(settings, "subframes")
     col.prop(settings, "all_euler_orders")
-    col.prop(settings, "key_interpolation")
-    layout.prop(settings, "report_path", text="")
+    col = layout.column(align=True)
+    col.label(text="Blender's keys:")
+    col.prop(settings, "key_interpolation", text="")
+    col = layout.column(align=True)
+    col.label(text="Report file (optional):")
+    col.prop(settings, "report_path", text="")
 
 
 def label_width(context, default=40):
-    """How many characters of label text fit across the region drawing now (labels do not wrap)."""
+    """How many characters of label text fit across the region drawing now, inside a box (labels do
+    not wrap): about 7 pixels a character at UI scale 1, 50 pixels of margins."""
     region = getattr(context, "region", None) if context is not None else None
     if region is None or region.width <= 0:
         return default
     scale = context.preferences.view.ui_scale if context.preferences is not None else 1.0
-    return max(16, int((region.width - 40) / (6.5 * scale)))
+    return max(16, int((region.width - 50 * scale) / (7.2 * scale)))
 
 
 def compared_entry(context, settings):
@@ -151,11 +147,14 @@ def draw_compare_table(layout, settings, active=None, max_targets=POPUP_TARGETS,
     for target in table[:max_targets]:
         box = layout.box()
         head = box.row()
-        head.label(text=target["name"], icon="OBJECT_DATA")
-        if target.get("key_frames"):
-            head.label(text="%s, %d keys" % (target.get("rotation_mode", ""), len(target["key_frames"])))
+        frames = target.get("key_frames") or []
+        head.label(text="%s   %s, %d keys, frames %g to %g" % (
+            target["name"], target.get("rotation_mode", ""), len(frames), frames[0], frames[-1])
+            if frames else target["name"], icon="OBJECT_DATA")
         if target.get("image"):
-            op = head.operator("quatcurve.show_compare_plot", text="Plot", icon="IMAGE_DATA")
+            sub = head.row()
+            sub.alignment = "RIGHT"
+            op = sub.operator("quatcurve.show_compare_plot", text="Show Plot", icon="IMAGE_DATA")
             op.image_name = target["image"]
         row = box.row(align=True)
         for header, key, fmt, units in COMPARE_COLUMNS:
@@ -347,7 +346,8 @@ class FitPanel(_TaskPanel):
     bl_options = set()
 
     def draw(self, context):
-        fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context, extra_rows=FIT_ROWS)
+        fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context, extra_rows=FIT_ROWS,
+                              width=label_width(context))
 
 
 class BakePanel(_TaskPanel):
@@ -361,7 +361,7 @@ class BakePanel(_TaskPanel):
         layout = self.layout
         draw_bake_settings(layout, settings)
         big_button(layout, "quatcurve.bake", "Bake", "ACTION")
-        draw_last_result(layout, settings)
+        draw_last_result(layout, settings, width=label_width(context))
 
 
 class ReducePanel(_TaskPanel):
@@ -371,7 +371,7 @@ class ReducePanel(_TaskPanel):
     bl_label = "Reduce Keys"
 
     def draw(self, context):
-        reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce)
+        reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce, width=label_width(context))
 
 
 class ComparePanel(_TaskPanel):
