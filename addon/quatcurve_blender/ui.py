@@ -94,12 +94,19 @@ def draw_compare_result(layout, context, settings):
         return
     box = layout.box()
     col = box.column(align=True)
-    col.label(text=entry["name"] if count == 1 else "%s (1 of %d compared)" % (entry["name"], count), icon="INFO")
+    col.label(text=entry["name"], icon=target_icon(entry["name"]))
     wrapped_labels(col, entry.get("sentence") or entry["recommendation"], label_width(context))
+    if count > 1:
+        col.label(text="%d more in the Table" % (count - 1))
     row = box.row(align=True)
     row.operator("quatcurve.compare_table", text="Table", icon="SPREADSHEET" if _has_icon("SPREADSHEET") else "TEXT")
     op = row.operator("quatcurve.show_compare_plot", text="Plot", icon="IMAGE_DATA")
     op.image_name = entry.get("image") or ""
+
+
+def target_icon(name):
+    """A pose bone's comparison is named 'Armature/Bone'."""
+    return "BONE_DATA" if "/" in name else "OBJECT_DATA"
 
 
 def _has_icon(name):
@@ -116,7 +123,7 @@ COMPARE_COLUMNS = (
     (("Speed jump", "at keys (°/frame)"), "velocity_jump_deg", "%.3f", 6.5),
     (("Jerk at keys", "(accel. jump, °/frame²)"), "acceleration_jump_deg", "%.4f", 8.5),
 )
-POPUP_TARGETS = 4  # targets shown in the popup; the rest are in the report
+POPUP_TARGETS = 3  # targets shown in the popup (a popup does not scroll); the rest are in the report
 
 
 def cell_text(row, key, fmt):
@@ -150,7 +157,7 @@ def draw_compare_table(layout, settings, active=None, max_targets=POPUP_TARGETS,
         frames = target.get("key_frames") or []
         head.label(text="%s   %s, %d keys, frames %g to %g" % (
             target["name"], target.get("rotation_mode", ""), len(frames), frames[0], frames[-1])
-            if frames else target["name"], icon="OBJECT_DATA")
+            if frames else target["name"], icon=target_icon(target["name"]))
         if target.get("image"):
             sub = head.row()
             sub.alignment = "RIGHT"
@@ -179,7 +186,7 @@ def draw_compare_table(layout, settings, active=None, max_targets=POPUP_TARGETS,
         for line in target.get("path_rule", []):
             wrapped_labels(sub, "Path rule: " + line, width)
     if len(table) > max_targets:
-        layout.label(text="… and %d more targets: set a Report path to see every one" % (len(table) - max_targets))
+        layout.label(text="… and %d more targets: set a Report file to see every one" % (len(table) - max_targets))
 
 
 def rows_as_sources(target):

@@ -137,6 +137,22 @@ def test_the_panel_shows_one_sentence_and_opens_table_and_plot(scene):
     assert not any(n.kind == "prop" for n in layout.walk())  # no table in the sidebar
 
 
+def test_the_panel_shows_the_active_targets_sentence_first(scene):
+    keyed_cube(scene, "Other")
+    cube = keyed_cube(scene, "Cube")
+    assert bpy.ops.quatcurve.compare() == {"FINISHED"}
+    for active in ("Other", "Cube"):
+        bpy.context.view_layer.objects.active = bpy.data.objects[active]
+        layout = Recorder()
+        ui.draw_compare_result(layout, bpy.context, scene.quatcurve_compare)
+        labels = layout.texts("label")
+        assert labels[0] == active and labels[-1] == "1 more in the Table"
+        popup = Recorder()
+        ui.draw_compare_table(popup, scene.quatcurve_compare, active=active)
+        assert popup.children[0].children[0].children[0].text.startswith(active + " ")
+    assert cube.select_get()
+
+
 def test_the_popup_table_has_every_column_with_its_unit(scene):
     keyed_cube(scene)
     assert bpy.ops.quatcurve.compare() == {"FINISHED"}

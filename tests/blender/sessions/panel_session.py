@@ -35,6 +35,9 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import compare_ops, fcurves, fit, ui  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from window_clicks import open_subpanels  # noqa: E402
+
 ARGS = sys.argv[sys.argv.index("--") + 1:]
 VERDICT, SHOTS = ARGS[0], ARGS[1]
 os.makedirs(SHOTS, exist_ok=True)
@@ -155,30 +158,6 @@ def open_tab(panel):
     yield
 
 
-def open_subpanel(panel):
-    """Clicks up the sidebar from its bottom, on the subpanel headers' arrows, until `panel` draws
-    (a closed subpanel draws only its header). The tasks below `panel` are closed again; nothing
-    above it is clicked, so no button of an open panel is pressed."""
-    region = region_of("UI")
-    x = region.x + 40
-    for y in range(region.y + 6, region.y + region.height, 6):
-        if verdict["drawn"].get(panel):
-            break
-        before = dict(verdict["drawn"])
-        click(x, y)
-        yield
-        yield
-        opened = [p for p in verdict["drawn"] if p not in before and p != panel]
-        verdict.setdefault("scan", []).append([y, opened])
-        for other in opened:  # a task below `panel` opened: close it again (its header stays put)
-            click(x, y)
-            verdict["drawn"].pop(other, None)
-            yield
-            yield
-    mouse_to(area.x + 5, area.y + 5)
-    yield
-
-
 def frame_rig(rig):
     space = area.spaces.active
     rv3d = space.region_3d
@@ -254,7 +233,7 @@ def session():
     screenshot("panel_rig")
     verdict["drawn_default"] = dict(verdict["drawn"])
 
-    yield from open_subpanel("QUATCURVE_PT_view3d_compare")
+    yield from open_subpanels(win, area, verdict["drawn"], ["QUATCURVE_PT_view3d_compare"])
     select_bone(rig, "Upper", True)  # the clicks below the panels went through to the viewport
     yield
     yield
