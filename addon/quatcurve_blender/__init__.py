@@ -19,7 +19,7 @@ if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
 
     # Lowest layer first, so each module reloads against already-reloaded modules below it.
     for _name in ("native", "opsutil", "fcurves", "targets", "write", "plot", "reduce", "bake", "compare", "fit", "live",
-                  "bake_ops", "fit_ops", "compare_ops", "reduce_ops", "trails", "ui"):
+                  "bake_ops", "compare_ops", "reduce_ops", "fit_ops", "trails", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
 

@@ -10,7 +10,7 @@ import json
 
 import bpy
 
-from . import compare, fit_ops, native, opsutil
+from . import compare, methods, native, opsutil
 
 KEY_INTERPOLATION_ITEMS = (
     ("BEZIER", "Bezier (auto-clamped)", "Blender's default for new keys: rotation eases in and out of every key"),
@@ -18,7 +18,7 @@ KEY_INTERPOLATION_ITEMS = (
 )
 
 # Display names of the compared sources (the report and the CLI keep the source identifiers).
-METHOD_NAMES = {identifier: name for identifier, name, _ in fit_ops.METHOD_ITEMS}
+METHOD_NAMES = {method: methods.label(method) for method in methods.ALL}
 SOURCE_NAMES = dict(METHOD_NAMES, BLENDER="Blender (as keyed)", BLENDER_QUATERNION="Blender Quaternion")
 
 
