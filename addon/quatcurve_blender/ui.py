@@ -79,23 +79,30 @@ def label_width(context, default=40):
 
 
 def compared_entry(context, settings):
-    """The last comparison's entry of the active target, else its first one (None without a result)."""
+    """(entry, is the active target's, how many targets) of the last comparison: the active target's
+    entry, else its first one (None without a result)."""
     table = compare_ops.last_table(settings)
     target = trails.active_target(context) if context is not None else None
     name = target.name if target is not None else None
-    return next((t for t in table if t["name"] == name), table[0] if table else None), len(table)
+    entry = next((t for t in table if t["name"] == name), None)
+    return (entry, True, len(table)) if entry is not None else (table[0] if table else None, False, len(table))
 
 
 def draw_compare_result(layout, context, settings):
     """The panel's view of the last comparison: the recommendation as one sentence (the active
-    target's), the buttons that open the table (a popup wide enough for every column) and the plot."""
-    entry, count = compared_entry(context, settings)
+    target's; when the active target was not compared, the last compared one's, said so), the
+    buttons that open the table (a popup wide enough for every column) and the plot."""
+    entry, active, count = compared_entry(context, settings)
     if entry is None:
         return
     box = layout.box()
     col = box.column(align=True)
-    col.label(text=entry["name"], icon=target_icon(entry["name"]))
-    wrapped_labels(col, entry.get("sentence") or entry["recommendation"], label_width(context))
+    width = label_width(context)
+    if active:
+        col.label(text=entry["name"], icon=target_icon(entry["name"]))
+    else:
+        wrapped_labels(col, "Last compared: %s" % entry["name"], width)
+    wrapped_labels(col, entry.get("sentence") or entry["recommendation"], width)
     if count > 1:
         col.label(text="%d more in the Table" % (count - 1))
     row = box.row(align=True)

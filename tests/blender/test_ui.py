@@ -151,6 +151,13 @@ def test_the_panel_shows_the_active_targets_sentence_first(scene):
         ui.draw_compare_table(popup, scene.quatcurve_compare, active=active)
         assert popup.children[0].children[0].children[0].text.startswith(active + " ")
     assert cube.select_get()
+    # An active target that was not compared: the last compared one's sentence, said so.
+    bpy.context.view_layer.objects.active = keyed_cube(scene, "Third")
+    layout = Recorder()
+    ui.draw_compare_result(layout, bpy.context, scene.quatcurve_compare)
+    first = compare_ops.last_table(scene.quatcurve_compare)[0]
+    assert layout.texts("label")[0] == "Last compared: " + first["name"]
+    assert " ".join(layout.texts("label")[1:]) == first["sentence"] + " 1 more in the Table"
 
 
 def test_the_popup_table_has_every_column_with_its_unit(scene):
