@@ -1,6 +1,6 @@
-"""The `quatcurve.fit`, `quatcurve.unfit` and `quatcurve.set_ease` operators, the fit settings and last
-result (`scene.quatcurve_fit`), and the records fit keeps on actions (`Action.quatcurve_fits`,
-`Action.quatcurve_eases`).
+"""The `quatcurve.fit`, `quatcurve.unfit`, `quatcurve.set_ease` and `quatcurve.set_turns` operators, the
+fit settings and last result (`scene.quatcurve_fit`), and the records fit keeps on actions
+(`Action.quatcurve_fits`, `Action.quatcurve_eases`, `Action.quatcurve_turns`).
 
 Fit shapes the selected objects' (Object mode) or pose bones' (Pose mode) own rotation keys so that
 Blender plays the chosen method (fit.py). Properties not given by the caller come from the panel's
@@ -80,6 +80,25 @@ class QuatCurveEaseRecord(bpy.types.PropertyGroup):
     )
 
 
+class QuatCurveTurnsRecord(bpy.types.PropertyGroup):
+    """Action.quatcurve_turns item: the extra full turns of the segment leaving one key (by frame)."""
+    __annotations__ = dict(
+        slot=bpy.props.StringProperty(name="Slot", description="The action slot of the turned target (4.4+)"),
+        owner_path=bpy.props.StringProperty(
+            name="Owner Path", description="Whose key turns: '' (the object) or the pose bone's path"),
+        frame=bpy.props.FloatProperty(name="Frame", description="The key's frame, in frames"),
+        turns=bpy.props.IntProperty(name="Turns",
+                                    description="Extra full turns of the segment leaving this key (a count)"),
+    )
+
+
+def turns_property():
+    return bpy.props.IntProperty(
+        name="Turns", default=0, min=-10000, max=10000, soft_min=-10, soft_max=10,
+        description="Extra full turns of the segment leaving each selected key, about its own axis "
+                    "(negative: the other way; quaternion targets)")
+
+
 class QuatCurveFitSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_fit: the panel's fit settings, live mode, the ease to set, the last result."""
     __annotations__ = dict(
@@ -94,6 +113,7 @@ class QuatCurveFitSettings(bpy.types.PropertyGroup):
         ease_out=bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0,
                                          description="How much the motion starts slowly out of the selected keys, "
                                                      "from 0 (no ease) to 1 (from rest); the path stays the same"),
+        turns=turns_property(),
         last_summary=bpy.props.StringProperty(name="Last Fit", default="",
                                               description="Targets and keys of the last fit"),
         last_lines=bpy.props.StringProperty(name="Last Fit Details", default="",
@@ -110,7 +130,7 @@ def settings_from(props):
 
 def draw_settings(layout, settings, context=None, extra_rows=(), width=40):
     """The panel's fit box: the method and Live on one line, tolerance and the method's options, Fit /
-    Unmark, ease, `extra_rows` (functions draw(layout, context) other tools add, see ui.FIT_ROWS),
+    Unmark, ease, turns, `extra_rows` (functions draw(layout, context) other tools add, see ui.FIT_ROWS),
     whether the active target is fitted, the last fit's summary (wrapped at `width` characters; a
     line per target stays in settings.last_lines)."""
     row = layout.row(align=True)
@@ -127,6 +147,9 @@ def draw_settings(layout, settings, context=None, extra_rows=(), width=40):
     col.prop(settings, "ease_in")
     col.prop(settings, "ease_out")
     col.operator("quatcurve.set_ease", text="Set Ease on Selected Keys")
+    row = layout.row(align=True)
+    row.prop(settings, "turns")
+    row.operator("quatcurve.set_turns", text="Set Turns")
     for draw in extra_rows:
         draw(layout, context)
     if context is not None:
@@ -219,7 +242,8 @@ def set_ease(found, ease_in, ease_out):
         e_in, e_out = fit.key_eases(action, target, keys.frames)
         e_in[chosen], e_out[chosen] = ease_in, ease_out
         changed += int(chosen.sum())
-        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out)
+        turns = fit.key_turns(action, target, keys.frames)
+        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out, turns)
         if plan is not None:
             plans.append((plan, target))
     for plan, target in plans:
@@ -227,8 +251,29 @@ def set_ease(found, ease_in, ease_out):
     return changed
 
 
-_classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveFitSettings, QUATCURVE_OT_fit, QUATCURVE_OT_unfit,
-            QUATCURVE_OT_set_ease)
+class QUATCURVE_OT_set_turns(bpy.types.Operator):
+    """Turn the segment leaving each selected rotation key of the selected fitted quaternion targets by
+    extra full turns about its own axis, and refit them"""
+    bl_idname = "quatcurve.set_turns"
+    bl_label = "Set Turns on Selected Keys"
+    bl_options = {"REGISTER", "UNDO"}
+    turns: turns_property()
+
+    def execute(self, context):
+        opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("turns",))
+        try:
+            native.require()
+            changed = fit.set_turns(targets.gather_targets(context, verb="turn"), self.turns)
+        except (TargetError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, "%+d turn%s on %d key%s" % (
+            self.turns, "" if abs(self.turns) == 1 else "s", changed, "" if changed == 1 else "s"))
+        return {"FINISHED"}
+
+
+_classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveTurnsRecord, QuatCurveFitSettings, QUATCURVE_OT_fit,
+            QUATCURVE_OT_unfit, QUATCURVE_OT_set_ease, QUATCURVE_OT_set_turns)
 
 
 def register():
@@ -237,9 +282,11 @@ def register():
     bpy.types.Scene.quatcurve_fit = bpy.props.PointerProperty(type=QuatCurveFitSettings)
     bpy.types.Action.quatcurve_fits = bpy.props.CollectionProperty(type=QuatCurveFitRecord)
     bpy.types.Action.quatcurve_eases = bpy.props.CollectionProperty(type=QuatCurveEaseRecord)
+    bpy.types.Action.quatcurve_turns = bpy.props.CollectionProperty(type=QuatCurveTurnsRecord)
 
 
 def unregister():
+    del bpy.types.Action.quatcurve_turns
     del bpy.types.Action.quatcurve_eases
     del bpy.types.Action.quatcurve_fits
     del bpy.types.Scene.quatcurve_fit

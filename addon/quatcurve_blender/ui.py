@@ -300,8 +300,8 @@ def show_in_image_editor(context, window, image):
 # closed. A task's panel is the same class in every editor (see _task_panels).
 #
 # Where another tool adds itself (docs/ui.md, "Adding a tool"):
-# - a row inside the Fit panel (a tool on the fitted keys, e.g. full turns): a function
-#   draw(layout, context) in FIT_ROWS, drawn below the ease row;
+# - a row inside the Fit panel (a tool on the fitted keys): a function draw(layout, context) in
+#   FIT_ROWS, drawn below the ease and turns rows;
 # - a panel of its own (a task with settings, e.g. rotation mode conversion, glTF export): a
 #   _TaskPanel subclass in TASK_PANELS, closed by default (bl_options {"DEFAULT_CLOSED"});
 # - the F3 search and the Key / Animation menus: a line in draw_bake_menu_item.
@@ -347,7 +347,7 @@ class _TaskPanel:
         return getattr(context.scene, cls.settings, None) is not None
 
 
-# Rows other tools add to the Fit panel, below the ease row: functions draw(layout, context).
+# Rows other tools add to the Fit panel, below the ease and turns rows: functions draw(layout, context).
 FIT_ROWS = ()
 
 

@@ -99,7 +99,7 @@ def test_fit_method_and_live_share_the_first_row(scene):
     fit_ops.draw_settings(layout, scene.quatcurve_fit, bpy.context, extra_rows=ui.FIT_ROWS)
     first = layout.children[0]
     assert first.kind == "row" and [c.text for c in first.children] == ["method", "live"]
-    assert layout.texts("operator")[:3] == ["quatcurve.fit", "quatcurve.unfit", "quatcurve.set_ease"]
+    assert layout.texts("operator") == ["quatcurve.fit", "quatcurve.unfit", "quatcurve.set_ease", "quatcurve.set_turns"]
 
 
 def test_fit_rows_draw_inside_the_fit_panel(scene):
@@ -216,9 +216,9 @@ def test_the_sentence_says_which_method_and_why():
 
 SETTINGS = (bake_ops.QuatCurveSettings, compare_ops.QuatCurveCompareSettings, reduce_ops.QuatCurveReduceSettings,
             fit_ops.QuatCurveFitSettings, trails.QuatCurveTrailSettings, fit_ops.QuatCurveFitRecord,
-            fit_ops.QuatCurveEaseRecord)
-# A number's tooltip says its unit (degrees, frames, scene units, seconds, a count) or its range.
-UNIT = re.compile(r"degree|°|frame|scene unit|second|count|from -?[01] ")
+            fit_ops.QuatCurveEaseRecord, fit_ops.QuatCurveTurnsRecord)
+# A number's tooltip says its unit (degrees, frames, scene units, seconds, full turns, a count) or its range.
+UNIT = re.compile(r"degree|°|frame|scene unit|second|turns|count|from -?[01] ")
 
 
 def addon_operators():
