@@ -11,6 +11,7 @@ drawing into a recording layout; test_ui_xvfb.py draws the same panels in a wind
 import math
 import re
 
+import blf
 import bpy
 from quatcurve_blender import bake_ops, compare_ops, fit_ops, reduce_ops, trails, ui
 
@@ -64,6 +65,14 @@ class Recorder:
 
     def texts(self, kind):
         return [n.text for n in self.walk() if n.kind == kind]
+
+
+def text_width(text):
+    """Pixels of `text` in Blender's UI font (blf's font 0) at the labels' size and the UI scale."""
+    styles = bpy.context.preferences.ui_styles[0]
+    style = getattr(styles, "widget_label", None) or styles.widget  # 5.x: one font size for widgets
+    blf.size(0, style.points * bpy.context.preferences.view.ui_scale)
+    return blf.dimensions(0, text)[0]
 
 
 def keyed_cube(scene, name="Cube"):
@@ -179,16 +188,37 @@ def test_the_popup_table_has_every_column_with_its_unit(scene):
     slerp = entry["sources"][sources.index("Slerp")]
     assert table.children[1].texts("label")[2 + sources.index("Slerp")] == "0.00°"
     assert slerp["speed_ratio"] is not None and slerp["velocity_jump_deg"] >= 0
-    # Every column as wide as its longest text at about 7 pixels a character (a UI unit is 20
-    # pixels), and the popup as wide as the columns.
+    # Every text narrower than its column in this Blender's UI font (blf; a UI unit is 20 pixels at
+    # UI scale 1, 8 of them margins), and the popup as wide as the columns.
     for (header, key, fmt, units), col in zip(ui.COMPARE_COLUMNS, table.children):
         assert col.ui_units_x == units
-        longest = max(len(t) for t in col.texts("label"))
-        assert longest * 7 <= units * 20, (header, longest)
+        for text in col.texts("label"):
+            assert text_width(text) + (20 if key == "label" else 0) <= units * 20 - 8, (text, text_width(text))
     assert ui.popup_width(bpy.context) >= sum(c[3] for c in ui.COMPARE_COLUMNS) * 20
     # The sentence, then the reasons and the plot button.
     texts = box.texts("label")
     assert entry["sentence"] in texts and "quatcurve.show_compare_plot" in box.texts("operator")
+
+
+def test_the_sentence_fits_the_default_sidebar(scene):
+    # Blender's default sidebar is 229 pixels wide at UI scale 1 (measured in 3.4 under Xvfb; the
+    # window test checks it there): the wrapped lines fit inside its box, in this Blender's font.
+    class Region:
+        width = 229
+
+    class Context:
+        region, preferences = Region, bpy.context.preferences
+
+    keyed_cube(scene)
+    assert bpy.ops.quatcurve.compare() == {"FINISHED"}
+    for sentence in [compare_ops.last_result(scene, "Cube")["sentence"]] + [compare_ops.recommendation_sentence(r) for r in (
+            {"method": "SPLINE_C2", "methods": {"SPLINE_C2": {"eligible": True, "smooth": True}}},
+            {"method": "CATMULL_ROM", "methods": {"CATMULL_ROM": {"eligible": False}}})]:
+        layout = Recorder()
+        ui.wrapped_labels(layout, sentence, ui.label_width(Context))
+        lines = layout.texts("label")
+        assert " ".join(lines) == sentence
+        assert max(text_width(line) for line in lines) <= Region.width - 40, lines
 
 
 def test_the_table_operator_reports_in_background_and_refuses_without_a_comparison(scene):
