@@ -163,7 +163,7 @@ def draw_settings(layout, settings, context=None, extra_rows=(), width=40):
 
 
 def active_status(context):
-    """'Fitted: SQUAD, 0.05°' for the active target when it carries a fit record, else ''."""
+    """'Fitted: Squad, 0.05°' for the active target when it carries a fit record, else ''."""
     obj = context.active_object
     if obj is None:
         return ""
@@ -171,7 +171,7 @@ def active_status(context):
     target = targets.Target(obj, bone)
     action = fcurves.active_action(obj)
     record = fit.find_record(action, target) if action is not None else None
-    return "Fitted: %s, %.3g°" % (record.method, record.tolerance) if record is not None else ""
+    return "Fitted: %s, %.3g°" % (methods.label(record.method), record.tolerance) if record is not None else ""
 
 
 class QUATCURVE_OT_fit(bpy.types.Operator):

@@ -111,6 +111,13 @@ def test_fit_method_and_live_share_the_first_row(scene):
     assert layout.texts("operator") == ["quatcurve.fit", "quatcurve.unfit", "quatcurve.set_ease", "quatcurve.set_turns"]
 
 
+def test_fit_says_whether_the_active_target_is_fitted(scene):
+    keyed_cube(scene)
+    assert fit_ops.active_status(bpy.context) == ""
+    assert bpy.ops.quatcurve.fit(method="SPLINE_C2", tolerance=0.05) == {"FINISHED"}
+    assert fit_ops.active_status(bpy.context) == "Fitted: C2 Spline, 0.05°"
+
+
 def test_fit_rows_draw_inside_the_fit_panel(scene):
     drawn = []
 
