@@ -282,6 +282,8 @@ def session():
     yield
     with bpy.context.temp_override(window=win, area=area, region=region_of("WINDOW")):
         bpy.ops.action.view_all()
+    with bpy.context.temp_override(window=win, area=area, region=region_of("CHANNELS")):
+        bpy.ops.anim.channels_expand(all=True)  # the four quaternion channels, each in its own row
     for _ in range(2):
         yield
     sheet = region_of("WINDOW")
