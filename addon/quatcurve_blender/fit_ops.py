@@ -20,7 +20,8 @@ def fit_properties():
     P = bpy.props
     return {
         "method": P.EnumProperty(name="Method", items=METHOD_ITEMS, default="SLERP",
-                                 description="How the rotation travels from key to key; Fit shapes your keys so that Blender plays it"),
+                                 description="How the rotation travels from key to key; Fit shapes your keys so "
+                                             "that Blender plays it"),
         "tolerance": P.FloatProperty(
             name="Tolerance (°)", default=0.05, min=1e-4, soft_max=5.0, precision=3,
             description="How far Blender's playback may stray from the method, in degrees, checked on every "
