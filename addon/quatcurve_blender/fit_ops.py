@@ -58,8 +58,8 @@ class QuatCurveFitRecord(bpy.types.PropertyGroup):
         slot=bpy.props.StringProperty(name="Slot", description="The action slot of the fitted target (4.4+)"),
         owner_path=bpy.props.StringProperty(
             name="Owner Path", description="Whose rotation was fitted: '' (the object) or the pose bone's path"),
-        prop=bpy.props.StringProperty(name="Rotation Property",
-                                      description="The fitted rotation channels (rotation_euler, rotation_quaternion, ...)"),
+        prop=bpy.props.StringProperty(
+            name="Rotation Property", description="The fitted rotation channels (rotation_quaternion, ...)"),
         signature=bpy.props.StringProperty(
             name="Signature", description="A digest of the animator's keys when fitted (Live refits when it changes)"),
         key_frames=bpy.props.StringProperty(name="Key Frames",

@@ -243,8 +243,8 @@ class QUATCURVE_OT_show_compare_plot(bpy.types.Operator):
     bl_idname = "quatcurve.show_compare_plot"
     bl_label = "Show Comparison Plot in Image Editor"
     bl_options = {"REGISTER"}
-    image_name: bpy.props.StringProperty(name="Image", default="",
-                                         description="Name of the plot image to show (empty: the active object's or bone's)")
+    image_name: bpy.props.StringProperty(
+        name="Image", default="", description="Name of the plot image to show (empty: the active object's or bone's)")
 
     def execute(self, context):
         name = self.image_name

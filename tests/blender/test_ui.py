@@ -218,9 +218,10 @@ def test_the_sentence_fits_the_default_sidebar(scene):
 
     keyed_cube(scene)
     assert bpy.ops.quatcurve.compare() == {"FINISHED"}
-    for sentence in [compare_ops.last_result(scene, "Cube")["sentence"]] + [compare_ops.recommendation_sentence(r) for r in (
-            {"method": "SPLINE_C2", "methods": {"SPLINE_C2": {"eligible": True, "smooth": True}}},
-            {"method": "CATMULL_ROM", "methods": {"CATMULL_ROM": {"eligible": False}}})]:
+    longest = [compare_ops.recommendation_sentence(r) for r in (
+        {"method": "SPLINE_C2", "methods": {"SPLINE_C2": {"eligible": True, "smooth": True}}},
+        {"method": "CATMULL_ROM", "methods": {"CATMULL_ROM": {"eligible": False}}})]
+    for sentence in [compare_ops.last_result(scene, "Cube")["sentence"]] + longest:
         layout = Recorder()
         ui.wrapped_labels(layout, sentence, ui.label_width(Context))
         lines = layout.texts("label")
