@@ -31,7 +31,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, native, targets
+    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -40,7 +40,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, native, targets
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, targets
 
 import bpy
 
@@ -70,6 +70,7 @@ examples:
       --objects 'Rig' --output fitted.blend in.blend
   blender -b --python addon/quatcurve_blender/cli.py -- --convert QUATERNION --all-actions \\
       --objects 'Rig' --output quaternions.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --gltf out.glb --tolerance 0.1 fitted.blend
 """
 
 
@@ -80,7 +81,9 @@ def build_parser():
                            "comparing the methods first (the quatcurve.compare operator); or, with --fit,\n"
                            "shape their own rotation keys so that Blender plays the method (the\n"
                            "quatcurve.fit operator); or, with --convert MODE, change their rotation mode\n"
-                           "keeping the motion (the quatcurve.convert operator).")
+                           "keeping the motion (the quatcurve.convert operator); or, with --gltf, export the\n"
+                           "scene to binary glTF with few rotation keys that play each target's curve\n"
+                           "(the quatcurve.export_gltf operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
                         "blender -b IN.blend --python cli.py -- ...)")
@@ -114,6 +117,16 @@ def build_parser():
     g.add_argument("--fit", action="store_true",
                    help="fit instead of bake; uses --method, --tension, --continuity, --bias, "
                         "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
+
+    g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
+                                     "Blender's glTF exporter, each rotation sampler replaced by few slerp "
+                                     "keys within --tolerance (default 0.1°) of the target's curve, checked at "
+                                     "--subframes points per frame (default 20). IN.blend is not changed.")
+    g.add_argument("--gltf", metavar="OUT.glb", help="the binary glTF file to write")
+    g.add_argument("--gltf-curve", choices=gltf.METHODS, default="AUTO", metavar="CURVE",
+                   help="the curve each rotation sampler plays: AUTO (default: fitted targets their fit's "
+                        "method, others what Blender plays), BLENDER (what Blender plays), or a method "
+                        "through each target's keys: %s" % ", ".join(fit.METHODS))
 
     g = p.add_argument_group("convert", "Instead of baking (the quatcurve.convert operator): the targets get a new "
                                         "rotation mode and their rotation keys are converted so that Blender plays "
@@ -240,6 +253,32 @@ def convert_settings(args):
         convert.check_settings(settings)
     except convert.ConvertError as error:
         raise UsageError(str(error)) from None
+    return settings
+
+
+# Options of bake, fit and compare that mean nothing to --gltf (argparse defaults: what is not given).
+NOT_FOR_GLTF = NOT_FOR_FIT + (("fit", False, "--fit"), ("output", None, "--output"), ("in_place", False, "--in-place"),
+                              ("objects", None, "--objects"), ("bones", None, "--bones"), ("method", "SLERP", "--method"),
+                              ("tension", 0.0, "--tension"), ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"),
+                              ("shortest_path", True, "--no-shortest-path"), ("clamped", True, "--no-clamp"),
+                              ("convert", None, "--convert"), ("all_actions", False, "--all-actions"))
+
+
+def gltf_settings(args):
+    """ExportSettings from the arguments, checked with the output path by gltf's own check; options of
+    the other tasks are a UsageError."""
+    given = [flag for name, default, flag in NOT_FOR_GLTF if getattr(args, name) != default]
+    if given:
+        raise UsageError("%s: not an option of --gltf (it exports the whole scene; choose the curve with "
+                         "--gltf-curve)" % ", ".join(given))
+    defaults = gltf.ExportSettings()
+    settings = gltf.ExportSettings(
+        method=args.gltf_curve, tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        gltf.check_settings(settings, args.gltf)
+    except gltf.GltfError as error:
+        raise UsageError("--gltf: %s" % error) from None
     return settings
 
 
@@ -426,6 +465,10 @@ def save_atomically(path):
 # ---- main -------------------------------------------------------------------------------------------
 
 def run(args):
+    if args.gltf is not None:
+        return run_gltf(args)
+    if args.gltf_curve != "AUTO":
+        raise UsageError("--gltf-curve: an option of --gltf only")
     if args.convert:
         return run_convert(args)
     if args.all_actions:
@@ -539,6 +582,28 @@ def run_convert(args):
     finally:
         if registered:
             addon.unregister()
+
+
+def run_gltf(args):
+    """--gltf: the scene of IN.blend exported by gltf.export (the operator's function)."""
+    settings = gltf_settings(args)
+    source = input_path(args)
+    native.require()
+    open_input(source)
+    registered = register_addon()
+    try:
+        with blender_output_silenced():  # the exporter's progress lines
+            result = gltf.export(bpy.context.scene, args.gltf, settings)
+    finally:
+        if registered:
+            addon.unregister()
+    print("quatcurve %s (Blender %s): glTF, curve %s, tolerance %g°, %d subframes, %s -> %s" % (
+        native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+        settings.subframes, os.path.basename(source), result.filepath))
+    for line in result.lines():
+        print("  " + line)
+    print("total: " + result.summary())
+    return EXIT_OK
 
 
 def main(argv=None):
