@@ -273,7 +273,7 @@ def test_every_operator_and_property_has_a_tooltip_with_its_unit(addon):
         if owner.startswith("quatcurve.") and len(rna.description.split()) < 5:
             missing.append("%s: operator tooltip %r" % (owner, rna.description))
         for prop in rna.properties:
-            if prop.identifier == "rna_type":
+            if prop.identifier == "rna_type" or prop.is_hidden:  # hidden: never shown, so no tooltip
                 continue
             where = "%s.%s" % (owner, prop.identifier)
             if len(prop.description.split()) < 3:
