@@ -21,11 +21,11 @@ ROTATION_MODE_ITEMS = (
     ("KEEP", "Keep", "The target's current rotation mode"),
     ("QUATERNION", "Quaternion (WXYZ)", "Quaternion keys, hemisphere-continuous"),
     ("XYZ", "XYZ Euler", "Euler keys, continuous (no flips or 360° jumps)"),
-    ("XZY", "XZY Euler", ""),
-    ("YXZ", "YXZ Euler", ""),
-    ("YZX", "YZX Euler", ""),
-    ("ZXY", "ZXY Euler", ""),
-    ("ZYX", "ZYX Euler", ""),
+    ("XZY", "XZY Euler", "Euler keys in the XZY order, continuous"),
+    ("YXZ", "YXZ Euler", "Euler keys in the YXZ order, continuous"),
+    ("YZX", "YZX Euler", "Euler keys in the YZX order, continuous"),
+    ("ZXY", "ZXY Euler", "Euler keys in the ZXY order, continuous"),
+    ("ZYX", "ZYX Euler", "Euler keys in the ZYX order, continuous"),
     ("AXIS_ANGLE", "Axis Angle", "Axis-angle keys, continuous"),
 )
 
@@ -36,13 +36,14 @@ def bake_properties():
     P = bpy.props
     return {
         "method": P.EnumProperty(name="Method", items=METHOD_ITEMS, default="SLERP",
-                                 description="How orientations are interpolated between the keys"),
+                                 description="How the rotation travels from key to key in the baked keys"),
         "tension": P.FloatProperty(name="Tension", default=0.0, soft_min=-1.0, soft_max=1.0,
-                                   description="TCB tension: 1 tightens the curve at keys, -1 rounds it"),
+                                   description="TCB: how tightly the motion turns at keys, from -1 (rounder) to 1 (tight)"),
         "continuity": P.FloatProperty(name="Continuity", default=0.0, soft_min=-1.0, soft_max=1.0,
-                                      description="TCB continuity: 0 keeps the curve smooth at keys"),
+                                      description="TCB: from -1 (a sharp corner at keys) through 0 (smooth) to 1 "
+                                                  "(bulging out at keys)"),
         "bias": P.FloatProperty(name="Bias", default=0.0, soft_min=-1.0, soft_max=1.0,
-                                description="TCB bias: overshoot (+) or undershoot (-) at keys"),
+                                description="TCB: from -1 (undershoots at keys) to 1 (overshoots at keys)"),
         "shortest_path": P.BoolProperty(name="Shortest Path", default=True,
                                         description="Slerp: take the shorter way between keys (off: keep the "
                                                     "keyed quaternions' path)"),
@@ -51,14 +52,15 @@ def bake_properties():
             description="Squad, TCB, Catmull-Rom: tangents clamped so that no segment overshoots its keys and "
                         "holds stay still; off: the textbook tangents"),
         "rotation_mode": P.EnumProperty(name="Rotation Mode", items=ROTATION_MODE_ITEMS, default="KEEP",
-                                        description="Rotation mode of the baked keys (the target's mode is set to it)"),
-        "frame_start": P.IntProperty(name="Start", default=1, description="First baked frame"),
-        "frame_end": P.IntProperty(name="End", default=250, description="Last baked frame"),
+                                        description="Rotation mode of the baked keys (the object or bone is switched to it)"),
+        "frame_start": P.IntProperty(name="Start", default=1, description="First frame to bake (a frame number)"),
+        "frame_end": P.IntProperty(name="End", default=250, description="Last frame to bake (a frame number)"),
         "step": P.IntProperty(name="Step", default=1, soft_min=1, soft_max=100,
-                              description="Frames between baked keys (at least 1)"),
+                              description="Frames between two baked keys, in frames (at least 1)"),
         "tolerance": P.FloatProperty(name="Tolerance (°)", default=0.0, soft_min=0.0, soft_max=10.0, precision=3,
-                                     description="Degrees. 0: a key every Step frames. Above 0: as few keys as "
-                                                 "the angular bound allows (key reduction, Bezier keys)"),
+                                     description="How far the baked keys may stray from the method, in degrees. 0: a key "
+                                                 "every Step frames; above 0: only as many Bezier keys as "
+                                                 "this allows"),
         "new_action": P.BoolProperty(name="New Action", default=True,
                                      description="Bake into a new action named after the original, which is "
                                                  "kept (fake user) and untouched; off: replace the rotation "
@@ -72,11 +74,15 @@ class QuatCurveSettings(bpy.types.PropertyGroup):
         bake_properties(),
         use_keyed_range=bpy.props.BoolProperty(
             name="Keyed Range", default=True,
-            description="Bake over the keyed range of the selection (off: use Start and End)"),
-        last_summary=bpy.props.StringProperty(name="Last Bake", default=""),
-        last_targets=bpy.props.IntProperty(name="Targets", default=0),
-        last_keys=bpy.props.IntProperty(name="Keys Written", default=0),
-        last_seconds=bpy.props.FloatProperty(name="Seconds", default=0.0),
+            description="Bake from the first to the last key of the selection (off: from Start to End)"),
+        last_summary=bpy.props.StringProperty(name="Last Bake", default="",
+                                              description="Targets, keys and seconds of the last bake"),
+        last_targets=bpy.props.IntProperty(name="Targets", default=0,
+                                           description="Objects and bones the last bake wrote (a count)"),
+        last_keys=bpy.props.IntProperty(name="Keys Written", default=0,
+                                        description="Keys the last bake wrote (a count)"),
+        last_seconds=bpy.props.FloatProperty(name="Seconds", default=0.0,
+                                             description="How long the last bake took, in seconds"),
         last_lines=bpy.props.StringProperty(name="Last Bake Details", default="",
                                             description="One line per target, newline-separated"),
     )
@@ -106,7 +112,7 @@ def settings_from(values, frame_range=(None, None)):
 
 
 class QUATCURVE_OT_bake(bpy.types.Operator):
-    """Bake the rotation of the selected objects or pose bones with an orientation curve method"""
+    """Replace the rotation of the selected objects or pose bones by keys on every Step frames (or as few as the Tolerance in degrees allows) that follow the chosen method; the original action is kept"""
     bl_idname = "quatcurve.bake"
     bl_label = "Bake Orientation Curves"
     bl_options = {"REGISTER", "UNDO"}

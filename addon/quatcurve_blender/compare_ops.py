@@ -10,12 +10,16 @@ import json
 
 import bpy
 
-from . import compare, native, opsutil
+from . import compare, methods, native, opsutil
 
 KEY_INTERPOLATION_ITEMS = (
-    ("BEZIER", "Bezier (auto-clamped)", "Blender's default for new keys"),
-    ("LINEAR", "Linear", "Linear keys"),
+    ("BEZIER", "Bezier (auto-clamped)", "Blender's default for new keys: rotation eases in and out of every key"),
+    ("LINEAR", "Linear", "Straight lines between keys in each channel"),
 )
+
+# Display names of the compared sources (the report and the CLI keep the source identifiers).
+METHOD_NAMES = {method: methods.label(method) for method in methods.ALL}
+SOURCE_NAMES = dict(METHOD_NAMES, BLENDER="Blender (as keyed)", BLENDER_QUATERNION="Blender Quaternion")
 
 
 def compare_properties():
@@ -24,16 +28,20 @@ def compare_properties():
     return {
         "report_path": P.StringProperty(
             name="Report", subtype="FILE_PATH", default="",
-            description="JSON report to write (the plots go beside it as PNG); empty: no files"),
+            description="Also save the comparison as a file: a JSON report at this path, each plot beside it "
+                        "as a PNG. Empty: no files (the plots are still images in this .blend)"),
         "subframes": P.IntProperty(
             name="Samples per Frame", default=1, min=1, max=100,
-            description="Samples per frame (1: every frame; more for finer speed profiles)"),
+            description="How often each frame the rotation is measured, in samples per frame (1: on every "
+                        "frame; more shows speed changes between frames, and takes longer)"),
         "all_euler_orders": P.BoolProperty(
             name="All Euler Orders", default=False,
-            description="Compare Blender's Euler mode in all six orders (off: the target's order)"),
+            description="Also show how Blender's Euler rotation plays your keys in each of the six axis "
+                        "orders (off: only in the order the object or bone uses)"),
         "key_interpolation": P.EnumProperty(
             name="Blender Keys", items=KEY_INTERPOLATION_ITEMS, default="BEZIER",
-            description="Key type of the Euler and quaternion curves Blender evaluates for comparison"),
+            description="The key interpolation Blender's own Euler and quaternion rotation are played with "
+                        "for the comparison"),
     }
 
 
@@ -44,20 +52,65 @@ class QuatCurveCompareSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_compare: the panel's compare settings and the last comparison's table."""
     __annotations__ = dict(
         compare_properties(),
-        last_summary=bpy.props.StringProperty(name="Last Compare", default=""),
+        last_summary=bpy.props.StringProperty(
+            name="Last Compare", default="", description="Targets, sources and seconds of the last comparison"),
         last_table=bpy.props.StringProperty(
             name="Last Compare Table", default="",
-            description="JSON: [{name, rows: [[source, max deviation, speed ratio, path length]], "
-                        "recommendation, method, no_difference, path_rule: [line], image}]"),
+            description="The last comparison for the panel (JSON: [{name, rotation_mode, key_frames, rows: "
+                        "[[source, max deviation, speed ratio, path length]], sources: [{source, label, "
+                        "max_deviation_deg, speed_ratio, path_length_deg, velocity_jump_deg, "
+                        "acceleration_jump_deg}], recommendation, sentence, method, no_difference, "
+                        "path_rule: [line], image}])"),
     )
+
+
+def source_rows(comparison):
+    """Per source of a TargetComparison, the figures the panel's table shows, in degrees (None: not
+    finite): {source, label, max_deviation_deg, speed_ratio, path_length_deg, velocity_jump_deg (°/frame),
+    acceleration_jump_deg (°/frame²)}."""
+    rows = []
+    for name, s in comparison.sources.items():
+        m = s.metrics
+        rows.append({"source": name, "label": source_label(name),
+                     "max_deviation_deg": compare._deg(m["max_deviation"]),
+                     "speed_ratio": compare._num(m["speed_ratio"]),
+                     "path_length_deg": compare._deg(m["path_length"]),
+                     "velocity_jump_deg": compare._deg(m["max_velocity_jump"]),
+                     "acceleration_jump_deg": compare._deg(m["max_acceleration_jump"])})
+    return rows
+
+
+def source_label(source):
+    """'Slerp', 'Blender Euler XYZ', 'Blender (as keyed)' for a source identifier."""
+    if source.startswith("BLENDER_EULER_"):
+        return "Blender Euler " + source[len("BLENDER_EULER_"):]
+    return SOURCE_NAMES.get(source, source)
+
+
+def recommendation_sentence(recommendation):
+    """The recommendation as one sentence an animator reads at a glance (the reasons are in the
+    table's popup): which method, and why in a few words."""
+    method = recommendation.get("method", "")
+    name = METHOD_NAMES.get(method, method)
+    verdict = recommendation.get("methods", {}).get(method, {})
+    if not method:
+        return ""
+    if recommendation.get("no_difference"):
+        return "Any method plays these keys the same way; %s is enough." % name
+    if verdict.get("eligible"):
+        return "Use %s: it passes through your keys at a steady speed%s." % (
+            name, " and turns smoothly at them" if verdict.get("smooth") else "")
+    return "No method is clean here; %s keeps the steadiest speed (see the table)." % name
 
 
 def store_result(settings, report):
     """Records a CompareReport in scene.quatcurve_compare for the panel."""
     settings.last_summary = report.summary()
     settings.last_table = json.dumps([
-        {"name": t.name, "rows": [list(r) for r in t.table_rows()],
-         "recommendation": t.recommendation.get("text", ""), "method": t.recommendation.get("method", ""),
+        {"name": t.name, "rotation_mode": t.rotation_mode, "key_frames": [float(f) for f in t.key_frames],
+         "rows": [list(r) for r in t.table_rows()], "sources": source_rows(t),
+         "recommendation": t.recommendation.get("text", ""), "sentence": recommendation_sentence(t.recommendation),
+         "method": t.recommendation.get("method", ""),
          "no_difference": bool(t.recommendation.get("no_difference", False)),
          "path_rule": [b.text() for b in t.path_rule], "image": t.image_name or ""}
         for t in report.targets])
@@ -83,7 +136,7 @@ def last_result(scene, target_name):
 
 
 class QUATCURVE_OT_compare(bpy.types.Operator):
-    """Compare interpolation methods with Blender's Euler and quaternion modes on the selected objects or pose bones"""
+    """Measure how each method and Blender's own Euler and quaternion rotation move through the selected objects' or pose bones' keys (deviation in degrees, speed, path length), recommend a method and plot it; changes no keys"""
     bl_idname = "quatcurve.compare"
     bl_label = "Compare Orientation Curves"
     bl_options = {"REGISTER"}

@@ -20,23 +20,31 @@ def fit_properties():
     P = bpy.props
     return {
         "method": P.EnumProperty(name="Method", items=METHOD_ITEMS, default="SLERP",
-                                 description="The interpolation Blender should play through the keys"),
+                                 description="How the rotation travels from key to key; Fit shapes your keys so "
+                                             "that Blender plays it"),
         "tolerance": P.FloatProperty(
             name="Tolerance (°)", default=0.05, min=1e-4, soft_max=5.0, precision=3,
-            description="Largest rotation error of Blender's playback against the method, at every frame "
-                        "and subframe, in degrees"),
-        "tension": P.FloatProperty(name="Tension", default=0.0, min=-1.0, max=1.0, description="TCB tension"),
+            description="How far Blender's playback may stray from the method, in degrees, checked on every "
+                        "frame and between frames (smaller: more generated keys)"),
+        "tension": P.FloatProperty(name="Tension", default=0.0, min=-1.0, max=1.0,
+                                  description="TCB: how tightly the motion turns at keys, from -1 (rounder, "
+                                              "overshoots) to 1 (tight, slows into keys)"),
         "continuity": P.FloatProperty(name="Continuity", default=0.0, min=-1.0, max=1.0,
-                                      description="TCB continuity"),
-        "bias": P.FloatProperty(name="Bias", default=0.0, min=-1.0, max=1.0, description="TCB bias"),
+                                      description="TCB: from -1 (a sharp corner at keys) through 0 (smooth) "
+                                                  "to 1 (bulging out at keys)"),
+        "bias": P.FloatProperty(name="Bias", default=0.0, min=-1.0, max=1.0,
+                                description="TCB: from -1 (the motion undershoots, leaning toward the next key) "
+                                            "to 1 (overshoots, carrying on from the previous key)"),
         "shortest_path": P.BoolProperty(name="Shortest Path", default=True,
-                                        description="Slerp: the shorter arc between keys"),
+                                        description="Slerp: turn the short way round between keys (off: as the "
+                                                    "keyed values say, which may turn the long way)"),
         "clamped": P.BoolProperty(
             name="No Overshoot", default=True,
             description="Squad, TCB, Catmull-Rom: tangents clamped so that no segment overshoots its keys "
                         "and holds stay still; off: the textbook tangents"),
         "subframes": P.IntProperty(name="Subframes", default=4, min=1, max=64,
-                                   description="Points per frame where the tolerance is checked"),
+                                   description="How often each frame the tolerance is checked, in checks per "
+                                               "frame (matters for motion blur and slowed-down playback)"),
     }
 
 
@@ -45,33 +53,43 @@ class QuatCurveFitRecord(bpy.types.PropertyGroup):
     settings it was fitted with; signature and key_frames describe the animator's keys then."""
     __annotations__ = dict(
         {name: prop for name, prop in fit_properties().items() if name != "method"},
-        method=bpy.props.StringProperty(name="Method", default="SLERP"),
-        slot=bpy.props.StringProperty(name="Slot"),
-        owner_path=bpy.props.StringProperty(name="Owner Path"),
-        prop=bpy.props.StringProperty(name="Rotation Property"),
-        signature=bpy.props.StringProperty(name="Signature"),
-        key_frames=bpy.props.StringProperty(name="Key Frames"),
+        method=bpy.props.StringProperty(name="Method", default="SLERP",
+                                        description="The method this target was fitted with"),
+        slot=bpy.props.StringProperty(name="Slot", description="The action slot of the fitted target (4.4+)"),
+        owner_path=bpy.props.StringProperty(
+            name="Owner Path", description="Whose rotation was fitted: '' (the object) or the pose bone's path"),
+        prop=bpy.props.StringProperty(
+            name="Rotation Property", description="The fitted rotation channels (rotation_quaternion, ...)"),
+        signature=bpy.props.StringProperty(
+            name="Signature", description="A digest of the animator's keys when fitted (Live refits when it changes)"),
+        key_frames=bpy.props.StringProperty(name="Key Frames",
+                                            description="The animator's key frames when fitted, in frames"),
     )
 
 
 class QuatCurveEaseRecord(bpy.types.PropertyGroup):
     """Action.quatcurve_eases item: ease in / ease out of one key (by frame) of a target."""
     __annotations__ = dict(
-        slot=bpy.props.StringProperty(name="Slot"),
-        owner_path=bpy.props.StringProperty(name="Owner Path"),
-        frame=bpy.props.FloatProperty(name="Frame"),
-        ease_in=bpy.props.FloatProperty(name="Ease In", min=0.0, max=1.0),
-        ease_out=bpy.props.FloatProperty(name="Ease Out", min=0.0, max=1.0),
+        slot=bpy.props.StringProperty(name="Slot", description="The action slot of the eased target (4.4+)"),
+        owner_path=bpy.props.StringProperty(
+            name="Owner Path", description="Whose key is eased: '' (the object) or the pose bone's path"),
+        frame=bpy.props.FloatProperty(name="Frame", description="The eased key's frame, in frames"),
+        ease_in=bpy.props.FloatProperty(name="Ease In", min=0.0, max=1.0,
+                                        description="How much the motion slows into this key, from 0 to 1"),
+        ease_out=bpy.props.FloatProperty(name="Ease Out", min=0.0, max=1.0,
+                                         description="How much the motion starts slowly out of this key, from 0 to 1"),
     )
 
 
 class QuatCurveTurnsRecord(bpy.types.PropertyGroup):
     """Action.quatcurve_turns item: the extra full turns of the segment leaving one key (by frame)."""
     __annotations__ = dict(
-        slot=bpy.props.StringProperty(name="Slot"),
-        owner_path=bpy.props.StringProperty(name="Owner Path"),
-        frame=bpy.props.FloatProperty(name="Frame"),
-        turns=bpy.props.IntProperty(name="Turns"),
+        slot=bpy.props.StringProperty(name="Slot", description="The action slot of the turned target (4.4+)"),
+        owner_path=bpy.props.StringProperty(
+            name="Owner Path", description="Whose key turns: '' (the object) or the pose bone's path"),
+        frame=bpy.props.FloatProperty(name="Frame", description="The key's frame, in frames"),
+        turns=bpy.props.IntProperty(name="Turns",
+                                    description="Extra full turns of the segment leaving this key (a count)"),
     )
 
 
@@ -91,12 +109,16 @@ class QuatCurveFitSettings(bpy.types.PropertyGroup):
             description="Keep fitted targets fitted while you edit their rotation keys (insert, move, delete, "
                         "change, undo): their generated keys and handles are refitted after each change"),
         ease_in=bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0,
-                                        description="Slow the motion into the selected keys (path unchanged)"),
+                                        description="How much the motion slows down into the selected keys, from "
+                                                    "0 (no ease) to 1 (comes to rest); the path stays the same"),
         ease_out=bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0,
-                                         description="Slow the motion out of the selected keys (path unchanged)"),
+                                         description="How much the motion starts slowly out of the selected keys, "
+                                                     "from 0 (no ease) to 1 (from rest); the path stays the same"),
         turns=turns_property(),
-        last_summary=bpy.props.StringProperty(name="Last Fit", default=""),
-        last_lines=bpy.props.StringProperty(name="Last Fit Details", default=""),
+        last_summary=bpy.props.StringProperty(name="Last Fit", default="",
+                                              description="Targets and keys of the last fit"),
+        last_lines=bpy.props.StringProperty(name="Last Fit Details", default="",
+                                            description="One line per fitted target, newline-separated"),
     )
 
 
@@ -107,17 +129,21 @@ def settings_from(props):
                            clamped=props.clamped, subframes=props.subframes)
 
 
-def draw_settings(layout, settings, context=None, max_lines=6):
-    """The panel's fit box: settings, buttons, ease, live toggle, whether the active target is fitted,
-    last result."""
+def draw_settings(layout, settings, context=None, extra_rows=(), width=40):
+    """The panel's fit box: the method and Live on one line, tolerance and the method's options, Fit /
+    Unmark, ease, turns, `extra_rows` (functions draw(layout, context) other tools add, see ui.FIT_ROWS),
+    whether the active target is fitted, the last fit's summary (wrapped at `width` characters; a
+    line per target stays in settings.last_lines)."""
+    row = layout.row(align=True)
+    row.prop(settings, "method", text="")
+    row.prop(settings, "live", toggle=True, icon="REC" if settings.live else "PLAY")
     col = layout.column(align=True)
-    col.prop(settings, "method", text="")
     col.prop(settings, "tolerance")
     opsutil.draw_method_options(col, settings)
     row = layout.row(align=True)
+    row.scale_y = 1.4
     row.operator("quatcurve.fit", text="Fit Rotation Keys", icon="IPO_EASE_IN_OUT")
     row.operator("quatcurve.unfit", text="", icon="X")
-    layout.prop(settings, "live", toggle=True, icon="REC" if settings.live else "PLAY")
     col = layout.column(align=True)
     col.prop(settings, "ease_in")
     col.prop(settings, "ease_out")
@@ -125,6 +151,8 @@ def draw_settings(layout, settings, context=None, max_lines=6):
     row = layout.row(align=True)
     row.prop(settings, "turns")
     row.operator("quatcurve.set_turns", text="Set Turns")
+    for draw in extra_rows:
+        draw(layout, context)
     if context is not None:
         status = active_status(context)
         if status:
@@ -132,12 +160,11 @@ def draw_settings(layout, settings, context=None, max_lines=6):
     if settings.last_summary:
         col = layout.column(align=True)
         col.scale_y = 0.8
-        for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
-            col.label(text=line)
+        opsutil.wrapped_labels(col, settings.last_summary, width)
 
 
 def active_status(context):
-    """'Fitted: SQUAD, 0.05°' for the active target when it carries a fit record, else ''."""
+    """'Fitted: Squad, 0.05°' for the active target when it carries a fit record, else ''."""
     obj = context.active_object
     if obj is None:
         return ""
@@ -145,11 +172,11 @@ def active_status(context):
     target = targets.Target(obj, bone)
     action = fcurves.active_action(obj)
     record = fit.find_record(action, target) if action is not None else None
-    return "Fitted: %s, %.3g°" % (record.method, record.tolerance) if record is not None else ""
+    return "Fitted: %s, %.3g°" % (methods.label(record.method), record.tolerance) if record is not None else ""
 
 
 class QUATCURVE_OT_fit(bpy.types.Operator):
-    """Shape the selected objects' or pose bones' own rotation keys so that Blender plays the chosen method"""
+    """Shape the handles of the selected objects' or pose bones' own rotation keys, adding generated keys where needed, so that Blender plays the chosen method within the Tolerance (degrees)"""
     bl_idname = "quatcurve.fit"
     bl_label = "Fit Rotation Keys"
     bl_options = {"REGISTER", "UNDO"}
@@ -160,7 +187,7 @@ class QUATCURVE_OT_fit(bpy.types.Operator):
 
 
 class QUATCURVE_OT_unfit(bpy.types.Operator):
-    """Unmark the selected fitted targets: their keys and handles stay, and are the animator's from now on"""
+    """Stop treating the selected objects or bones as fitted: their keys and handles stay as they are and are yours to edit; Live no longer refits them"""
     bl_idname = "quatcurve.unfit"
     bl_label = "Unmark Fitted Rotation"
     bl_options = {"REGISTER", "UNDO"}
@@ -176,12 +203,16 @@ class QUATCURVE_OT_unfit(bpy.types.Operator):
 
 
 class QUATCURVE_OT_set_ease(bpy.types.Operator):
-    """Set ease in / ease out on the selected rotation keys of the selected fitted targets, and refit them"""
+    """Slow the motion into (ease in) and out of (ease out) the selected rotation keys of fitted objects or bones, from 0 to 1, keeping the path, and refit them"""
     bl_idname = "quatcurve.set_ease"
     bl_label = "Set Ease on Selected Keys"
     bl_options = {"REGISTER", "UNDO"}
-    ease_in: bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0)
-    ease_out: bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0)
+    ease_in: bpy.props.FloatProperty(name="Ease In", default=0.0, min=0.0, max=1.0,
+                                     description="How much the motion slows down into the keys, from 0 (no ease) "
+                                                 "to 1 (comes to rest)")
+    ease_out: bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0,
+                                      description="How much the motion starts slowly out of the keys, from 0 (no "
+                                                  "ease) to 1 (from rest)")
 
     def execute(self, context):
         opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("ease_in", "ease_out"))

@@ -22,6 +22,18 @@ def draw_method_options(col, settings):
     methods.draw_options(col, settings)
 
 
+def wrapped_labels(layout, text, width):
+    """`text` as labels of at most about `width` characters (Blender's labels do not wrap)."""
+    line = ""
+    for word in text.split():
+        if line and len(line) + 1 + len(word) > width:
+            layout.label(text=line)
+            line = ""
+        line = (line + " " + word).strip()
+    if line:
+        layout.label(text=line)
+
+
 def run_task(operator, context, scene_attr, names, make_settings, task, verb, report_prefix=""):
     """The body of a task operator (fit, reduce): the panel's settings for unset properties, the task
     on the selection, errors reported (CANCELLED, nothing changed), the summary and one line per

@@ -22,9 +22,10 @@ def reduce_properties():
     return {
         "tolerance": P.FloatProperty(
             name="Tolerance (°)", default=0.1, min=0.0, soft_max=10.0, precision=3,
-            description="Largest rotation error allowed at every frame and original key, in degrees"),
+            description="How far the reduced rotation may stray from the original, in degrees, checked on every "
+                        "frame and original key (larger: fewer keys)"),
         "interpolation": P.EnumProperty(name="Interpolation", items=INTERPOLATION_ITEMS, default="BEZIER",
-                                        description="Interpolation of the written keys"),
+                                        description="The kind of keys written"),
         "synchronized": P.BoolProperty(
             name="Synchronized", default=False,
             description="Same key frames on every rotation channel of a target (glTF export, hand "
@@ -40,14 +41,16 @@ class QuatCurveReduceSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_reduce: the panel's reduce settings and the last reduction's summary."""
     __annotations__ = dict(
         reduce_properties(),
-        last_summary=bpy.props.StringProperty(name="Last Reduce", default=""),
+        last_summary=bpy.props.StringProperty(name="Last Reduce", default="",
+                                              description="Keys before and after, and the largest error, of the "
+                                                          "last reduction"),
         last_lines=bpy.props.StringProperty(name="Last Reduce Details", default="",
                                             description="One line per target, newline-separated"),
     )
 
 
-def draw_settings(layout, settings, max_lines=6):
-    """The panel's reduce box: settings, button, last result."""
+def draw_settings(layout, settings, max_lines=6, width=40):
+    """The panel's reduce box: settings, button, last result (wrapped at `width` characters)."""
     col = layout.column(align=True)
     col.prop(settings, "tolerance")
     col.prop(settings, "interpolation", text="")
@@ -58,11 +61,11 @@ def draw_settings(layout, settings, max_lines=6):
         col = layout.column(align=True)
         col.scale_y = 0.8
         for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
-            col.label(text=line)
+            opsutil.wrapped_labels(col, line, width)
 
 
 class QUATCURVE_OT_reduce(bpy.types.Operator):
-    """Reduce the rotation keys of the selected objects or pose bones to as few as an angular bound allows"""
+    """Remove rotation keys of the selected objects or pose bones (motion capture, bakes) while the rotation stays within the Tolerance, in degrees; into a new action by default"""
     bl_idname = "quatcurve.reduce"
     bl_label = "Reduce Rotation Keys"
     bl_options = {"REGISTER", "UNDO"}

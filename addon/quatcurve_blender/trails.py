@@ -56,23 +56,25 @@ def trail_properties():
     return {
         "show": P.BoolProperty(
             name="Orientation Trails", default=False, update=_redraw,
-            description="Draw the active object's or pose bone's orientation over its frame range in the 3D Viewport"),
+            description="Draw how the active object or pose bone turns over its frames in the 3D Viewport, as "
+                        "motion paths draw where it moves (magenta: Blender's playback)"),
         "show_method": P.BoolProperty(
             name="Compare Method", default=True, update=_redraw,
-            description="Also draw the chosen quatcurve method through the same keys, side by side"),
+            description="Also draw how the chosen method would turn through the same keys, in cyan, beside "
+                        "Blender's playback"),
         "method": P.EnumProperty(
             name="Method", items=bake_ops.METHOD_ITEMS, default="SLERP", update=_redraw,
-            description="The quatcurve method drawn beside Blender's own evaluation"),
+            description="The method drawn in cyan beside Blender's playback"),
         "axis": P.EnumProperty(name="Axis", items=AXIS_ITEMS, default="X", update=_redraw,
                                description="The local axis whose tip leaves the trail"),
         "step": P.IntProperty(name="Tripod Every", default=4, min=1, soft_max=50, update=_redraw,
-                              description="Frames between two axis tripods"),
+                              description="Draw the object's or bone's axes every this many frames, in frames"),
         "size": P.FloatProperty(name="Size", default=1.0, min=0.0, soft_min=0.01, soft_max=10.0,
                                 subtype="DISTANCE", update=_redraw,
                                 description="Length of the tripod axes and of the trail's axis, in scene units"),
         "use_scene_range": P.BoolProperty(
             name="Scene Range", default=False, update=_redraw,
-            description="The scene's frame range (off: the target's keyed range)"),
+            description="Draw over the scene's frame range (off: from the first to the last rotation key)"),
     }
 
 

@@ -16,16 +16,7 @@ def draw_status(layout):
     return False
 
 
-def wrapped_labels(layout, text, width):
-    """`text` as labels of at most about `width` characters (Blender's labels do not wrap)."""
-    line = ""
-    for word in text.split():
-        if len(line) + len(word) > width:
-            layout.label(text=line)
-            line = ""
-        line = (line + " " + word).strip()
-    if line:
-        layout.label(text=line)
+wrapped_labels = opsutil.wrapped_labels
 
 
 def draw_bake_settings(layout, settings):
@@ -45,7 +36,7 @@ def draw_bake_settings(layout, settings):
     layout.prop(settings, "new_action")
 
 
-def draw_last_result(layout, settings, max_lines=8):
+def draw_last_result(layout, settings, max_lines=8, width=40):
     """Summary of the last bake: targets, keys written, seconds, and one line per target."""
     if not settings.last_summary:
         return
@@ -59,7 +50,7 @@ def draw_last_result(layout, settings, max_lines=8):
     col = box.column(align=True)
     col.scale_y = 0.8
     for line in lines[:max_lines]:
-        col.label(text=line)
+        wrapped_labels(col, line, width)
     if len(lines) > max_lines:
         col.label(text="… and %d more" % (len(lines) - max_lines))
 
@@ -69,71 +60,191 @@ def draw_compare_settings(layout, settings):
     col = layout.column(align=True)
     col.prop(settings, "subframes")
     col.prop(settings, "all_euler_orders")
-    col.prop(settings, "key_interpolation")
-    layout.prop(settings, "report_path", text="")
+    col = layout.column(align=True)
+    col.label(text="Blender's keys:")
+    col.prop(settings, "key_interpolation", text="")
+    col = layout.column(align=True)
+    col.label(text="Report file (optional):")
+    col.prop(settings, "report_path", text="")
 
 
-def _table_row(layout, cells):
-    """source | max deviation | speed ratio | path length; the source column is wider."""
-    split = layout.split(factor=0.46)
-    split.label(text=cells[0])
-    row = split.row()
-    for cell in cells[1:]:
-        row.label(text=cell)
+def label_width(context, default=40):
+    """How many characters of label text fit across the region drawing now, inside a box (labels do
+    not wrap): about 7 pixels a character at UI scale 1, 50 pixels of margins."""
+    region = getattr(context, "region", None) if context is not None else None
+    if region is None or region.width <= 0:
+        return default
+    scale = context.preferences.view.ui_scale if context.preferences is not None else 1.0
+    return max(16, int((region.width - 50 * scale) / (7.2 * scale)))
 
 
-def draw_compare_table(layout, settings, max_targets=4, active=None):
-    """The last comparison: per target a table (source, max deviation, speed ratio, path length) and
-    the recommendation, wrapped by hand (labels do not wrap); the active target's first."""
+def compared_entry(context, settings):
+    """(entry, is the active target's, how many targets) of the last comparison: the active target's
+    entry, else its first one (None without a result)."""
+    table = compare_ops.last_table(settings)
+    target = trails.active_target(context) if context is not None else None
+    name = target.name if target is not None else None
+    entry = next((t for t in table if t["name"] == name), None)
+    return (entry, True, len(table)) if entry is not None else (table[0] if table else None, False, len(table))
+
+
+def draw_compare_result(layout, context, settings):
+    """The panel's view of the last comparison: the recommendation as one sentence (the active
+    target's; when the active target was not compared, the last compared one's, said so), the
+    buttons that open the table (a popup wide enough for every column) and the plot."""
+    entry, active, count = compared_entry(context, settings)
+    if entry is None:
+        return
+    box = layout.box()
+    col = box.column(align=True)
+    width = label_width(context)
+    if active:
+        col.label(text=entry["name"], icon=target_icon(entry["name"]))
+    else:
+        wrapped_labels(col, "Last compared: %s" % entry["name"], width)
+    wrapped_labels(col, entry.get("sentence") or entry["recommendation"], width)
+    if count > 1:
+        col.label(text="%d more in the Table" % (count - 1))
+    row = box.row(align=True)
+    row.operator("quatcurve.compare_table", text="Table", icon="SPREADSHEET" if _has_icon("SPREADSHEET") else "TEXT")
+    op = row.operator("quatcurve.show_compare_plot", text="Plot", icon="IMAGE_DATA")
+    op.image_name = entry.get("image") or ""
+
+
+def target_icon(name):
+    """A pose bone's comparison is named 'Armature/Bone'."""
+    return "BONE_DATA" if "/" in name else "OBJECT_DATA"
+
+
+def _has_icon(name):
+    return name in bpy.types.UILayout.bl_rna.functions["label"].parameters["icon"].enum_items.keys()
+
+
+# The comparison table's columns: (two header lines, the source row's key, format, width in UI units).
+# Jerk: compare measures the largest jump of angular acceleration at a key (an impulse of jerk there).
+COMPARE_COLUMNS = (
+    (("Source", ""), "label", "%s", 8.0),
+    (("Max deviation", "from Slerp (°)"), "max_deviation_deg", "%.2f°", 6.5),
+    (("Speed ratio", "fastest / slowest"), "speed_ratio", None, 6.5),
+    (("Path length", "(°)"), "path_length_deg", "%.1f°", 6.5),
+    (("Speed jump", "at keys (°/frame)"), "velocity_jump_deg", "%.3f", 6.5),
+    (("Jerk at keys", "(accel. jump, °/frame²)"), "acceleration_jump_deg", "%.4f", 8.5),
+)
+POPUP_TARGETS = 3  # targets shown in the popup (a popup does not scroll); the rest are in the report
+
+
+def cell_text(row, key, fmt):
+    value = row.get(key)
+    if fmt is None:  # the speed ratio: a stop inside a segment reads "stops", as in the report
+        return "stops" if value is None else compare._ratio_text(value)
+    if value is None:
+        return "∞" if key != "label" else "?"
+    return fmt % value
+
+
+def popup_width(context):
+    """The table popup's width in pixels: every column at its width, and the margins."""
+    units = sum(c[3] for c in COMPARE_COLUMNS) + 2.0
+    scale = context.preferences.view.ui_scale if context is not None and context.preferences is not None else 1.0
+    return int(units * 20 * scale)
+
+
+def draw_compare_table(layout, settings, active=None, max_targets=POPUP_TARGETS, width=150):
+    """The last comparison, the active target's first: per target a table (one column per measure,
+    headers with units, the recommended method ticked), the recommendation's sentence and its
+    reasons (wrapped to `width` characters), the path rule's breaks and a button for its plot."""
     table = compare_ops.last_table(settings)
     if not table:
+        layout.label(text="No comparison yet: select objects or bones and press Compare", icon="INFO")
         return
     table = sorted(table, key=lambda t: t["name"] != active)  # stable: the active target first
-    box = layout.box()
-    box.label(text="Last compare: " + settings.last_summary, icon="INFO")
     for target in table[:max_targets]:
-        col = box.column(align=True)
-        col.label(text=target["name"], icon="OBJECT_DATA")
-        _table_row(col, ("Source", "Max dev", "Ratio", "Length"))
-        for row in target["rows"]:
-            _table_row(col, row)
-        wrapped_labels(col, target["recommendation"], 52)
+        box = layout.box()
+        head = box.row()
+        frames = target.get("key_frames") or []
+        head.label(text="%s   %s, %d keys, frames %g to %g" % (
+            target["name"], target.get("rotation_mode", ""), len(frames), frames[0], frames[-1])
+            if frames else target["name"], icon=target_icon(target["name"]))
         if target.get("image"):
-            col.label(text="Plot: image '%s'" % target["image"], icon="IMAGE_DATA")
+            sub = head.row()
+            sub.alignment = "RIGHT"
+            op = sub.operator("quatcurve.show_compare_plot", text="Show Plot", icon="IMAGE_DATA")
+            op.image_name = target["image"]
+        row = box.row(align=True)
+        for header, key, fmt, units in COMPARE_COLUMNS:
+            col = row.column(align=True)
+            col.ui_units_x = units
+            if key != "label":
+                col.alignment = "RIGHT"
+            col.label(text=header[0])
+            col.label(text=header[1])
+            for source in target.get("sources") or rows_as_sources(target):
+                if key == "label":
+                    col.label(text=source["label"],
+                              icon="CHECKMARK" if source["source"] == target["method"] else "BLANK1")
+                else:
+                    col.label(text=cell_text(source, key, fmt))
+        col = box.column(align=True)
+        if target.get("sentence"):
+            col.label(text=target["sentence"], icon="INFO")
+        sub = col.column(align=True)
+        sub.scale_y = 0.8
+        wrapped_labels(sub, target["recommendation"], width)
+        for line in target.get("path_rule", []):
+            wrapped_labels(sub, "Path rule: " + line, width)
     if len(table) > max_targets:
-        box.label(text="… and %d more (see the report)" % (len(table) - max_targets))
+        layout.label(text="… and %d more targets: set a Report file to see every one" % (len(table) - max_targets))
 
 
-def draw_compare_plot(layout, context, compare_settings, preview_scale=9.0):
-    """The active target's comparison plot: a preview of its image (Blender renders image previews
-    in the background; until then a placeholder) and the button that opens it in an Image Editor."""
-    target = trails.active_target(context)
-    name = target.name if target is not None else None
-    # The plot image compare made for this target (compare_ops keeps only the last run's table, but
-    # every compared target's image stays, named by compare.image_name).
-    entry = next((t for t in compare_ops.last_table(compare_settings) if t["name"] == name), None)
-    image_name = entry["image"] if entry and entry.get("image") else compare.image_name(name) if name else ""
-    image = bpy.data.images.get(image_name) if image_name else None
-    if image is None:
-        if name:
-            layout.label(text="No plot of %s yet: Compare it" % name, icon="IMAGE_DATA")
-        return
-    box = layout.box()
-    box.label(text=name, icon="IMAGE_DATA")
-    preview = image.preview_ensure()
-    if preview is not None and preview.icon_id:
-        box.template_icon(icon_value=preview.icon_id, scale=preview_scale)
-    op = box.operator("quatcurve.show_compare_plot", text="Show in Image Editor", icon="WINDOW")
-    op.image_name = image.name
+def rows_as_sources(target):
+    """The source rows of a table stored without figures (the display strings of `rows`)."""
+    return [{"source": r[0], "label": compare_ops.source_label(r[0])} for r in target.get("rows", [])]
+
+
+class QUATCURVE_OT_compare_table(bpy.types.Operator):
+    """Show the last comparison as a table: for each source its largest deviation from Slerp (°), how much its speed varies, its path length (°), and the jumps of speed (°/frame) and acceleration (°/frame²) at the keys"""
+    bl_idname = "quatcurve.compare_table"
+    bl_label = "Comparison Table"
+    bl_options = {"REGISTER"}
+
+    def _active(self, context):
+        target = trails.active_target(context)
+        return target.name if target is not None else None
+
+    def invoke(self, context, event):
+        settings = getattr(context.scene, "quatcurve_compare", None)
+        if settings is None or not compare_ops.last_table(settings):
+            self.report({"WARNING"}, "No comparison yet: select objects or bones and press Compare")
+            return {"CANCELLED"}
+        return context.window_manager.invoke_popup(self, width=popup_width(context))
+
+    def draw(self, context):
+        draw_compare_table(self.layout, context.scene.quatcurve_compare, active=self._active(context),
+                           width=int(popup_width(context) / 7))
+
+    def execute(self, context):
+        """From a script or the F3 search without a window: the table goes to the Info log."""
+        settings = getattr(context.scene, "quatcurve_compare", None)
+        table = compare_ops.last_table(settings) if settings is not None else []
+        if not table:
+            self.report({"WARNING"}, "No comparison yet: select objects or bones and press Compare")
+            return {"CANCELLED"}
+        for target in table:
+            for source in target.get("sources") or rows_as_sources(target):
+                figures = ["%s %s" % (" ".join(h).strip(), cell_text(source, key, fmt))
+                           for h, key, fmt, _ in COMPARE_COLUMNS[1:] if key in source]
+                self.report({"INFO"}, "%s, %s: %s" % (target["name"], source["label"], "; ".join(figures)))
+            self.report({"INFO"}, "%s: %s" % (target["name"], target.get("sentence") or target["recommendation"]))
+        return {"FINISHED"}
 
 
 class QUATCURVE_OT_show_compare_plot(bpy.types.Operator):
-    """Open a comparison plot in an Image Editor (the active target's by default)"""
+    """Open the comparison plot (speed in °/frame and deviation from Slerp in ° over the frames) in an Image Editor, splitting this area when the window has none"""
     bl_idname = "quatcurve.show_compare_plot"
     bl_label = "Show Comparison Plot in Image Editor"
     bl_options = {"REGISTER"}
-    image_name: bpy.props.StringProperty(name="Image", default="",
-                                         description="The plot image (empty: the active target's)")
+    image_name: bpy.props.StringProperty(
+        name="Image", default="", description="Name of the plot image to show (empty: the active object's or bone's)")
 
     def execute(self, context):
         name = self.image_name
@@ -184,8 +295,17 @@ def show_in_image_editor(context, window, image):
 
 
 # ---- panels ---------------------------------------------------------------------------------------
-# A parent panel per editor and one small class per task below it; a task's panel is the same class
-# in every editor (see _task_panels). A new task adds one class to TASK_PANELS.
+# A parent panel per editor (the active target's name) and one small class per task below it, in
+# TASK_PANELS order: Fit first and open, then Bake, Reduce Keys, Compare and Orientation Trails,
+# closed. A task's panel is the same class in every editor (see _task_panels).
+#
+# Where another tool adds itself (docs/ui.md, "Adding a tool"):
+# - a row inside the Fit panel (a tool on the fitted keys): a function draw(layout, context) in
+#   FIT_ROWS, drawn below the ease and turns rows;
+# - a panel of its own (a task with settings, e.g. rotation mode conversion, glTF export): a
+#   _TaskPanel subclass in TASK_PANELS, closed by default (bl_options {"DEFAULT_CLOSED"});
+# - the F3 search and the Key / Animation menus: a line in draw_bake_menu_item.
+
 
 class _SidebarPanel:
     bl_label = "QuatCurve"
@@ -194,10 +314,9 @@ class _SidebarPanel:
 
     def draw(self, context):
         layout = self.layout
-        if draw_status(layout):
-            layout.label(text="quatcurve %s" % native.module.__version__)
+        draw_status(layout)
         target = trails.active_target(context)
-        layout.label(text=target.name if target is not None else "No active object",
+        layout.label(text=target.name if target is not None else "Select an object or pose bone",
                      icon="BONE_DATA" if target is not None and target.bone else "OBJECT_DATA")
 
 
@@ -221,10 +340,28 @@ def big_button(layout, operator, text, icon):
 class _TaskPanel:
     """A task's subpanel, shown when its scene settings (scene.<settings>) are registered."""
     settings = ""
+    bl_options = {"DEFAULT_CLOSED"}
 
     @classmethod
     def poll(cls, context):
         return getattr(context.scene, cls.settings, None) is not None
+
+
+# Rows other tools add to the Fit panel, below the ease and turns rows: functions draw(layout, context).
+FIT_ROWS = ()
+
+
+class FitPanel(_TaskPanel):
+    """Fit (open): the method and Live on one line, tolerance, Fit / Unmark, ease, FIT_ROWS, the
+    active target's fit and the last fit."""
+    task = "fit"
+    settings = "quatcurve_fit"
+    bl_label = "Fit Rotation Keys"
+    bl_options = set()
+
+    def draw(self, context):
+        fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context, extra_rows=FIT_ROWS,
+                              width=label_width(context))
 
 
 class BakePanel(_TaskPanel):
@@ -232,14 +369,13 @@ class BakePanel(_TaskPanel):
     task = "bake"
     settings = "quatcurve"
     bl_label = "Bake"
-    bl_options = set()
 
     def draw(self, context):
         settings = context.scene.quatcurve
         layout = self.layout
         draw_bake_settings(layout, settings)
         big_button(layout, "quatcurve.bake", "Bake", "ACTION")
-        draw_last_result(layout, settings)
+        draw_last_result(layout, settings, width=label_width(context))
 
 
 class ReducePanel(_TaskPanel):
@@ -247,40 +383,23 @@ class ReducePanel(_TaskPanel):
     task = "reduce"
     settings = "quatcurve_reduce"
     bl_label = "Reduce Keys"
-    bl_options = {"DEFAULT_CLOSED"}
-
 
     def draw(self, context):
-        reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce)
-
-
-class FitPanel(_TaskPanel):
-    """Fit: the animator's own keys play a method — settings, Fit / Unmark, Live, ease, last fit."""
-    task = "fit"
-    settings = "quatcurve_fit"
-    bl_label = "Fit Rotation Keys"
-    bl_options = {"DEFAULT_CLOSED"}
-
-
-    def draw(self, context):
-        fit_ops.draw_settings(self.layout, context.scene.quatcurve_fit, context)
+        reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce, width=label_width(context))
 
 
 class ComparePanel(_TaskPanel):
-    """Compare: settings, button, the active target's plot, the last table."""
+    """Compare: settings, button, the recommendation in one sentence, Table (popup) and Plot buttons."""
     task = "compare"
     settings = "quatcurve_compare"
     bl_label = "Compare"
-    bl_options = set()
 
     def draw(self, context):
         settings = context.scene.quatcurve_compare
         layout = self.layout
         draw_compare_settings(layout, settings)
         big_button(layout, "quatcurve.compare", "Compare", "GRAPH")
-        draw_compare_plot(layout, context, settings)
-        target = trails.active_target(context)
-        draw_compare_table(layout, settings, active=target.name if target is not None else None)
+        draw_compare_result(layout, context, settings)
 
 
 class TrailsPanel(_TaskPanel):
@@ -288,9 +407,7 @@ class TrailsPanel(_TaskPanel):
     task = "trails"
     settings = "quatcurve_trails"
     bl_label = "Orientation Trails"
-    bl_options = set()
     spaces = ("VIEW_3D",)
-
 
     def draw_header(self, context):
         self.layout.prop(context.scene.quatcurve_trails, "show", text="")
@@ -332,6 +449,7 @@ def draw_trail_status(layout, context, settings):
         col.label(text="Cyan: %s" % method)
 
 
+# The task panels in the order they are drawn (a new task: one class here).
 TASK_PANELS = (FitPanel, BakePanel, ReducePanel, ComparePanel, TrailsPanel)
 
 
@@ -350,12 +468,13 @@ def _task_panels():
     return tuple(out)
 
 
-_classes = (QUATCURVE_OT_show_compare_plot, QUATCURVE_PT_view3d, QUATCURVE_PT_graph) + _task_panels()
+_classes = (QUATCURVE_OT_show_compare_plot, QUATCURVE_OT_compare_table, QUATCURVE_PT_view3d, QUATCURVE_PT_graph) + _task_panels()
 # Menus that list the bake (so F3 menu search finds it): Object/Pose > Animation, Graph Editor > Key.
 _MENUS = ("VIEW3D_MT_object_animation", "GRAPH_MT_key")
 
 
 def draw_bake_menu_item(self, context):
+    """The add-on's operators in the menus above (all of them, not only the bake)."""
     self.layout.separator()
     self.layout.operator("quatcurve.fit", icon="IPO_EASE_IN_OUT")
     self.layout.operator("quatcurve.bake", icon="ACTION")

@@ -5,7 +5,7 @@ tests/blender/test_ui_xvfb.py):
         --enable-event-simulate DEMO.blend --python tests/blender/sessions/trails_session.py -- VERDICT.json SHOTS
 
 On the demo scene (build_scripts/demo_scene.py): for FixedAngle, Spin and a Mocap bone in turn, makes
-the target active, compares it (so the Compare subpanel has its plot), turns the trails on (Blender's
+the target active, compares it (so the Compare subpanel has its recommendation), turns the trails on (Blender's
 evaluation and SLERP side by side), frames the view on it and saves a screenshot SHOTS/trails_<name>.png
 of the window; for FixedAngle also one with the trails off, and the window positions of trail points
 (projected with view3d_utils.location_3d_to_region_2d) for the test to look up in both. Then the
@@ -26,6 +26,9 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import trails, ui  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from window_clicks import open_subpanels  # noqa: E402
 
 ARGS = sys.argv[sys.argv.index("--") + 1:]
 VERDICT, SHOTS = ARGS[0], ARGS[1]
@@ -174,7 +177,10 @@ def session():
             settings.show = True
             yield
     verdict["shader"] = trails._shaders.get("polyline", trails._shaders.get("uniform", ("?",)))[0]
-    # The subpanels: 3D Viewport (FixedAngle active: its plot in Compare), then Graph Editor.
+    # The subpanels, opened (the add-on opens only Fit): 3D Viewport (FixedAngle active: its
+    # recommendation in Compare), then Graph Editor.
+    yield from open_subpanels(win, area, verdict["drawn"], ["QUATCURVE_PT_view3d_" + p
+                                                            for p in ("bake", "compare", "trails")])
     activate("FixedAngle", None)
     settings.axis, settings.step, settings.size = "X", 2, 1.0
     frame_view(trails.world_frame(trails.active_target(bpy.context))[0], 1.0)
@@ -191,6 +197,9 @@ def session():
     screenshot("subpanels_view3d_scrolled")
     area.type = "GRAPH_EDITOR"
     yield from open_tab("QUATCURVE_PT_graph")
+    yield from open_subpanels(win, area, verdict["drawn"], ["QUATCURVE_PT_graph_compare"])
+    activate("FixedAngle", None)
+    yield
     screenshot("subpanels_graph")
     area.type = "VIEW_3D"
     yield
