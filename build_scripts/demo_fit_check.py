@@ -103,11 +103,7 @@ for name in names:
         inside = (times >= frames[0]) & (times <= frames[-1])
         got = np.array(played[id(owner)])[inside]
         want = curve.sample(times[inside])
-        # 2·atan2(|a − b|, |a + b|): arccos of a float32 dot product would add up to ~0.04° of noise.
-        got = got / np.linalg.norm(got, axis=1, keepdims=True)
-        want = np.where(np.sum(got * want, axis=1, keepdims=True) < 0, -want, want)
-        error = math.degrees(2 * np.arctan2(np.linalg.norm(got - want, axis=1),
-                                            np.linalg.norm(got + want, axis=1)).max())
+        error = math.degrees(quatcurve.angle_between(got, want).max())
         if error >= row_error:
             row_error, row_bone = error, owner.name
         animator += len(frames)

@@ -22,12 +22,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fcurves, native, path_rule, targets, write
-from .reduce import parallel_imap, parallel_map, thread_count
+from . import fcurves, methods, native, path_rule, targets, write
+from .workers import parallel_imap, parallel_map, thread_count
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
 
-METHODS = ("EULER", "QUAT_COMPONENTS", "NLERP", "SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+METHODS = methods.ALL
 OUTPUT_MODES = ("QUATERNION",) + fcurves.EULER_ORDERS + ("AXIS_ANGLE", "KEEP")
 MAX_FRAMES = 10_000_000  # longest frame range a bake accepts (checked before allocating)
 
@@ -57,14 +57,7 @@ class BakeSettings:
 
     def curve_options(self):
         """Keyword options of quatcurve.Curve for this method (only the ones it accepts)."""
-        if self.method == "TCB":
-            return {"tension": self.tension, "continuity": self.continuity, "bias": self.bias,
-                    "clamped": bool(self.clamped)}
-        if self.method == "SLERP":
-            return {"shortest_path": bool(self.shortest_path)}
-        if self.method in ("SQUAD", "CATMULL_ROM"):
-            return {"clamped": bool(self.clamped)}
-        return {}
+        return methods.options(self.method, self)
 
 
 def check_settings(settings):
@@ -218,7 +211,7 @@ class BakePlan:
         if source.mode == item.output_mode:
             if len(source.frames) and self.frames[0] == source.frames[0]:
                 return source.values[0].copy()  # read there already (the same evaluation)
-            return source.evaluate(self.frames[:1])[0]
+            return targets.playback(item.target).evaluate(self.frames[:1])[0]
         return None
 
     def _dense(self, todo, threads):

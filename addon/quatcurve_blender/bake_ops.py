@@ -12,20 +12,10 @@ import time
 
 import bpy
 
-from . import bake, native, opsutil, targets
+from . import bake, methods, native, opsutil, targets
 from .targets import TargetError
 
-METHOD_ITEMS = (
-    ("EULER", "Euler (linear angles)", "Each Euler angle linear between keys: Blender's Euler mode with LINEAR keys"),
-    ("QUAT_COMPONENTS", "Quaternion components", "w, x, y, z linear then normalized, no hemisphere fix: "
-                                                 "Blender's quaternion mode with LINEAR keys"),
-    ("NLERP", "Nlerp", "Normalized linear interpolation with hemisphere fix"),
-    ("SLERP", "Slerp", "Constant angular speed within each segment"),
-    ("SQUAD", "Squad", "Shoemake's spherical quadrangle: smooth (C1) through the keys"),
-    ("CATMULL_ROM", "Catmull-Rom", "Spherical Catmull-Rom: smooth (C1) through the keys"),
-    ("TCB", "TCB", "Kochanek-Bartels: tension, continuity and bias"),
-    ("SPLINE_C2", "C2 spline", "Continuous angular velocity and acceleration"),
-)
+METHOD_ITEMS = methods.enum_items(methods.ALL)
 
 ROTATION_MODE_ITEMS = (
     ("KEEP", "Keep", "The target's current rotation mode"),

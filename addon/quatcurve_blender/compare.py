@@ -43,11 +43,14 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, native, path_rule, plot, targets
-from .reduce import parallel_imap
+from . import fcurves, methods, native, path_rule, plot, targets
+from .workers import parallel_imap
 from .targets import TargetError
 
-ENGINE_METHODS = ("SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2", "NLERP")
+# The curve methods in the order the recommendation prefers them on a tie (recommend): SLERP first
+# (the reference), NLERP last (it is SLERP's cheaper approximation).
+ENGINE_METHODS = tuple(sorted(methods.CURVE_METHODS, key=lambda m: (m != "SLERP", m == "NLERP",
+                                                                   methods.CURVE_METHODS.index(m))))
 REFERENCE_METHOD = "SLERP"
 SOURCE_BLENDER = "BLENDER"
 SOURCE_BLENDER_QUATERNION = "BLENDER_QUATERNION"
@@ -56,7 +59,7 @@ MAX_SAMPLES = 2_000_000  # per target; refused before sampling
 REPORT_FORMAT = "quatcurve-compare"
 REPORT_VERSION = 1
 
-# The recommendation (see recommend and README "Compare"):
+# The recommendation (see recommend and docs/compare.md):
 # smooth at the keys: the largest angular velocity jump at a key is at most this fraction of the mean
 # keyed speed (the keyed arcs over the keyed frames);
 SMOOTH_JUMP_FRACTION = 0.1
@@ -94,9 +97,7 @@ class CompareSettings:
     gimbal_tolerance: float = 0.5      # degrees: frames this close to the closest approach are listed
 
     def curve_options(self, method):
-        if method == "TCB":
-            return {"tension": self.tension, "continuity": self.continuity, "bias": self.bias}
-        return {}
+        return methods.options(method, self)
 
     def to_json(self):
         return {"subframes": self.subframes, "all_euler_orders": self.all_euler_orders,
@@ -356,13 +357,14 @@ def read_target(target, settings):
         raise CompareError("%s: one rotation key (frame %g): nothing to compare" % (target.name, keys.frames[0]))
     frames = sample_frames(keys.frames, settings.subframes)
     try:
+        played = targets.playback(target)
         key_quats = keys.quats()
-        current = keys.quats(frames)
+        current = played.quats(frames)
     except TargetError as error:
         raise CompareError(str(error)) from None
     paths = {}  # name → (kind, quats, euler order, euler angles)
     paths[SOURCE_BLENDER] = ("blender", current, keys.mode if keys.is_euler else None,
-                             keys.evaluate(frames) if keys.is_euler else None)
+                             played.evaluate(frames) if keys.is_euler else None)
 
     orders = fcurves.EULER_ORDERS if settings.all_euler_orders else (keys.mode if keys.is_euler else "XYZ",)
     for order in orders:
@@ -431,7 +433,7 @@ def _compress_frames(frames, limit=50):
 
 
 def recommend(comparison):
-    """The recommendation for one target (README "Compare", "The recommendation"):
+    """The recommendation for one target (docs/compare.md, "The recommendation"):
 
     1. eligible: the engine methods that pass through the keys (within KEY_TOLERANCE_DEG of SLERP
        at every key frame), obey the path rule in every key segment, do not drift where the keys

@@ -37,11 +37,11 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, native, path_rule, targets
-from .reduce import parallel_map
+from . import fcurves, methods, native, path_rule, targets
+from .workers import parallel_map
 from .targets import TargetError
 
-METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+METHODS = methods.CURVE_METHODS
 # Raw Keyframe.type values (foreach_get/foreach_set): KEYFRAME 0, EXTREME 1, BREAKDOWN 2, JITTER 3,
 # MOVING_HOLD 4, GENERATED 5 (4.2+).
 KEY_TYPE_KEYFRAME = 0
@@ -87,13 +87,7 @@ def check_settings(settings):
 
 def curve_options(settings, ease_in=None, ease_out=None):
     """Keyword options of quatcurve.Curve for the settings' method (and per-key ease)."""
-    options = {}
-    if settings.method == "SLERP":
-        options["shortest_path"] = bool(settings.shortest_path)
-    if settings.method in ("SQUAD", "TCB", "CATMULL_ROM"):
-        options["clamped"] = bool(settings.clamped)
-    if settings.method == "TCB":
-        options.update(tension=settings.tension, continuity=settings.continuity, bias=settings.bias)
+    options = methods.options(settings.method, settings)
     if ease_in is not None and np.any(ease_in):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
     if ease_out is not None and np.any(ease_out):
@@ -207,22 +201,21 @@ def carry_eases(old_frames, new_frames, ease_in, ease_out):
 
 @dataclass(eq=False)
 class AnimatorKeys:
-    """A target's own rotation keys (every key not marked as generated).
+    """A target's own rotation keys (every key not marked as generated), as plain arrays: planning
+    runs on worker threads and never sees Blender data.
 
-    frames (K,): the union of the channels' animator key frames (channels keyed separately, e.g. with
-    "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types (K,) raw
-    keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
-    target: object
+    name: the target's name (for messages); mode, prop, path: its rotation mode, property and F-curve
+    data path; frames (K,): the union of the channels' animator key frames (channels keyed separately,
+    e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
+    (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
+    name: str
     mode: str
     prop: str
     path: str
-    action: object
-    curves: list
     frames: np.ndarray
     values: np.ndarray
     types: np.ndarray
     selected: np.ndarray
-    name: str = ""   # the target's name, read on the main thread (planning may run on a worker)
 
     @property
     def is_euler(self):
@@ -338,8 +331,7 @@ def read_animator_keys(target):
         if (~own).any():  # this channel has no key of its own there: Blender's evaluation
             values[~own, c] = fcurves.evaluate(curves[c], frames[~own])
     types[types < 0] = KEY_TYPE_KEYFRAME
-    return AnimatorKeys(target, mode, prop, path, action, list(curves), frames, values, types, selected,
-                        target.name)
+    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected)
 
 
 # ---- the fit ------------------------------------------------------------------------------------------
@@ -370,27 +362,15 @@ def curve_of(keys, settings, ease_in=None, ease_out=None):
     """The native curve of the settings' method through the animator's keys, and the key values the
     fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
     their turns kept by the curve)."""
-    qc = native.require()
     options = curve_options(settings, ease_in, ease_out)
     try:
-        if keys.is_euler:
-            return qc.Curve.from_euler(keys.frames, keys.values, order=keys.mode, method=settings.method,
-                                       **options), keys.values
-        if keys.is_axis_angle:
-            zero = np.flatnonzero(~np.any(keys.values[:, 1:], axis=1))
-            if zero.size:
-                raise FitError("%s: %s[1..3] (the axis) is zero at frame %s: no rotation axis defined"
-                               % (keys.name, keys.prop, targets.num(keys.frames[zero[0]])))
-            return qc.Curve.from_axis_angle(keys.frames, keys.values, method=settings.method,
-                                            **options), keys.values
-        norms = np.linalg.norm(keys.values, axis=1)
-        if (norms == 0).any():
-            k = int(np.flatnonzero(norms == 0)[0])
-            raise FitError("%s: the quaternion is zero at frame %s (no rotation defined)"
-                           % (keys.name, targets.num(keys.frames[k])))
-        curve = qc.Curve(keys.frames, keys.values, method=settings.method, **options)
+        curve = targets.build_curve(keys.mode, keys.frames, keys.values, settings.method, keys.name, **options)
+    except TargetError as e:
+        raise FitError(str(e)) from None
     except ValueError as e:
         raise FitError("%s: %s" % (keys.name, e)) from None
+    if keys.is_euler or keys.is_axis_angle:
+        return curve, keys.values  # their turns are kept by the curve
     # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
     at_keys = curve.sample(keys.frames)
     signs = np.where(np.sum(at_keys * keys.values, axis=1) < 0, -1.0, 1.0)
@@ -425,15 +405,17 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
                    ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method))
 
 
-def write_plan(plan):
-    """Writes one target's fitted keys into its action, in place: the rotation F-curves' keys are
-    replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
+def write_plan(plan, target):
+    """Writes one target's fitted keys into its active action, in place: the rotation F-curves' keys
+    are replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
     selection kept) and the generated keys; then the fit record and the eases are stored."""
     keys = plan.keys
-    channels = fcurves.Channels.of(keys.target.id_data, keys.action, create=True)
+    action = fcurves.active_action(target.id_data)
+    channels = fcurves.Channels.of(target.id_data, action, create=True)
+    found = channels.find_all(keys.path, len(plan.channels))
     group = False  # the group of the channels' F-curves, read when a missing one is made
     for c, (frames, values, left, right, types) in enumerate(plan.channels):
-        curve = keys.curves[c] if c < len(keys.curves) else None
+        curve = found[c]
         if curve is None:
             if group is False:
                 group = channels.group_of(keys.path)
@@ -445,22 +427,25 @@ def write_plan(plan):
         on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
         chosen[on_key] = keys.selected[c, at[on_key]]
         fcurves.write_key_selection(curve, chosen)
-    store_record(keys, plan.settings)
-    set_key_eases(keys.action, keys.target, keys.frames, plan.ease_in, plan.ease_out)
-    keys.target.id_data.update_tag(refresh={"TIME"})
+    store_record(keys, plan.settings, target, action)
+    set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
+    target.id_data.update_tag(refresh={"TIME"})
 
 
-def store_record(keys, settings):
-    """The target's fit record: method, settings, and the signature and frames of its animator keys."""
-    record = find_record(keys.action, keys.target)
+def store_record(keys, settings, target, action=None):
+    """The target's fit record in `action` (default: its active action): method, settings, and the
+    signature and frames of its animator keys."""
+    if action is None:
+        action = fcurves.active_action(target.id_data)
+    record = find_record(action, target)
     if record is None:
-        records = keys.action.quatcurve_fits
+        records = action.quatcurve_fits
         record = records.add()
-        record.slot, record.owner_path = target_key(keys.target)
-        known = _record_index.get(keys.action.as_pointer()) if _record_index is not None else None
+        record.slot, record.owner_path = target_key(target)
+        known = _record_index.get(action.as_pointer()) if _record_index is not None else None
         if known is not None and known[0] == len(records) - 1:  # the index learns the new record
             known[1].setdefault((record.slot, record.owner_path), len(records) - 1)
-            _record_index[keys.action.as_pointer()] = (len(records), known[1])
+            _record_index[action.as_pointer()] = (len(records), known[1])
     record.method = settings.method
     for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
         setattr(record, name, getattr(settings, name))
@@ -480,21 +465,17 @@ def record_frames(record):
     return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
 
 
-def refit_eases(keys, record=None):
-    """The (ease_in, ease_out) of the target's keys from the action's records; keys moved in time
-    since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
-    ease_in, ease_out = key_eases(keys.action, keys.target, keys.frames)
+def refit_eases(keys, target, record=None):
+    """The (ease_in, ease_out) of the target's keys from its active action's records; keys moved in
+    time since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
+    action = fcurves.active_action(target.id_data)
+    ease_in, ease_out = key_eases(action, target, keys.frames)
     if record is not None and record.key_frames:
         old = record_frames(record)
         if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
-            o_in, o_out = key_eases(keys.action, keys.target, old)
+            o_in, o_out = key_eases(action, target, old)
             ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
     return ease_in, ease_out
-
-
-def plan_refit(keys, settings, record=None):
-    """plan_target with the target's eases (fit and live mode)."""
-    return plan_target(keys, settings, *refit_eases(keys, record))
 
 
 # ---- the task -------------------------------------------------------------------------------------------
@@ -547,7 +528,7 @@ def fit(found, settings, only_changed=False):
     start = time.perf_counter()
     result = FitResult(settings)
     # Blender is read on the main thread; the planning (native curve, sampling, fit_keys without the
-    # GIL) runs on worker threads over targets (reduce.parallel_map: same results on any count).
+    # GIL) runs on worker threads over targets (workers.parallel_map: same results on any count).
     with record_index():
         _fit(found, settings, only_changed, result)
     result.seconds = time.perf_counter() - start
@@ -558,23 +539,23 @@ def _fit(found, settings, only_changed, result):
     work = []
     for target in found:
         keys = read_animator_keys(target)
-        record = find_record(keys.action, target)
+        record = find_record(fcurves.active_action(target.id_data), target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        work.append((keys, refit_eases(keys, record)))
-    planned = parallel_map(lambda item: plan_target(item[0], settings, *item[1]), work)
+        work.append((target, keys, refit_eases(keys, target, record)))
+    planned = parallel_map(lambda item: plan_target(item[1], settings, *item[2]), work)
     plans = []
-    for (keys, _), plan in zip(work, planned):
+    for (target, keys, _), plan in zip(work, planned):
         if plan is None:
             result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (
                                                    len(keys.frames), "" if len(keys.frames) == 1 else "s")))
             continue
-        plans.append(plan)
+        plans.append((plan, target))
         result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), plan.generated_count,
                                            math.degrees(plan.max_error), notes=plan.notes))
-    for plan in plans:
-        write_plan(plan)
+    for plan, target in plans:
+        write_plan(plan, target)
 
 
 def unfit(found):

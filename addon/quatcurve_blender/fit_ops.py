@@ -9,18 +9,10 @@ settings, as for bake and reduce.
 
 import bpy
 
-from . import fcurves, fit, live, native, opsutil, targets
+from . import fcurves, fit, live, methods, native, opsutil, targets
 from .targets import TargetError
 
-METHOD_ITEMS = (
-    ("SLERP", "Slerp", "Constant angular speed along the shortest arc between keys (Maya's Quaternion Slerp; "
-                       "glTF's LINEAR rotation)"),
-    ("NLERP", "Nlerp", "Normalized linear interpolation of quaternions"),
-    ("SQUAD", "Squad", "Smooth spherical quadrangle through the keys (Maya's Quaternion Cubic)"),
-    ("CATMULL_ROM", "Catmull-Rom", "Smooth spherical spline through the keys"),
-    ("TCB", "TCB", "Kochanek-Bartels with tension, continuity, bias (3ds Max's TCB rotation)"),
-    ("SPLINE_C2", "C2 Spline", "Continuous angular velocity and acceleration (may overshoot on uneven spacing)"),
-)
+METHOD_ITEMS = methods.enum_items(methods.CURVE_METHODS)
 
 
 def fit_properties():
@@ -189,20 +181,21 @@ def set_ease(found, ease_in, ease_out):
     plans, changed = [], 0
     for target in found:
         keys = fit.read_animator_keys(target)
-        record = fit.find_record(keys.action, target)
+        action = fcurves.active_action(target.id_data)
+        record = fit.find_record(action, target)
         if record is None:
             raise fit.FitError("%s: not fitted (fit it first: ease is part of the fit)" % target.name)
         chosen = keys.selected.any(axis=0)
         if not chosen.any():
             continue
-        e_in, e_out = fit.key_eases(keys.action, target, keys.frames)
+        e_in, e_out = fit.key_eases(action, target, keys.frames)
         e_in[chosen], e_out[chosen] = ease_in, ease_out
         changed += int(chosen.sum())
         plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out)
         if plan is not None:
-            plans.append(plan)
-    for plan in plans:
-        fit.write_plan(plan)
+            plans.append((plan, target))
+    for plan, target in plans:
+        fit.write_plan(plan, target)
     return changed
 
 

@@ -38,7 +38,7 @@ import bpy
 import numpy as np
 
 from . import fcurves, fit
-from .reduce import parallel_map
+from .workers import parallel_map
 
 DEBOUNCE = 0.3   # seconds without a key change before Blender 3.4 refits (it cannot see a drag)
 POLL = 0.1       # seconds between checks while a drag runs (4.2+)
@@ -267,7 +267,7 @@ def _refit_action(action):
     found = fit.fitted_targets(action)
     STATS.add("targets", time.perf_counter() - t0)
     # Read and compare on the main thread; plan the changed targets on worker threads (native work
-    # without the GIL, reduce.parallel_map); write on the main thread. A target whose raw digest is
+    # without the GIL, workers.parallel_map); write on the main thread. A target whose raw digest is
     # the one its last full check found fitted is not read again.
     changed = []
     for target in found:
@@ -289,7 +289,7 @@ def _refit_action(action):
             STATS.errors.append(str(error))
             continue
         t1 = time.perf_counter()
-        same = keys.action == action and keys.signature() == record.signature
+        same = keys.signature() == record.signature
         t2 = time.perf_counter()
         STATS.checks += 1
         STATS.add("read", t1 - t0)
@@ -297,7 +297,7 @@ def _refit_action(action):
         if same:
             _unchanged[key] = raw if raw is not None else raw_digest(target)
         else:
-            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, record)))
+            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record)))
 
     def plan(item):
         _, keys, settings, eases = item
@@ -319,7 +319,7 @@ def _refit_action(action):
         t3 = time.perf_counter()
         _busy = True
         try:
-            fit.write_plan(result)
+            fit.write_plan(result, target)
         finally:
             _busy = False
         STATS.add("write", time.perf_counter() - t3)

@@ -24,7 +24,7 @@ def _diagnose(error, here=os.path.dirname(os.path.abspath(__file__))):
     running = "Python %d.%d" % sys.version_info[:2]
     if built and not any(_python_tag() in name for name in built):
         return ("the compiled quatcurve module (%s) was built for another Python; this Blender runs %s: "
-                "rebuild it for %s (see README, 'Building for another Blender')"
+                "rebuild it for %s (see docs/packaging.md, 'Building for another Blender')"
                 % (", ".join(built), running, running))
     if built:
         return "the compiled quatcurve module (%s) failed to load: %s" % (", ".join(built), error)

@@ -2,9 +2,7 @@
 panel's settings for the properties a caller did not set, and the method-specific settings drawn
 in a panel, and the body of a task operator."""
 
-from . import native, targets
-
-TANGENT_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")  # the methods with the clamped option
+from . import methods, native, targets
 
 
 def take_scene_settings(operator, scene_settings, names, skip=()):
@@ -18,16 +16,10 @@ def take_scene_settings(operator, scene_settings, names, skip=()):
 
 
 def draw_method_options(col, settings):
-    """The options of settings.method: TCB's tension, continuity, bias; SLERP's shortest path; the
-    No Overshoot (clamped) option of the tangent methods."""
-    if settings.method == "TCB":
-        col.prop(settings, "tension")
-        col.prop(settings, "continuity")
-        col.prop(settings, "bias")
-    elif settings.method == "SLERP":
-        col.prop(settings, "shortest_path")
-    if settings.method in TANGENT_METHODS:
-        col.prop(settings, "clamped")
+    """The options of settings.method that the native module lists for it (methods.option_names):
+    TCB's tension, continuity, bias; SLERP's shortest path; the No Overshoot (clamped) option of the
+    tangent methods."""
+    methods.draw_options(col, settings)
 
 
 def run_task(operator, context, scene_attr, names, make_settings, task, verb, report_prefix=""):

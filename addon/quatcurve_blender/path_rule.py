@@ -1,4 +1,4 @@
-"""The path rule (README "Curves"): between two keys a curve's sampled path may be at most
+"""The path rule (docs/curves.md): between two keys a curve's sampled path may be at most
 PATH_RULE_FACTOR × the keyed arc + PATH_RULE_SLACK (1.5 × arc + 10°). The clamped methods obey it by
 construction; SPLINE_C2 (never clamped) and textbook tangents may not, so bake and compare report
 every key segment that breaks it: the target, the frames, the path and the ratio.

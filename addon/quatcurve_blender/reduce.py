@@ -25,78 +25,17 @@ The bake calls `reduce_values` (imported by bake.py) when its tolerance is above
 """
 
 import math
-import os
-import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import fcurves, native, targets, write
+from .workers import parallel_imap
 from .targets import TargetError
 
 INTERPOLATIONS = ("LINEAR", "BEZIER")
 
-# Worker threads for the native work per target (the reducer and channel conversion release the
-# GIL); None: one per core. Results do not depend on it: every target is computed on its own.
-THREADS = None
-GIL_SWITCH = 0.0002  # seconds: sys.setswitchinterval while parallel_imap's workers run
-
-
-def thread_count():
-    """Worker threads for per-target native work: THREADS, or QUATCURVE_THREADS, or the cores."""
-    if THREADS is not None:
-        return max(1, int(THREADS))
-    env = os.environ.get("QUATCURVE_THREADS", "")
-    return max(1, int(env)) if env.isdigit() else (os.cpu_count() or 1)
-
-
-def parallel_map(fn, items):
-    """[fn(item) for item in items], on thread_count() worker threads when that is more than one.
-    fn must not touch Blender data (only the main thread may). Results come back in order; the first
-    item (in order) whose call raised re-raises its exception, as the plain loop would."""
-    items = list(items)
-    threads = min(thread_count(), len(items))
-    if threads <= 1:
-        return [fn(item) for item in items]
-    with ThreadPoolExecutor(max_workers=threads) as pool:
-        return list(pool.map(fn, items))
-
-
-def parallel_imap(fn, items):
-    """Like parallel_map, but yields each result in order as soon as it and those before it are done,
-    so the caller (on the main thread) can use the first results while thread_count() workers compute
-    the rest. `items` may be a generator that reads Blender on the main thread: each item goes to the
-    workers as soon as it is made, and the first result is yielded only after the last item is made
-    (one thread: no workers; every item is made, then each call runs when its result is asked for).
-
-    While it runs, the interpreter hands the GIL over every 0.2 ms instead of 5 ms: the main thread's
-    Blender calls hold it, and the workers need it briefly between their native calls (measured: a
-    100-target bake 0.69 s → 0.43 s, when the bake's dense keys were computed here; a BakeQueue's
-    native workers now do without the GIL). When the caller stops early (an error, a generator
-    closed), the calls not yet started are cancelled."""
-    threads = thread_count()
-    if hasattr(items, "__len__"):
-        threads = min(threads, len(items))
-    if threads <= 1:
-        for item in list(items):  # every item made first, as with workers
-            yield fn(item)
-        return
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(min(switch, GIL_SWITCH))
-    pool = ThreadPoolExecutor(max_workers=threads)
-    futures = []
-    try:
-        for item in items:
-            futures.append(pool.submit(fn, item))
-        for future in futures:
-            yield future.result()
-    finally:
-        for future in futures:
-            future.cancel()
-        pool.shutdown(wait=True)
-        sys.setswitchinterval(switch)
 
 
 class ReduceError(TargetError, ValueError):
@@ -224,16 +163,15 @@ def read_target(target):
     if source.mode not in ("QUATERNION", "AXIS_ANGLE") + fcurves.EULER_ORDERS:
         raise ReduceError("%s: rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
                           "rotations" % (target.name, source.mode))
-    for index, fcurve in enumerate(source.fcurves):
-        if fcurve is not None and len(fcurve.modifiers):
+    for index, modifiers in enumerate(source.modifiers):
+        if modifiers:
             raise ReduceError("%s: %s[%d] has F-curve modifiers; the bound holds for keys alone "
                               "(apply or remove the modifiers first)" % (target.name, source.prop, index))
     frames = native.require().whole_frame_samples(source.frames)  # every whole frame and key
-    values = source.evaluate(frames)
+    values = targets.playback(target).evaluate(frames)
     if not np.isfinite(values).all():
         raise ReduceError("%s: %s evaluates to non-finite values" % (target.name, source.prop))
-    before = sum(fcurves.key_count(f) for f in source.fcurves if f is not None)
-    return TargetReduce(target, source.mode, source.prop, frames, values, before)
+    return TargetReduce(target, source.mode, source.prop, frames, values, source.key_count)
 
 
 def reduce(found, settings):

@@ -2,7 +2,13 @@
 evaluates them. The reading layer of the add-on: every task (bake, reduce, compare) starts here.
 
     targets = targets.gather_targets(bpy.context)     # or [Target(obj), Target(rig, "Bone")]
-    keys = targets.read_rotation_keys(targets[0])     # frames, channel values, notes
+    keys = targets.read_rotation_keys(targets[0])     # plain arrays: frames, channel values, notes
+    played = targets.playback(targets[0])             # Blender's evaluation at any frames (main thread)
+    curve = keys.curve("SQUAD")                       # build_curve: every task's curves are made there
+
+The key arrays hold no Blender reference, so the compute step (native curves, sampling, reduction,
+fitting) may run on worker threads; what Blender plays between keys is read through a Playback, on
+the main thread.
 
 Refused with a TargetError naming object, bone, channel and frame: nothing selected, no rotation
 keys in the target's mode, NaN/infinite keys, two different keys on one frame, drivers on rotation,
@@ -112,17 +118,19 @@ def check_editable(target, new_action):
 
 @dataclass(eq=False)
 class RotationKeys:
-    """A target's rotation keys, as Blender evaluates them.
+    """A target's rotation keys as plain arrays: what every compute step takes.
 
-    mode: the rotation mode read (the target's); prop: 'rotation_euler' etc.; frames (K,): every frame
-    where any channel of prop is keyed; values (K, 3|4): Blender's evaluation of each channel there
-    (an unkeyed channel holds the property's value); fcurves: the channel F-curves (None if unkeyed)."""
-    target: Target
+    name: the target's name (for messages); mode: the rotation mode read (the target's); prop:
+    'rotation_euler' etc.; frames (K,): every frame where any channel of prop is keyed; values (K, 3|4):
+    Blender's evaluation of each channel there (an unkeyed channel holds the property's value);
+    key_count: the keys on the channels' F-curves; modifiers: per channel, the F-curve modifier types."""
+    name: str
     mode: str
     prop: str
     frames: np.ndarray
     values: np.ndarray
-    fcurves: list
+    key_count: int = 0
+    modifiers: tuple = ()
     notes: list = field(default_factory=list)   # what the bake report should tell the animator
     nla: bool = False                           # values are Blender's NLA-evaluated result
 
@@ -130,36 +138,48 @@ class RotationKeys:
     def is_euler(self):
         return self.mode in fcurves.EULER_ORDERS
 
-    def evaluate(self, frames):
-        """Blender's evaluation of the channels at any `frames`: (N, 3|4) channel values (with NLA
-        strips present: the whole animation evaluated, scene.frame_set)."""
-        if self.nla:
-            return evaluate_in_scene(self.target, self.prop, frames)
-        return evaluate_channels(self.target, self.prop, self.fcurves, frames)
-
-    def quats(self, frames=None):
-        """Blender's orientation (w, x, y, z), at the key frames or at `frames`."""
-        values = self.values if frames is None else self.evaluate(frames)
-        return channels_to_quats(self.mode, values, self.target.name, self.frames if frames is None else frames)
+    def quats(self):
+        """The keys' orientations (w, x, y, z) as Blender builds them."""
+        return channels_to_quats(self.mode, self.values, self.name, self.frames)
 
     def curve(self, method, **options):
-        """The native curve of `method` through these keys (Euler keys through Curve.from_euler and
-        axis-angle keys through Curve.from_axis_angle, so turns beyond 180° between keys survive)."""
-        qc = native.require()
-        if self.is_euler:
-            return qc.Curve.from_euler(self.frames, self.values, order=self.mode, method=method, **options)
-        refuse_zero_rotations(self.mode, self.values, self.target.name, self.frames)
-        if self.mode == "AXIS_ANGLE":
-            return qc.Curve.from_axis_angle(self.frames, self.values, method=method, **options)
-        # The stored components as they are: QUAT_COMPONENTS lerps them before normalizing, as
-        # Blender does, which differs from lerping normalized keys when they are not unit length.
-        return qc.Curve(self.frames, self.values, method=method, **options)
+        """The native curve of `method` through these keys (build_curve)."""
+        return build_curve(self.mode, self.frames, self.values, method, self.name, **options)
 
     def bake_job(self, method, mode, reference=None, **options):
         """quatcurve.BakeJob: the curve() of `method` through these keys, to be sampled as the keys of
         rotation mode `mode` (with Curve.sample_keys' `reference`) by a quatcurve.BakeQueue."""
-        refuse_zero_rotations(self.mode, self.values, self.target.name, self.frames)
+        refuse_zero_rotations(self.mode, self.values, self.name, self.frames)
         return native.require().BakeJob(self.frames, self.values, self.mode, method, mode, reference, **options)
+
+
+def build_curve(mode, frames, values, method, name="", **options):
+    """The native curve of `method` through keys given as channel values of rotation mode `mode`
+    (quatcurve.Curve.from_channels: Euler and axis-angle keys keep turns beyond 180° between keys;
+    quaternion keys are taken as stored, as QUAT_COMPONENTS lerps them). Every task builds its curves
+    here. A zero quaternion or axis-angle axis raises TargetError naming `name` and the frame; the
+    native module's ValueError (bad options, key spacing) passes through."""
+    refuse_zero_rotations(mode, values, name, frames)
+    return native.require().Curve.from_channels(frames, values, mode, method, **options)
+
+
+class Playback:
+    """What Blender plays on a target's rotation channels, read at any frames (main thread only): the
+    channels' F-curves evaluated by Blender, or with NLA strips the whole animation (scene.frame_set)."""
+
+    def __init__(self, target, mode, prop, channel_fcurves, nla):
+        self.target, self.mode, self.prop = target, mode, prop
+        self.fcurves, self.nla = channel_fcurves, nla
+
+    def evaluate(self, frames):
+        """(N, 3|4) channel values at `frames`."""
+        if self.nla:
+            return evaluate_in_scene(self.target, self.prop, frames)
+        return evaluate_channels(self.target, self.prop, self.fcurves, frames)
+
+    def quats(self, frames):
+        """Blender's orientations (w, x, y, z) at `frames`."""
+        return channels_to_quats(self.mode, self.evaluate(frames), self.target.name, frames)
 
 
 def evaluate_channels(target, prop, channel_fcurves, frames):
@@ -189,6 +209,27 @@ def evaluate_in_scene(target, prop, frames):
     return np.array(out, dtype=np.float64).reshape(len(out), -1)
 
 
+def _rotation_channels(target, action):
+    """(mode, prop, channels, keyed F-curves per channel (None: unkeyed), NLA strips playing them)."""
+    mode = target.owner.rotation_mode
+    prop, count = fcurves.rotation_property(mode)
+    path = target.data_path(prop)
+    channels = fcurves.Channels.of(target.id_data, action)
+    found = channels.find_all(path, count) if channels is not None else [None] * count
+    found = [f if f is not None and fcurves.key_count(f) else None for f in found]
+    strips = [] if action is not None else [
+        strip for strip, strip_channels in fcurves.nla_strips(target.id_data)
+        if strip_channels is not None and any(strip_channels.find(path, i) is not None for i in range(count))]
+    return mode, prop, channels, found, strips
+
+
+def playback(target, action=None):
+    """The Playback of `target`'s rotation in its current mode, from `action` (default: its active
+    action and the NLA strips that play on it)."""
+    mode, prop, _, found, strips = _rotation_channels(target, action)
+    return Playback(target, mode, prop, found, bool(strips))
+
+
 def read_rotation_keys(target, action=None):
     """RotationKeys of `target` in its current rotation mode, from `action` (default: its active
     action, and the NLA strips that play on it).
@@ -197,16 +238,8 @@ def read_rotation_keys(target, action=None):
     with different values on one frame, or are driven by a driver. Notes (RotationKeys.notes) tell
     what a bake keeps: channels held at their current value, F-curve modifiers read at the keys,
     constraints that still apply, NLA strips whose evaluated result is read at every frame."""
-    mode = target.owner.rotation_mode
-    prop, count = fcurves.rotation_property(mode)
-    path = target.data_path(prop)
-    refuse_drivers(target, prop, count)
-    channels = fcurves.Channels.of(target.id_data, action)
-    found = channels.find_all(path, count) if channels is not None else [None] * count
-    found = [f if f is not None and fcurves.key_count(f) else None for f in found]
-    strips = [] if action is not None else [
-        strip for strip, strip_channels in fcurves.nla_strips(target.id_data)
-        if strip_channels is not None and any(strip_channels.find(path, i) is not None for i in range(count))]
+    mode, prop, channels, found, strips = _rotation_channels(target, action)
+    refuse_drivers(target, prop, len(found))
     if not any(found) and not strips:
         raise TargetError("%s: no rotation animation (rotation mode %s, no keys on %s)%s"
                         % (target.name, mode, prop, _other_keyed_hint(target, channels, prop)))
@@ -231,7 +264,11 @@ def read_rotation_keys(target, action=None):
         k, i = np.argwhere(bad)[0]
         where = "at frame %s" % num(float(frames[k])) if found[i] is not None or strips else "(unkeyed value)"
         raise TargetError("%s: %s[%d] is %s %s" % (target.name, prop, i, values[k, i], where))
-    return RotationKeys(target, mode, prop, frames, values, found, notes, nla=bool(strips))
+    return RotationKeys(target.name, mode, prop, frames, values,
+                        key_count=sum(fcurves.key_count(f) for f in found if f is not None),
+                        modifiers=tuple(tuple(m.type for m in f.modifiers) if f is not None else ()
+                                        for f in found),
+                        notes=notes, nla=bool(strips))
 
 
 def refuse_drivers(target, prop, count):
@@ -316,8 +353,10 @@ def refuse_zero_rotations(mode, values, name="", frames=None):
     if (norms == 0).any():
         k = int(np.flatnonzero(norms == 0)[0])
         frame = " at frame %s" % num(float(frames[k])) if frames is not None else ""
-        what = "quaternion" if mode == "QUATERNION" else "axis-angle axis"
-        raise TargetError("%s: the %s is zero%s (no rotation defined)" % (name, what, frame))
+        if mode == "QUATERNION":
+            raise TargetError("%s: the quaternion is zero%s (no rotation defined)" % (name, frame))
+        raise TargetError("%s: rotation_axis_angle[1..3] (the axis) is zero%s: no rotation axis defined"
+                          % (name, frame))
 
 
 def default_frame_range(targets):

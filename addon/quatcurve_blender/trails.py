@@ -146,8 +146,9 @@ def compute_local(target, method=None, frame_range=None):
     its keyed range (or `frame_range` (start, end)), and `method`'s native curve through the same
     keys sampled there."""
     trail = LocalTrail(target.name)
+    action = fcurves.active_action(target.id_data)
     try:
-        keys = targets.read_rotation_keys(target, action=fcurves.active_action(target.id_data))
+        keys = targets.read_rotation_keys(target, action=action)
     except (TargetError, RuntimeError) as error:
         trail.error = str(error)
         return trail
@@ -156,7 +157,7 @@ def compute_local(target, method=None, frame_range=None):
     frames = np.asarray(qc.step_frames(float(start), float(end), 1.0), dtype=np.float64)
     trail.frames = frames
     try:
-        trail.quats[BLENDER] = keys.quats(frames)
+        trail.quats[BLENDER] = targets.playback(target, action=action).quats(frames)
         if method:
             trail.quats[method] = np.asarray(keys.curve(method).sample(frames))
     except (TargetError, ValueError) as error:

@@ -96,6 +96,15 @@ void bind_curve(py::module_& m) {
     py::tuple names(method_names().size());
     for (std::size_t i = 0; i < method_names().size(); ++i) names[i] = method_names()[i];
     m.attr("METHODS") = names;
+    // Each method's option names (curve.hpp option_names): what the add-on's settings pass on.
+    py::dict method_options;
+    for (const std::string& name : method_names()) {
+        const std::vector<std::string> options = option_names(parse_method(name));
+        py::tuple t(options.size());
+        for (std::size_t i = 0; i < options.size(); ++i) t[i] = options[i];
+        method_options[py::str(name)] = t;
+    }
+    m.attr("METHOD_OPTIONS") = method_options;
     m.attr("PATH_RULE_FACTOR") = kPathRuleFactor;
     m.attr("PATH_RULE_SLACK") = kPathRuleSlack;
 
@@ -154,6 +163,23 @@ void bind_curve(py::module_& m) {
             "Keys from Blender axis-angle channels (K, 4) (angle in radians, axis x, y, z; the axis is "
             "normalized, a zero axis refused); every segment keeps the turn of its axis-angle path (spins "
             "over 360° survive).")
+        .def_static(
+            "from_channels",
+            [](py::handle times, py::handle values, const std::string& mode_name, const std::string& method,
+               const py::kwargs& kwargs) {
+                const RotationMode mode = parse_rotation_mode(mode_name);
+                const Method meth = parse_method(method);
+                CurveOptions options = to_options(meth, kwargs);
+                std::vector<double> t = key_times(times);
+                const Batch v = key_rows(values, static_cast<py::ssize_t>(channel_count(mode)), "values");
+                std::vector<double> keys(v.data(), v.data() + v.count * channel_count(mode));
+                py::gil_scoped_release release;
+                return curve_from_channels(t, keys, mode, meth, options);
+            },
+            py::arg("times"), py::arg("values"), py::arg("mode"), py::arg("method") = "SLERP",
+            "Keys as Blender's rotation channels of `mode` ('QUATERNION' (K, 4) w, x, y, z as stored; an Euler "
+            "order (K, 3); 'AXIS_ANGLE' (K, 4)): the Curve constructor, from_euler or from_axis_angle, so "
+            "Euler and axis-angle spins survive. The one way the add-on builds a curve through keys.")
         .def(
             "sample",
             [](const Curve& c, py::handle times) {

@@ -8,30 +8,8 @@
 
 namespace quatcurve {
 
-namespace {
-
-Curve job_curve(const BakeJob& job) {
-    const std::size_t n = job.times.size();
-    if (job.values.size() != n * channel_count(job.keys_mode))
-        throw InvalidArgument("values: expected " + std::to_string(n) + " rows of " +
-                              std::to_string(channel_count(job.keys_mode)) + " channel values, got " +
-                              std::to_string(job.values.size()) + " values");
-    switch (job.keys_mode.kind) {
-        case RotationMode::Kind::euler:
-            return Curve::from_euler(job.times.data(), job.values.data(), n, job.keys_mode.order, job.method,
-                                     job.options);
-        case RotationMode::Kind::axis_angle:
-            return Curve::from_axis_angle(job.times, job.values, job.method, job.options);
-        case RotationMode::Kind::quaternion:
-            break;
-    }
-    return Curve(job.times.data(), job.values.data(), n, job.method, job.options);
-}
-
-}  // namespace
-
 BakedKeys bake_keys(const BakeJob& job, const std::vector<double>& frames) {
-    const Curve curve = job_curve(job);
+    const Curve curve = curve_from_channels(job.times, job.values, job.keys_mode, job.method, job.options);
     BakedKeys baked;
     baked.path_rule_breaks = curve.path_rule_breaks();
     const std::size_t n = frames.size();

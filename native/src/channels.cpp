@@ -116,6 +116,24 @@ std::vector<double> axis_angle_channels(std::vector<Quat> q, const double* refer
 
 }  // namespace
 
+Curve curve_from_channels(const std::vector<double>& times, const std::vector<double>& values,
+                          const RotationMode& mode, Method method, const CurveOptions& options) {
+    const std::size_t n = times.size();
+    if (values.size() != n * channel_count(mode))
+        throw InvalidArgument("values: expected " + std::to_string(n) + " rows of " +
+                              std::to_string(channel_count(mode)) + " channel values, got " +
+                              std::to_string(values.size()) + " values");
+    switch (mode.kind) {
+        case RotationMode::Kind::euler:
+            return Curve::from_euler(times.data(), values.data(), n, mode.order, method, options);
+        case RotationMode::Kind::axis_angle:
+            return Curve::from_axis_angle(times, values, method, options);
+        case RotationMode::Kind::quaternion:
+            break;
+    }
+    return Curve(times.data(), values.data(), n, method, options);
+}
+
 std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end) {
     const std::size_t n = q.size();
     check_reference(start, 1, 4);

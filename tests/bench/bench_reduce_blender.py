@@ -61,12 +61,7 @@ def measure(arm, action, frames, reference):
         fc = curves[name]
         keys += sum(fcurves.key_count(f) for f in fc)
         q = np.stack([fcurves.evaluate(f, frames) for f in fc], axis=1)
-        q /= np.linalg.norm(q, axis=1, keepdims=True)
-        r = ref / np.linalg.norm(ref, axis=1, keepdims=True)
-        dot = np.abs(np.sum(q * r, axis=1))
-        cross = np.linalg.norm(q[:, :1] * r[:, 1:] - r[:, :1] * q[:, 1:]
-                               + np.cross(r[:, 1:], q[:, 1:]), axis=1)
-        worst = max(worst, float(np.degrees(2 * np.arctan2(cross, dot)).max()))
+        worst = max(worst, float(np.degrees(native.require().angle_between(q, ref)).max()))
     return keys, worst
 
 

@@ -55,7 +55,7 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 import quatcurve_blender  # noqa: E402
-from quatcurve_blender import bake, fcurves, native, reduce  # noqa: E402
+from quatcurve_blender import bake, fcurves, native, reduce, workers  # noqa: E402
 import rigs  # noqa: E402
 
 BONES = 100
@@ -300,7 +300,7 @@ def bake_stages(rig, original, repeat):
 
 def main():
     repeat, want_profile, threads = options()
-    reduce.THREADS = threads
+    workers.THREADS = threads
     quatcurve_blender.register()
     clear_scene()
     rig = rigs.build_rig("Rig", LAST_FRAME, 1, BONES, KEY_EVERY)
@@ -339,8 +339,8 @@ def main():
 
     print("Blender %s, quatcurve %s; %d bones x %s frames, SQUAD -> QUATERNION, %s keys; best of %d; %s"
           % (bpy.app.version_string, native.require().__version__, BONES, f"{n:,}", f"{keys:,}", repeat,
-             "%d worker thread%s" % (reduce.thread_count(), "" if reduce.thread_count() == 1 else "s")
-             if hasattr(reduce, "thread_count") else "no worker threads"))
+             "%d worker thread%s" % (workers.thread_count(), "" if workers.thread_count() == 1 else "s")
+             if hasattr(workers, "thread_count") else "no worker threads"))
     print("  %-34s %9s   %s" % ("stage", "seconds", "runs"))
     rows = (("bake (quatcurve.bake)", bake_s, bakes), ("  its own work (before the update)", own_s, owns),
             ("limit (add + foreach_set co, ipo)", limit_s, limits),

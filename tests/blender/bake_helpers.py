@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 from mathutils import Euler, Quaternion
 
-from quatcurve_blender import fcurves
+from quatcurve_blender import fcurves, native
 
 
 def add_empty(name, rotation_mode="XYZ"):
@@ -104,11 +104,9 @@ def evaluated(owner, frames, what="quat"):
 
 
 def angles_between(a, b):
-    """Geodesic angle (rad) between rotations, row by row, sign-invariant."""
-    a = np.asarray(a, float) / np.linalg.norm(a, axis=-1, keepdims=True)
-    b = np.asarray(b, float) / np.linalg.norm(b, axis=-1, keepdims=True)
-    d = np.abs(np.sum(a * b, axis=-1))
-    return 2 * np.arccos(np.clip(d, -1, 1))
+    """Geodesic angle (rad) between rotations, row by row, sign-invariant: quatcurve.angle_between,
+    the one measurement every test and the demo use."""
+    return native.require().angle_between(np.asarray(a, float), np.asarray(b, float))
 
 
 def file_state():

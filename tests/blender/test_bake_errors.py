@@ -86,8 +86,8 @@ def test_zero_quaternion_in_the_source(scene):
 def _failing_last(monkeypatch, threads, bad_keys):
     """Three good targets, one with only NLA strips, then 'Zz' keyed with bad_keys, all selected;
     returns the list the names of the targets written are appended to."""
-    from quatcurve_blender import reduce, write
-    monkeypatch.setattr(reduce, "THREADS", threads)
+    from quatcurve_blender import workers, write
+    monkeypatch.setattr(workers, "THREADS", threads)
     good = [add_empty("Good%d" % i, "QUATERNION") for i in range(3)]
     for obj in good:
         key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (7, (0, 1, 0, 0))])

@@ -164,8 +164,8 @@ def test_bake_with_compare_writes_file_report_and_plots(addon, source_blend, tmp
     scene.frame_set(11)  # the fixed-angle example's SLERP midpoint
     assert [round(math.degrees(a), 3) for a in turn.rotation_euler] == [90.0, 67.5, 90.0]
     scene.frame_set(6)
-    q = quat.rotation_quaternion
-    assert math.degrees(2 * math.atan2(math.hypot(q.x, q.y, q.z), q.w)) == pytest.approx(75.0, abs=1e-3)
+    angle = native.require().angle_between(tuple(quat.rotation_quaternion), (1.0, 0.0, 0.0, 0.0))
+    assert math.degrees(angle) == pytest.approx(75.0, abs=1e-3)
 
 
 def test_in_place_bakes_only_the_chosen_bones(addon, source_blend, tmp_path):
@@ -197,15 +197,6 @@ def fit_keys_of(owner):
         frames, values = fcurves.read_keys(curve)
         out.append((frames, values, fcurves.read_key_types(curve)))
     return out
-
-
-def rotation_angles(a, b):
-    """Angle (rad) between rotations row by row, sign-invariant; 2·atan2(|a − b|, |a + b|) keeps the
-    precision near 0 that arccos of a float32 dot product loses (~0.04°)."""
-    a = a / np.linalg.norm(a, axis=1, keepdims=True)
-    b = b / np.linalg.norm(b, axis=1, keepdims=True)
-    b = np.where(np.sum(a * b, axis=1, keepdims=True) < 0, -b, b)
-    return 2 * np.arctan2(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
 
 
 def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, tmp_path):
@@ -246,7 +237,7 @@ def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, 
         for t in times[times <= frames[-1]]:
             scene.frame_set(int(math.floor(t)), subframe=float(t - math.floor(t)))
             got.append(tuple(owner.rotation_quaternion.normalized()))
-        err = np.degrees(rotation_angles(np.array(got), want)).max()
+        err = np.degrees(qc.angle_between(np.array(got), want)).max()
         assert err <= 0.02 + 1e-3, "%s: %.5f°" % (name, err)
 
 

@@ -17,7 +17,7 @@ from compare_helpers import image_pixels, load_png, report_schema, schema_errors
 from conftest import ROOT, SHARED
 from quatcurve_blender import bake, compare, fcurves, plot, targets
 
-README = os.path.join(ROOT, "README.md")
+COMPARE_DOC = os.path.join(ROOT, "docs", "compare.md")
 
 
 @pytest.fixture
@@ -157,8 +157,8 @@ def test_report_png_and_json(linear_keys, tmp_path):
     assert ratio is None or ratio > compare.STOP_RATIO
 
 
-def test_readme_documents_every_report_field():
-    with open(README, encoding="utf-8") as f:
+def test_compare_doc_documents_every_report_field():
+    with open(COMPARE_DOC, encoding="utf-8") as f:
         text = f.read()
     missing = [name for name in schema_property_names(report_schema()) if "`%s`" % name not in text]
     assert missing == []

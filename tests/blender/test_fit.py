@@ -380,7 +380,7 @@ def test_record_index_finds_what_a_scan_finds(scene):
     with fit.record_index():
         assert [index_of(fit.find_record(action, t)) for t in everyone] == [scan(t) for t in everyone] == [0, 1, 2, None]
         assert fit.find_record(action, everyone[1]).method == "SLERP"
-        fit.store_record(fit.read_animator_keys(everyone[3]), fit.FitSettings(method="SQUAD"))
+        fit.store_record(fit.read_animator_keys(everyone[3]), fit.FitSettings(method="SQUAD"), everyone[3])
         assert index_of(fit.find_record(action, everyone[3])) == 4 == scan(everyone[3])
         action.quatcurve_fits.remove(0)  # outside the block's rules, still found right
         assert [index_of(fit.find_record(action, t)) for t in everyone] == [scan(t) for t in everyone] == [None, 0, 1, 3]

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from mathutils import Euler, Quaternion
 
-from bake_helpers import rotation_quat, select_bones
+from bake_helpers import angles_between, rotation_quat, select_bones
 from quatcurve_blender import fcurves, fit, native
 from quatcurve_blender.targets import Target
 
@@ -161,15 +161,6 @@ def gltf_slerp(times, quats, at):
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-def angles_between(a, b):
-    """Angle (rad) between rotations row by row, sign-invariant: 2·atan2(|a − b|, |a + b|), which
-    keeps the precision near 0 that arccos of a float32 dot product loses (~0.04°)."""
-    a = a / np.linalg.norm(a, axis=1, keepdims=True)
-    b = b / np.linalg.norm(b, axis=1, keepdims=True)
-    b = np.where(np.sum(a * b, axis=1, keepdims=True) < 0, -b, b)
-    return 2 * np.arctan2(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
-
-
 def change_of_frame(file_quats, blender_quats):
     """The orthogonal 4×4 M with blender_quats[k] = ±M·file_quats[k] for every key (least squares,
     the key signs searched), or None when there is none."""
@@ -245,7 +236,7 @@ def test_gltf_linear_rotations_play_as_the_file_specifies_after_a_slerp_fit(scen
     for name, owner in owners.items():
         assert owner.rotation_mode == "QUATERNION"
         keys = fit.read_animator_keys(Target(rig, name) if owner is not obj else Target(obj))
-        curves = [c for c in keys.curves if c is not None]
+        curves = [c for c in fcurves.Channels.of(owner.id_data).find_all(keys.path, 4) if c is not None]
         assert len(curves) == 4 and all(p.interpolation == "LINEAR" for c in curves for p in c.keyframe_points)
         times, quats, _ = in_file[name]
         offset = keys.frames[0] - fps * times[0]

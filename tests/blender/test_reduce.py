@@ -19,7 +19,7 @@ from conftest import ROOT, SHARED
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 import bvh  # noqa: E402
 
-from quatcurve_blender import fcurves, reduce, targets  # noqa: E402
+from quatcurve_blender import fcurves, native, reduce, targets  # noqa: E402
 
 MOCAP = os.path.join(SHARED, "data", "mocap", "mocapbank.bvh")
 CLIPS = ("mocapbank.bvh", "freebvh.bvh")  # both shared clips, ../shared/data/mocap/
@@ -94,8 +94,7 @@ def blender_quats(curves, frames, mode):
 
 
 def max_angle_deg(a, b):
-    dot = np.abs(np.sum(a * b, axis=1)) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
-    return float(np.degrees(2 * np.arccos(np.minimum(dot, 1.0))).max())
+    return float(np.degrees(native.require().angle_between(a, b)).max())
 
 
 def key_total(curves):

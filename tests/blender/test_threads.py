@@ -1,5 +1,5 @@
 """Worker threads (issue 15): the bake's and the reduction's native work runs on
-reduce.thread_count() threads, one target per task; the written keys must be the same, bit for bit,
+workers.thread_count() threads, one target per task; the written keys must be the same, bit for bit,
 whatever the thread count. Blender data is only touched on the main thread."""
 
 import hashlib
@@ -8,16 +8,16 @@ import bpy
 import numpy as np
 import pytest
 
-from quatcurve_blender import bake, fcurves, reduce, targets
+from quatcurve_blender import bake, fcurves, reduce, targets, workers
 
 import rigs
 
 
 @pytest.fixture
 def threads():
-    saved = reduce.THREADS
+    saved = workers.THREADS
     yield
-    reduce.THREADS = saved
+    workers.THREADS = saved
 
 
 def _rig(name):
@@ -39,7 +39,7 @@ def _digests(rig):
 def test_bake_is_the_same_on_any_thread_count(scene, threads, tolerance):
     digests = []
     for count in (1, 2, 5):
-        reduce.THREADS = count
+        workers.THREADS = count
         rig = _rig("Rig%d" % count)
         original = fcurves.active_action(rig)
         found = [targets.Target(rig, pb.name) for pb in rig.pose.bones]
@@ -53,7 +53,7 @@ def test_bake_is_the_same_on_any_thread_count(scene, threads, tolerance):
 def test_reduce_is_the_same_on_any_thread_count(scene, threads):
     digests, counts = [], []
     for count in (1, 2, 5):
-        reduce.THREADS = count
+        workers.THREADS = count
         rig = _rig("Rig%d" % count)
         found = [targets.Target(rig, pb.name) for pb in rig.pose.bones]
         bake.bake(found, bake.BakeSettings(method="SQUAD", rotation_mode="QUATERNION"))
@@ -65,8 +65,8 @@ def test_reduce_is_the_same_on_any_thread_count(scene, threads):
 
 
 def test_parallel_map_keeps_order_and_the_first_error(threads):
-    reduce.THREADS = 3
-    assert reduce.parallel_map(lambda x: x * x, range(10)) == [x * x for x in range(10)]
+    workers.THREADS = 3
+    assert workers.parallel_map(lambda x: x * x, range(10)) == [x * x for x in range(10)]
 
     def fail_odd(x):
         if x % 2:
@@ -74,14 +74,14 @@ def test_parallel_map_keeps_order_and_the_first_error(threads):
         return x
 
     with pytest.raises(ValueError, match="item 1"):
-        reduce.parallel_map(fail_odd, range(10))
+        workers.parallel_map(fail_odd, range(10))
 
 
 @pytest.mark.parametrize("count", [1, 4])
 def test_reduce_error_names_the_first_failing_target_in_order(scene, threads, count):
     """Obj2's zero axis is refused by the native reducer (a worker) after Obj0 and Obj1 were written
     into copies of their actions: the copies go again, and the file is as it was."""
-    reduce.THREADS = count
+    workers.THREADS = count
     objects = []
     for k in range(4):
         obj = bpy.data.objects.new("Obj%d" % k, None)

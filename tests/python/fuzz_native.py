@@ -1249,7 +1249,7 @@ def build_blender_evaluate(fn, d):
 
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
-CURVE_MEMBERS = {"angular_velocity", "from_axis_angle", "from_euler", "method", "options", "quats", "path_rule_breaks",
+CURVE_MEMBERS = {"angular_velocity", "from_axis_angle", "from_channels", "from_euler", "method", "options", "quats", "path_rule_breaks",
                  "sample", "sample_keys", "segment_paths", "times"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
@@ -1397,9 +1397,15 @@ def build_curve(method, d: Draw) -> Case:
         sample_fail = sample_fail or ("junk sample times" if bad else "")
     cls = qc.Curve
     keys_mode = d.pick(("QUATERNION",) + ORDERS + ("AXIS_ANGLE",), "keys_mode")
+    # The same keys through Curve.from_channels, the add-on's one way to build a curve: the same curve
+    # or the same refusal.
+    via_channels = d.chance(0.3, "from_channels")
+    channels_mode = order if from_euler else ("AXIS_ANGLE" if from_axis_angle else "QUATERNION")
 
     def call():
-        if from_euler:
+        if via_channels:
+            c = cls.from_channels(*args, channels_mode, method=meth, **kwargs)
+        elif from_euler:
             c = cls.from_euler(*args, order=order, method=meth, **kwargs)
         elif from_axis_angle:
             c = cls.from_axis_angle(*args, method=meth, **kwargs)

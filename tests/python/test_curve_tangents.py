@@ -27,9 +27,8 @@ def chain(arcs, axes):
 
 
 def angles(a, b):
-    """Rotation angle between unit quaternions (either sign), accurate also for tiny angles."""
-    b = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0, -b, b)
-    return 4 * np.arctan2(np.linalg.norm(a - b, axis=-1), np.linalg.norm(a + b, axis=-1))
+    """Rotation angle between rotations (either sign), accurate also for tiny angles."""
+    return qc.angle_between(a, b)
 
 
 def path_lengths(curve, n=400):

@@ -4,7 +4,7 @@ target, plus the regression cases the fuzzer found.
 
 The fuzzer runs in a child Python: a segfault or a hang (its watchdog dumps the stack and exits)
 fails that target and the child is restarted for the rest, so one crash does not abort pytest.
-Long campaign: QUATCURVE_FUZZ_LONG=1 (random seeds, 20,000 examples per target; see README
+Long campaign: QUATCURVE_FUZZ_LONG=1 (random seeds, 20,000 examples per target; see docs/testing.md,
 "Hardening")."""
 
 import json

@@ -8,7 +8,7 @@
 // it writes keys into Blender, and the workers never wait for it (Python worker threads would, at
 // every step between two native calls).
 //
-// Conventions as everywhere (README): quaternion keys (w, x, y, z), Euler angles (about X, Y, Z) in
+// Conventions as everywhere (docs/conventions.md): quaternion keys (w, x, y, z), Euler angles (about X, Y, Z) in
 // Blender's order semantics, axis-angle keys (angle, x, y, z), radians, time in frames.
 #pragma once
 

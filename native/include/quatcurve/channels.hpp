@@ -63,6 +63,16 @@ std::vector<double> quats_to_channels(const std::vector<Quat>& q, const Rotation
                                       EulerBranch branch = EulerBranch::continuous);
 
 class Curve;
+enum class Method;
+struct CurveOptions;
+
+// The curve of `method` through keys given as channel values of `mode`: n times and n rows of
+// channel_count(mode) values. Quaternion keys go to the Curve constructor as stored (QUAT_COMPONENTS
+// lerps them unnormalized, as Blender does), Euler keys to Curve::from_euler and axis-angle keys to
+// Curve::from_axis_angle, so the turns of Euler and axis-angle paths beyond 180° survive. Throws
+// InvalidArgument for a values count that is not n rows, and as those constructors do.
+Curve curve_from_channels(const std::vector<double>& times, const std::vector<double>& values,
+                          const RotationMode& mode, Method method, const CurveOptions& options);
 
 // The F-curve keys of `curve` sampled at `frames` (n) in rotation mode `mode`: out holds, per channel,
 // n (frame, value) float32 pairs as Blender stores keys — (C, n, 2) — the values those of

@@ -1,6 +1,6 @@
 // Quaternion algebra, rotation of points, axis-angle and matrix conversions.
 //
-// Conventions (see README "Conventions"): quaternions are (w, x, y, z) at array edges; a unit
+// Conventions (see docs/conventions.md): quaternions are (w, x, y, z) at array edges; a unit
 // quaternion q = (cos α, sin α · u) rotates by 2α about the unit axis u, P' = q·[0,P]·q⁻¹;
 // matrices act on column vectors (P' = M·P) and compose right to left (M1·M2·M3·P applies M3 first).
 // All functions compute in double. "Where a rotation is meant" a non-unit quaternion is normalized
