@@ -60,7 +60,9 @@ ok=0
   env SKBUILD_BUILD_DIR="$ROOT/build-wheels/cmake-default" CMAKE_BUILD_PARALLEL_LEVEL="${CMAKE_BUILD_PARALLEL_LEVEL:-2}" \
     "$PY" -m pip wheel "$ROOT" --no-deps --disable-pip-version-check -q -w "$out/wheel" 2>&1 | grep -v "^WARNING: Location" || true
   wheel="$(ls "$out"/wheel/quatcurve-*.whl)"
-  echo "pip wheel .: $(basename "$wheel") ($(( $(stat -c %s "$wheel") / 1024 )) KiB)"
+  # For comparison only: what this machine's compiler makes needs this machine's glibc.
+  needs="$("$ROOT/.venv/bin/auditwheel" show "$wheel" 2>/dev/null | tr '\n' ' ' | grep -o 'platform tag: "[^"]*"' || true)"
+  echo "pip wheel .: $(basename "$wheel") ($(( $(stat -c %s "$wheel") / 1024 )) KiB; auditwheel show: ${needs:-no tag})"
   (cd "$out" && "$PY" -m zipfile -e "$wheel" mod && cd mod && "$PY" -c '
 import numpy as np, quatcurve as qc
 q = qc.Curve([0.0, 10.0], [[1, 0, 0, 0], [0, 0, 0, 1]], "SLERP").sample([5.0])
