@@ -13,9 +13,9 @@
 # zig links against glibc 2.28's symbol versions and links its libc++ statically, so the module needs
 # nothing newer than glibc 2.28 and no libstdc++. `auditwheel repair --plat manylinux_2_28_x86_64`
 # checks that and tags the wheel; `auditwheel show` prints the proof (tests/package/run.sh checks it).
-# The cp313 wheel is built when a Python 3.13 is found ($QUATCURVE_PYTHON313, pyenv's 3.13.*, or
-# python3.13 on PATH); without one, only cp311 is built, with a note.
-# Idempotent: the CMake trees in build-wheels/ are reused, so a second run recompiles nothing.
+# The cp313 wheel is built when a Python 3.13 is found ($QUATCURVE_PYTHON313, pyenv's versions/3.13.*,
+# /usr/bin/python3.13, or python3.13 on PATH); without one, only cp311 is built, with a note.
+# Idempotent: the build venvs and CMake trees in build-wheels/ are reused, so a second run recompiles nothing.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -61,7 +61,7 @@ chmod +x "$tc/c++"
 # ---- the Pythons ----------------------------------------------------------------------------------
 python313() {
   local p
-  for p in "${QUATCURVE_PYTHON313:-}" "$(pyenv root 2>/dev/null)"/versions/3.13.*/bin/python \
+  for p in "${QUATCURVE_PYTHON313:-}" "$(pyenv root 2>/dev/null || echo "${PYENV_ROOT:-$HOME/.pyenv}")"/versions/3.13.*/bin/python \
            /usr/bin/python3.13 "$(command -v python3.13 2>/dev/null)"; do
     [ -n "$p" ] && [ -x "$p" ] && "$p" -c 'import sys; assert sys.version_info[:2] == (3, 13)' 2>/dev/null \
       && { echo "$p"; return; }
@@ -73,6 +73,21 @@ if [ -n "$py313" ]; then pythons+=("$py313"); else
   log "note: no Python 3.13 found (set QUATCURVE_PYTHON313): building the cp311 wheel only (no Blender 5.1+)"; fi
 
 # ---- the wheels -----------------------------------------------------------------------------------
+# One build venv per Python holds pyproject.toml's build requirements (scikit-build-core, pybind11):
+# pip builds without isolation, so the CMake tree in build-wheels/ survives between runs (a new
+# isolated environment makes scikit-build-core clear it).
+requires="$("$VENV/bin/python" -c 'import sys, tomllib; print(" ".join(tomllib.load(open(sys.argv[1], "rb"))["build-system"]["requires"]))' "$ROOT/pyproject.toml")"
+build_env() {  # PYTHON TAG: prints the python of the tag's build venv, made or updated as needed
+  local env="$WORK/env-$2"
+  if ! [ -x "$env/bin/python" ] || [ "$(cat "$env/.quatcurve-requirements" 2>/dev/null)" != "$requires" ]; then
+    [ -x "$env/bin/python" ] || "$1" -m venv "$env" >&2
+    # shellcheck disable=SC2086  # the requirements are words
+    "$env/bin/python" -m pip install -q --disable-pip-version-check $requires 2>&1 | grep -v "^WARNING: Location" >&2 || true
+    "$env/bin/python" -c 'import scikit_build_core, pybind11' 2>/dev/null || die "could not install $requires into $env"
+    echo "$requires" > "$env/.quatcurve-requirements"
+  fi
+  echo "$env/bin/python"
+}
 rm -f "$DIST"/wheels/quatcurve-*.whl
 wheels=()
 for py in "${pythons[@]}"; do
@@ -80,9 +95,11 @@ for py in "${pythons[@]}"; do
   raw="$WORK/raw-$tag" buildlog="$WORK/build-$tag.log"
   rm -rf "$raw"
   log "building the $tag wheel with $py and zig ($ZIG_TARGET)"
+  envpy="$(build_env "$py" "$tag")"
   if ! env CXX="$tc/c++" CMAKE_BUILD_PARALLEL_LEVEL="${CMAKE_BUILD_PARALLEL_LEVEL:-2}" \
        SKBUILD_BUILD_DIR="$WORK/cmake-$tag" SKBUILD_CMAKE_ARGS="-Dglm_DIR=$tc/glm" \
-       "$py" -m pip wheel "$ROOT" --no-deps --disable-pip-version-check -w "$raw" > "$buildlog" 2>&1; then
+       "$envpy" -m pip wheel "$ROOT" --no-deps --no-build-isolation --disable-pip-version-check -w "$raw" \
+       > "$buildlog" 2>&1; then
     tail -30 "$buildlog" >&2
     die "the $tag wheel build failed (log: ${buildlog#"$ROOT"/})"
   fi
