@@ -47,15 +47,16 @@ if [ -x "$BLENDER_BIN" ]; then
     env PATH=/usr/local/bin:/usr/bin:/bin "$BLENDER_BIN" --background --factory-startup --python-exit-code 1 \
       --python "$script" -- "$@"; }
   cli_shown="blender -b --python addon/quatcurve_blender/cli.py --"
+  blender_minor="$BLENDER_BIN_PYTHON_MINOR"
 else
   bpy_py=""
-  for v in $BPY_VERSIONS; do [ -x "$(bpy_python "$v")" ] && { bpy_py="$(bpy_python "$v")"; blender_name="bpy $v ($bpy_py)"; break; }; done
+  for v in $BPY_VERSIONS; do [ -x "$(bpy_python "$v")" ] && { bpy_py="$(bpy_python "$v")"; blender_name="bpy $v ($bpy_py)"; blender_minor="$(bpy_python_minor "$v")"; break; }; done
   [ -n "$bpy_py" ] || die "no Blender: neither $BLENDER_BIN nor a bpy venv under $VENV_CACHE (run build_scripts/setup.sh)"
   run_script() { local script="$1"; shift; PYTHONPATH="$ROOT/addon" "$bpy_py" "$script" "$@"; }
   cli_shown="PYTHONPATH=addon python -m quatcurve_blender.cli"
 fi
-# Blender's own start, end and Info lines are left out.
-quiet_blender() { sed -u -E '/^(Blender [0-9][0-9.]*( \(hash .*\))?|Read blend: .*|Info: .*|Blender quit)$/d'; }
+# Blender's own start, end and Info lines are left out (5.2 logs "Read blend" behind a time and a category).
+quiet_blender() { sed -u -E '/^(Blender [0-9][0-9.]*( \(hash .*\))?|([0-9:.]+ +[a-z_.]+ +\| )?Read blend: .*|Info: .*|Blender quit)$/d'; }
 section() { printf '\n== %s\n' "$*"; }
 
 section "1. The native core on the seed's examples"
@@ -98,7 +99,8 @@ fit_args=(--fit --method SQUAD --tolerance 0.05 --subframes 4 --objects "$fit_ta
 echo "\$ $cli_shown ${fit_args[*]//$ROOT\//} ${scene#$ROOT/}"
 run_script "$CLI" "${fit_args[@]}" "$scene" | quiet_blender
 echo
-run_script "$ROOT/build_scripts/demo_fit_check.py" "$OUT/demo_fit.blend" "$BUILD_DIR/python" SQUAD 0.05 4 \
+# The check loads the module built for the Python of the Blender that runs it (build.sh).
+run_script "$ROOT/build_scripts/demo_fit_check.py" "$OUT/demo_fit.blend" "$(module_build_dir "$blender_minor")/python" SQUAD 0.05 4 \
   ${fit_targets//,/ } | quiet_blender
 
 section "Written under ${OUT#$ROOT/}/"

@@ -4,8 +4,12 @@
 #   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
 #      Python), Xvfb
 #   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
-#      once the module is built (a .pth file points at build/python)
-#   3. one venv per pinned bpy version in $VENV_CACHE
+#      once the module is built (a .pth file points at build/python). It is Python 3.11's; with
+#      QUATCURVE_PYTHON_MINOR=3.13 the primary build's venv is .venv-cp313 instead.
+#   3. one venv per pinned bpy version in $VENV_CACHE, of the Python that bpy release runs (3.11 or 3.13)
+#   4. for every other Python minor a Blender runs (3.13 for bpy 5.2), a small build venv
+#      .venv-cp<MM> with pybind11, for the module's second build (build.sh)
+# A Blender whose Python is not on this machine is left out, and said so (test.sh repeats it).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -22,14 +26,18 @@ if [ ${#missing[@]} -gt 0 ]; then
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
-# pip_env VENV REQUIREMENTS… : create VENV if needed and install the pinned requirements, skipping
-# pip entirely when the stamp shows the same set was already installed.
+# pip_env MINOR VENV REQUIREMENTS… : create VENV from Python MINOR if needed and install the pinned
+# requirements, skipping pip entirely when the stamp shows the same set was already installed.
 pip_env() {
-  local venv="$1"; shift
-  local stamp="$venv/.quatcurve-requirements" want="$*"
+  local minor="$1" venv="$2"; shift 2
+  local stamp="$venv/.quatcurve-requirements" want="$*" has
+  if [ -f "$venv/pyvenv.cfg" ]; then
+    has="$(sed -n 's/^version *= *\([0-9]*\.[0-9]*\).*/\1/p' "$venv/pyvenv.cfg")"
+    [ "$has" = "$minor" ] || die "$venv runs Python $has, not $minor: remove it and run setup again"
+  fi
   if [ -x "$venv/bin/python" ] && [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then return; fi
   log "preparing $venv ($want)"
-  [ -x "$venv/bin/python" ] || "$(base_python)" -m venv "$venv"
+  [ -x "$venv/bin/python" ] || "$(base_python "$minor")" -m venv "$venv"
   "$venv/bin/python" -m pip install -q --disable-pip-version-check "$@" 2>&1 \
     | grep -v "^WARNING: Location" >&2 || true
   # pip's exit status is hidden by the filter above: verify that every pin is really installed.
@@ -42,10 +50,23 @@ pip_env() {
 }
 
 mapfile -t dev_reqs < <(grep -v '^\s*#' "$ROOT/build_scripts/requirements-dev.txt" | grep -v '^\s*$')
-pip_env "$VENV" "${dev_reqs[@]}"
+pip_env "$PYTHON_MINOR" "$VENV" "${dev_reqs[@]}"
 site="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 echo "$BUILD_DIR/python" > "$site/quatcurve-build.pth"
 
-for v in $BPY_VERSIONS; do
-  pip_env "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3" "jsonschema==4.26.0"
+load_blenders
+pybind11_req="$(grep -E '^pybind11==' "$ROOT/build_scripts/requirements-dev.txt")"
+for minor in $(python_minors); do
+  [ "$minor" = "$PYTHON_MINOR" ] && continue
+  venv="$(build_venv "$minor")"
+  # A development venv of that minor (the root .venv, when the primary build is another minor's)
+  # holds the pinned pybind11 already.
+  [ -x "$venv/bin/python" ] && grep -qF -- "$pybind11_req" "$venv/.quatcurve-requirements" 2>/dev/null && continue
+  pip_env "$minor" "$venv" "$pybind11_req"
 done
+for v in $BPY_VERSIONS; do
+  minor="$(bpy_python_minor "$v")"
+  have_python "$minor" || continue
+  pip_env "$minor" "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3" "jsonschema==4.26.0"
+done
+blender_skips | while read -r line; do log "$line"; done

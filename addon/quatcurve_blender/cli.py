@@ -31,7 +31,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
+    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -40,7 +40,7 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, fit, fit_ops, native, targets
+    from quatcurve_blender import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, targets
 
 import bpy
 
@@ -68,6 +68,9 @@ examples:
       --output out/baked.blend in.blend
   blender -b --python addon/quatcurve_blender/cli.py -- --fit --method SQUAD --tolerance 0.01 \\
       --objects 'Rig' --output fitted.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --convert QUATERNION --all-actions \\
+      --objects 'Rig' --output quaternions.blend in.blend
+  blender -b --python addon/quatcurve_blender/cli.py -- --gltf out.glb --tolerance 0.1 fitted.blend
 """
 
 
@@ -77,7 +80,10 @@ def build_parser():
                            "orientation-curve method (the quatcurve.bake operator without the UI), optionally\n"
                            "comparing the methods first (the quatcurve.compare operator); or, with --fit,\n"
                            "shape their own rotation keys so that Blender plays the method (the\n"
-                           "quatcurve.fit operator).")
+                           "quatcurve.fit operator); or, with --convert MODE, change their rotation mode\n"
+                           "keeping the motion (the quatcurve.convert operator); or, with --gltf, export the\n"
+                           "scene to binary glTF with few rotation keys that play each target's curve\n"
+                           "(the quatcurve.export_gltf operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
                         "blender -b IN.blend --python cli.py -- ...)")
@@ -111,6 +117,25 @@ def build_parser():
     g.add_argument("--fit", action="store_true",
                    help="fit instead of bake; uses --method, --tension, --continuity, --bias, "
                         "--no-shortest-path, --tolerance (default 0.05°) and --subframes (default 4)")
+
+    g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
+                                     "Blender's glTF exporter, each rotation sampler replaced by few slerp "
+                                     "keys within --tolerance (default 0.1°) of the target's curve, checked at "
+                                     "--subframes points per frame (default 20). IN.blend is not changed.")
+    g.add_argument("--gltf", metavar="OUT.glb", help="the binary glTF file to write")
+    g.add_argument("--gltf-curve", choices=gltf.METHODS, default="AUTO", metavar="CURVE",
+                   help="the curve each rotation sampler plays: AUTO (default: fitted targets their fit's "
+                        "method, others what Blender plays), BLENDER (what Blender plays), or a method "
+                        "through each target's keys: %s" % ", ".join(fit.METHODS))
+
+    g = p.add_argument_group("convert", "Instead of baking (the quatcurve.convert operator): the targets get a new "
+                                        "rotation mode and their rotation keys are converted so that Blender plays "
+                                        "the same motion, within --tolerance (default 0.05°) at --subframes points "
+                                        "per frame (default 4).")
+    g.add_argument("--convert", choices=convert.MODES, metavar="MODE",
+                   help="the new rotation mode: %s" % ", ".join(convert.MODES))
+    g.add_argument("--all-actions", action="store_true",
+                   help="--convert: every action that animates a target's rotation (default: its active action)")
 
     g = p.add_argument_group("bake")
     g.add_argument("--rotation-mode", choices=bake.OUTPUT_MODES, default="KEEP", metavar="MODE",
@@ -202,6 +227,58 @@ def fit_settings(args):
         fit.check_settings(settings)
     except fit.FitError as error:
         raise UsageError(str(error)) from None
+    return settings
+
+
+# Options that mean nothing to a conversion (argparse defaults: what is not given).
+NOT_FOR_CONVERT = NOT_FOR_FIT + (
+    ("fit", False, "--fit"), ("method", "SLERP", "--method"), ("tension", 0.0, "--tension"),
+    ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"), ("shortest_path", True, "--no-shortest-path"),
+    ("clamped", True, "--no-clamp"))
+
+
+def convert_settings(args):
+    """ConvertSettings from the arguments (the operator's defaults where not given), checked by
+    convert's own check; options of the other tasks are a UsageError."""
+    given = [flag for name, default, flag in NOT_FOR_CONVERT if getattr(args, name) != default]
+    if given:
+        raise UsageError("%s: not an option of --convert (it converts the keys in their own actions)"
+                         % ", ".join(given))
+    defaults = convert.ConvertSettings()
+    settings = convert.ConvertSettings(
+        rotation_mode=args.convert, actions="ALL" if args.all_actions else "ACTIVE",
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        convert.check_settings(settings)
+    except convert.ConvertError as error:
+        raise UsageError(str(error)) from None
+    return settings
+
+
+# Options of bake, fit and compare that mean nothing to --gltf (argparse defaults: what is not given).
+NOT_FOR_GLTF = NOT_FOR_FIT + (("fit", False, "--fit"), ("output", None, "--output"), ("in_place", False, "--in-place"),
+                              ("objects", None, "--objects"), ("bones", None, "--bones"), ("method", "SLERP", "--method"),
+                              ("tension", 0.0, "--tension"), ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"),
+                              ("shortest_path", True, "--no-shortest-path"), ("clamped", True, "--no-clamp"),
+                              ("convert", None, "--convert"), ("all_actions", False, "--all-actions"))
+
+
+def gltf_settings(args):
+    """ExportSettings from the arguments, checked with the output path by gltf's own check; options of
+    the other tasks are a UsageError."""
+    given = [flag for name, default, flag in NOT_FOR_GLTF if getattr(args, name) != default]
+    if given:
+        raise UsageError("%s: not an option of --gltf (it exports the whole scene; choose the curve with "
+                         "--gltf-curve)" % ", ".join(given))
+    defaults = gltf.ExportSettings()
+    settings = gltf.ExportSettings(
+        method=args.gltf_curve, tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
+        subframes=defaults.subframes if args.subframes is None else args.subframes)
+    try:
+        gltf.check_settings(settings, args.gltf)
+    except gltf.GltfError as error:
+        raise UsageError("--gltf: %s" % error) from None
     return settings
 
 
@@ -388,6 +465,14 @@ def save_atomically(path):
 # ---- main -------------------------------------------------------------------------------------------
 
 def run(args):
+    if args.gltf is not None:
+        return run_gltf(args)
+    if args.gltf_curve != "AUTO":
+        raise UsageError("--gltf-curve: an option of --gltf only")
+    if args.convert:
+        return run_convert(args)
+    if args.all_actions:
+        raise UsageError("--all-actions: an option of --convert only")
     if args.fit:
         return run_fit(args)
     settings = bake_settings(args)
@@ -468,6 +553,56 @@ def fit_and_save(args, settings, source, output):
     print("total: " + result.summary())
     save_atomically(output)
     print("saved %s" % output)
+    return EXIT_OK
+
+
+def run_convert(args):
+    """--convert MODE: the same checks and output handling as a bake; the work is convert.convert."""
+    settings = convert_settings(args)
+    source = input_path(args)
+    output = output_path(args, source)
+    native.require()
+    open_input(source)
+    registered = register_addon()
+    try:
+        scene = bpy.context.scene
+        chosen = select_targets(scene.objects, split_patterns(args.objects), split_patterns(args.bones))
+        result = convert.convert(chosen, settings)
+        scene.frame_set(scene.frame_current)  # re-evaluate in the new modes, as the operator does
+        print("quatcurve %s (Blender %s): convert to %s, tolerance %g°, %d subframes, %s actions, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, settings.rotation_mode, settings.tolerance,
+            settings.subframes, settings.actions.lower(), os.path.basename(source),
+            "in place" if args.in_place else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        save_atomically(output)
+        print("saved %s" % output)
+        return EXIT_OK
+    finally:
+        if registered:
+            addon.unregister()
+
+
+def run_gltf(args):
+    """--gltf: the scene of IN.blend exported by gltf.export (the operator's function)."""
+    settings = gltf_settings(args)
+    source = input_path(args)
+    native.require()
+    open_input(source)
+    registered = register_addon()
+    try:
+        with blender_output_silenced():  # the exporter's progress lines
+            result = gltf.export(bpy.context.scene, args.gltf, settings)
+    finally:
+        if registered:
+            addon.unregister()
+    print("quatcurve %s (Blender %s): glTF, curve %s, tolerance %g°, %d subframes, %s -> %s" % (
+        native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+        settings.subframes, os.path.basename(source), result.filepath))
+    for line in result.lines():
+        print("  " + line)
+    print("total: " + result.summary())
     return EXIT_OK
 
 

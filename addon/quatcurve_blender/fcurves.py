@@ -143,6 +143,14 @@ class Channels:
         bag = _channelbag(action, slot, create)
         return cls(action, slot, bag) if bag is not None else None
 
+    @classmethod
+    def of_slot(cls, action, slot=None):
+        """Channels of `slot` in `action` (≥ 4.4; ignored before): None when the slot has none."""
+        if not SLOTTED:
+            return cls(action)
+        bag = _channelbag(action, slot, False) if slot is not None else None
+        return cls(action, slot, bag) if bag is not None else None
+
     @property
     def fcurves(self):
         return self._bag.fcurves if self._bag is not None else ()
@@ -241,6 +249,26 @@ def action_users(action, slot_identifier=None):
         if uses:
             users.append(obj)
     return users
+
+
+def action_slots(action):
+    """The slots of `action` (≥ 4.4); [None] before (a legacy action is one set of channels)."""
+    return list(action.slots) if SLOTTED else [None]
+
+
+def played_slot(id_data, action):
+    """The slot through which `id_data` plays `action` — as its active action or in an NLA strip
+    (≥ 4.4) — or None (also before 4.4, where actions have no slots)."""
+    anim = id_data.animation_data
+    if not SLOTTED or anim is None:
+        return None
+    if anim.action == action and anim.action_slot is not None:
+        return anim.action_slot
+    for track in anim.nla_tracks:
+        for strip in track.strips:
+            if strip.action == action and strip.action_slot is not None:
+                return strip.action_slot
+    return None
 
 
 def slot_identifier(id_data):

@@ -19,18 +19,21 @@ JITTER (the documented stand-in). A refit replaces every marked key and keeps ev
 animator who wants to keep an inserted key changes its type to Keyframe.
 
 Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
-keys' signature — what live mode compares) and per key ease in / ease out (`Action.quatcurve_eases`,
-by frame, carried along when keys move). Rotation modes: quaternion, the six Euler orders (turns
-over 180° between Euler keys are kept, as the bake keeps them) and axis-angle (the angle channel's
-turns are kept too: 0° → 720° spins twice, as Blender's own channels do; inserted keys continue the
-animator's angle and axis side, and the axis length may drift between keys, as Blender normalizes
-it). Everything is read and computed before anything is written, so an error leaves the file
-untouched; the operator's UNDO flag makes the write one undo step.
+keys' signature — what live mode compares), per key ease in / ease out (`Action.quatcurve_eases`)
+and, for quaternion targets, per key turns (`Action.quatcurve_turns`: extra full turns of the segment
+leaving the key, set_turns), both by frame and carried along when keys move. Rotation modes:
+quaternion, the six Euler orders (turns over 180° between Euler keys are kept, as the bake keeps
+them) and axis-angle (the angle channel's turns are kept too: 0° → 720° spins twice, as Blender's
+own channels do; inserted keys continue the animator's angle and axis side, and the axis length may
+drift between keys, as Blender normalizes it). Everything is read and computed before anything is
+written, so an error leaves the file untouched; the operator's UNDO flag makes the write one undo
+step.
 """
 
 import contextlib
 import hashlib
 import math
+import re
 import time
 from dataclasses import dataclass, field
 
@@ -85,13 +88,15 @@ def check_settings(settings):
         raise FitError("subframes %r: must be a whole number from 1 to 64" % (settings.subframes,))
 
 
-def curve_options(settings, ease_in=None, ease_out=None):
-    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease)."""
+def curve_options(settings, ease_in=None, ease_out=None, turns=None):
+    """Keyword options of quatcurve.Curve for the settings' method (and per-key ease and turns)."""
     options = methods.options(settings.method, settings)
     if ease_in is not None and np.any(ease_in):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
     if ease_out is not None and np.any(ease_out):
         options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
+    if turns is not None and np.any(turns):
+        options["turns"] = np.asarray(turns, dtype=np.float64)
     return options
 
 
@@ -195,6 +200,87 @@ def carry_eases(old_frames, new_frames, ease_in, ease_out):
         if j.size:
             out_in[k], out_out[k] = ease_in[j[0]], ease_out[j[0]]
     return out_in, out_out
+
+
+# ---- per-key turns -----------------------------------------------------------------------------------
+# Full turns of the segment leaving a key (quaternion targets): Action.quatcurve_turns, by frame, as
+# the eases; the curve turns (quatcurve.Curve(turns=...)) and the fit inserts the keys Blender needs
+# to play it.
+
+def key_turns(action, target, frames):
+    """The turns of the key `frames` from the action's turn records (0 where none)."""
+    slot, path = target_key(target)
+    turns = np.zeros(len(frames))
+    for item in getattr(action, "quatcurve_turns", ()):
+        if item.owner_path == path and item.slot == slot:
+            k = np.flatnonzero(np.abs(np.asarray(frames) - item.frame) < 1e-4)
+            if k.size:
+                turns[k[0]] = item.turns
+    return turns
+
+
+def set_key_turns(action, target, frames, turns):
+    """Replaces the target's turn records by one per key frame with non-zero turns."""
+    items = getattr(action, "quatcurve_turns", None)
+    if items is None:
+        return
+    slot, path = target_key(target)
+    for i in reversed(range(len(items))):
+        if items[i].owner_path == path and items[i].slot == slot:
+            items.remove(i)
+    if turns is None:
+        return
+    for k in np.flatnonzero(np.asarray(turns[:len(frames)]) != 0):
+        item = items.add()
+        item.slot, item.owner_path, item.frame, item.turns = slot, path, float(frames[k]), int(turns[k])
+
+
+def turns_message(message, frames):
+    """The native curve's message about turns with key indices given as frames."""
+    if not message.startswith("turns["):
+        return message
+    return re.sub(r"\bkey (\d+)", lambda m: "the key at frame %s" % targets.num(frames[int(m.group(1))])
+                  if int(m.group(1)) < len(frames) else m.group(0), message)
+
+
+def set_turns(found, turns):
+    """Sets the turns of the segment leaving each selected animator key of each fitted quaternion
+    target and refits it with its settings and eases (the last key has no segment: its selection is
+    ignored). Returns the number of keys set. Raises FitError naming target and key frame (Euler and
+    axis-angle targets, targets not fitted, no selected key, a still segment without an axis to turn
+    about) before anything is written."""
+    if not math.isfinite(turns) or int(turns) != turns or abs(turns) > 10000:
+        raise FitError("turns %r: must be a whole number from -10000 to 10000" % (turns,))
+    plans, changed = [], 0
+    with record_index():
+        for target in found:
+            keys = read_animator_keys(target)
+            if keys.is_euler:
+                raise FitError("%s: rotation mode %s: Euler keys already keep their turns (key the angle: 0° → 450° "
+                               "turns once more); turns are for quaternion keys" % (keys.name, keys.mode))
+            if keys.is_axis_angle:
+                raise FitError("%s: rotation mode AXIS_ANGLE: axis-angle keys already keep their turns in the angle "
+                               "channel (key 90° → 450° to turn once more); turns are for quaternion keys" % keys.name)
+            record = find_record(fcurves.active_action(target.id_data), target)
+            if record is None:
+                raise FitError("%s: not fitted (fit it first: turns are part of the fit)" % keys.name)
+            chosen = keys.selected.any(axis=0)
+            chosen[-1:] = False
+            if not chosen.any():
+                continue
+            ease_in, ease_out, old = refit_eases(keys, target, record)
+            new = old.copy()
+            new[chosen] = turns
+            changed += int(chosen.sum())
+            plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
+            if plan is not None:
+                plans.append((plan, target))
+        if not plans:
+            raise FitError("no selected rotation key with a segment after it on a fitted target (select the key "
+                           "that starts the segment to turn)")
+        for plan, target in plans:
+            write_plan(plan, target)
+    return changed
 
 
 # ---- reading the animator's keys ---------------------------------------------------------------------
@@ -350,6 +436,7 @@ class FitPlan:
     ease_in: np.ndarray
     ease_out: np.ndarray
     notes: list = field(default_factory=list)
+    turns: np.ndarray = None
 
 
 def path_notes(name, curve, frames, method):
@@ -358,17 +445,17 @@ def path_notes(name, curve, frames, method):
     return ["path rule: " + b.text() for b in path_rule.breaks(curve, frames, name, method)]
 
 
-def curve_of(keys, settings, ease_in=None, ease_out=None):
+def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The native curve of the settings' method through the animator's keys, and the key values the
     fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
     their turns kept by the curve)."""
-    options = curve_options(settings, ease_in, ease_out)
+    options = curve_options(settings, ease_in, ease_out, turns)
     try:
         curve = targets.build_curve(keys.mode, keys.frames, keys.values, settings.method, keys.name, **options)
     except TargetError as e:
         raise FitError(str(e)) from None
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.name, e)) from None
+        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
     if keys.is_euler or keys.is_axis_angle:
         return curve, keys.values  # their turns are kept by the curve
     # The curve's output is sign-continuous; each key takes the sign the curve reaches it with.
@@ -377,7 +464,7 @@ def curve_of(keys, settings, ease_in=None, ease_out=None):
     return curve, keys.values * signs[:, None]
 
 
-def plan_target(keys, settings, ease_in=None, ease_out=None):
+def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     """The fitted keys of one target (nothing written). Fewer than two keys: None."""
     qc = native.require()
     K = len(keys.frames)
@@ -385,7 +472,13 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         return None
     ease_in = np.zeros(K) if ease_in is None else np.asarray(ease_in, float)
     ease_out = np.zeros(K) if ease_out is None else np.asarray(ease_out, float)
-    curve, key_values = curve_of(keys, settings, ease_in, ease_out)
+    # Turns are for quaternion keys: Euler and axis-angle keys carry their turns in their angles, and
+    # their channels, kept as keyed at the keys, could not add one (a target whose mode changed since
+    # its turns were set plays its keys' own turns).
+    if turns is None or keys.mode != "QUATERNION":
+        turns = np.zeros(K)
+    turns = np.asarray(turns, float)
+    curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
     # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
     try:
         t, forced, fitted = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode,
@@ -402,7 +495,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None):
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
     return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method))
+                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method), turns)
 
 
 def write_plan(plan, target):
@@ -429,6 +522,7 @@ def write_plan(plan, target):
         fcurves.write_key_selection(curve, chosen)
     store_record(keys, plan.settings, target, action)
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
+    set_key_turns(action, target, keys.frames, plan.turns)
     target.id_data.update_tag(refresh={"TIME"})
 
 
@@ -466,16 +560,19 @@ def record_frames(record):
 
 
 def refit_eases(keys, target, record=None):
-    """The (ease_in, ease_out) of the target's keys from its active action's records; keys moved in
-    time since `record` (as many as then) keep their ease. Reads Blender data: main thread."""
+    """The (ease_in, ease_out, turns) of the target's keys from its active action's records; keys
+    moved in time since `record` (as many as then) keep their ease and turns. Reads Blender data:
+    main thread."""
     action = fcurves.active_action(target.id_data)
     ease_in, ease_out = key_eases(action, target, keys.frames)
+    turns = key_turns(action, target, keys.frames)
     if record is not None and record.key_frames:
         old = record_frames(record)
         if len(old) == len(keys.frames) and not np.array_equal(old, keys.frames):
             o_in, o_out = key_eases(action, target, old)
             ease_in, ease_out = carry_eases(old, keys.frames, o_in, o_out)
-    return ease_in, ease_out
+            turns = carry_eases(old, keys.frames, key_turns(action, target, old), turns)[0]
+    return ease_in, ease_out, turns
 
 
 # ---- the task -------------------------------------------------------------------------------------------
@@ -569,6 +666,7 @@ def unfit(found):
             continue
         action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
         set_key_eases(action, target, [], [], [])
+        set_key_turns(action, target, [], [])
         names.append(target.name)
     return names
 

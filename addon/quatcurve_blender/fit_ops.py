@@ -1,6 +1,6 @@
-"""The `quatcurve.fit`, `quatcurve.unfit` and `quatcurve.set_ease` operators, the fit settings and last
-result (`scene.quatcurve_fit`), and the records fit keeps on actions (`Action.quatcurve_fits`,
-`Action.quatcurve_eases`).
+"""The `quatcurve.fit`, `quatcurve.unfit`, `quatcurve.set_ease` and `quatcurve.set_turns` operators, the
+fit settings and last result (`scene.quatcurve_fit`), and the records fit keeps on actions
+(`Action.quatcurve_fits`, `Action.quatcurve_eases`, `Action.quatcurve_turns`).
 
 Fit shapes the selected objects' (Object mode) or pose bones' (Pose mode) own rotation keys so that
 Blender plays the chosen method (fit.py). Properties not given by the caller come from the panel's
@@ -65,6 +65,23 @@ class QuatCurveEaseRecord(bpy.types.PropertyGroup):
     )
 
 
+class QuatCurveTurnsRecord(bpy.types.PropertyGroup):
+    """Action.quatcurve_turns item: the extra full turns of the segment leaving one key (by frame)."""
+    __annotations__ = dict(
+        slot=bpy.props.StringProperty(name="Slot"),
+        owner_path=bpy.props.StringProperty(name="Owner Path"),
+        frame=bpy.props.FloatProperty(name="Frame"),
+        turns=bpy.props.IntProperty(name="Turns"),
+    )
+
+
+def turns_property():
+    return bpy.props.IntProperty(
+        name="Turns", default=0, min=-10000, max=10000, soft_min=-10, soft_max=10,
+        description="Extra full turns of the segment leaving each selected key, about its own axis "
+                    "(negative: the other way; quaternion targets)")
+
+
 class QuatCurveFitSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_fit: the panel's fit settings, live mode, the ease to set, the last result."""
     __annotations__ = dict(
@@ -77,6 +94,7 @@ class QuatCurveFitSettings(bpy.types.PropertyGroup):
                                         description="Slow the motion into the selected keys (path unchanged)"),
         ease_out=bpy.props.FloatProperty(name="Ease Out", default=0.0, min=0.0, max=1.0,
                                          description="Slow the motion out of the selected keys (path unchanged)"),
+        turns=turns_property(),
         last_summary=bpy.props.StringProperty(name="Last Fit", default=""),
         last_lines=bpy.props.StringProperty(name="Last Fit Details", default=""),
     )
@@ -104,6 +122,9 @@ def draw_settings(layout, settings, context=None, max_lines=6):
     col.prop(settings, "ease_in")
     col.prop(settings, "ease_out")
     col.operator("quatcurve.set_ease", text="Set Ease on Selected Keys")
+    row = layout.row(align=True)
+    row.prop(settings, "turns")
+    row.operator("quatcurve.set_turns", text="Set Turns")
     if context is not None:
         status = active_status(context)
         if status:
@@ -191,7 +212,8 @@ def set_ease(found, ease_in, ease_out):
         e_in, e_out = fit.key_eases(action, target, keys.frames)
         e_in[chosen], e_out[chosen] = ease_in, ease_out
         changed += int(chosen.sum())
-        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out)
+        turns = fit.key_turns(action, target, keys.frames)
+        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out, turns)
         if plan is not None:
             plans.append((plan, target))
     for plan, target in plans:
@@ -199,8 +221,29 @@ def set_ease(found, ease_in, ease_out):
     return changed
 
 
-_classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveFitSettings, QUATCURVE_OT_fit, QUATCURVE_OT_unfit,
-            QUATCURVE_OT_set_ease)
+class QUATCURVE_OT_set_turns(bpy.types.Operator):
+    """Turn the segment leaving each selected rotation key of the selected fitted quaternion targets by
+    extra full turns about its own axis, and refit them"""
+    bl_idname = "quatcurve.set_turns"
+    bl_label = "Set Turns on Selected Keys"
+    bl_options = {"REGISTER", "UNDO"}
+    turns: turns_property()
+
+    def execute(self, context):
+        opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("turns",))
+        try:
+            native.require()
+            changed = fit.set_turns(targets.gather_targets(context, verb="turn"), self.turns)
+        except (TargetError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, "%+d turn%s on %d key%s" % (
+            self.turns, "" if abs(self.turns) == 1 else "s", changed, "" if changed == 1 else "s"))
+        return {"FINISHED"}
+
+
+_classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveTurnsRecord, QuatCurveFitSettings, QUATCURVE_OT_fit,
+            QUATCURVE_OT_unfit, QUATCURVE_OT_set_ease, QUATCURVE_OT_set_turns)
 
 
 def register():
@@ -209,9 +252,11 @@ def register():
     bpy.types.Scene.quatcurve_fit = bpy.props.PointerProperty(type=QuatCurveFitSettings)
     bpy.types.Action.quatcurve_fits = bpy.props.CollectionProperty(type=QuatCurveFitRecord)
     bpy.types.Action.quatcurve_eases = bpy.props.CollectionProperty(type=QuatCurveEaseRecord)
+    bpy.types.Action.quatcurve_turns = bpy.props.CollectionProperty(type=QuatCurveTurnsRecord)
 
 
 def unregister():
+    del bpy.types.Action.quatcurve_turns
     del bpy.types.Action.quatcurve_eases
     del bpy.types.Action.quatcurve_fits
     del bpy.types.Scene.quatcurve_fit

@@ -19,8 +19,8 @@ ALL = tuple(_module.METHODS) if _module is not None else ("SLERP",)
 # not offer them as curves.
 CHANNEL_METHODS = ("EULER", "QUAT_COMPONENTS")
 CURVE_METHODS = tuple(m for m in ALL if m not in CHANNEL_METHODS)
-# Per-key options, given by key arrays, not by settings.
-PER_KEY_OPTIONS = ("ease_in", "ease_out")
+# Per-key options, given by key arrays (the fit's ease and turns records), not by settings.
+PER_KEY_OPTIONS = ("ease_in", "ease_out", "turns")
 
 # What the UI says of each method: (label, tooltip).
 _TEXT = {

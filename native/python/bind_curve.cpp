@@ -70,6 +70,7 @@ py::dict options_dict(const Curve& c) {
         else if (name == "bias") d["bias"] = per_key_value(o.bias);
         else if (name == "ease_in") d["ease_in"] = per_key_value(o.ease_in);
         else if (name == "ease_out") d["ease_out"] = per_key_value(o.ease_out);
+        else if (name == "turns") d["turns"] = per_key_value(o.turns);
     }
     return d;
 }
@@ -115,7 +116,9 @@ void bind_curve(py::module_& m) {
                       "Curve.from_axis_angle(times, values, method='SLERP', **options).\nMethods: METHODS. Options: shortest_path "
                       "(SLERP, bool); clamped (SQUAD, TCB, CATMULL_ROM, bool, default True: overshoot-free "
                       "tangents; False: the textbook ones); ease_in, ease_out in [0, 1] (every method, a number or one per "
-                      "key: slows into / out of keys, path unchanged); tension, continuity, bias in [-1, 1] (TCB; a "
+                      "key: slows into / out of keys, path unchanged); turns (every method but EULER and QUAT_COMPONENTS, whole "
+                      "numbers, a number or one per key: extra signed full turns of the segment leaving each key "
+                      "about its own axis); tension, continuity, bias in [-1, 1] (TCB; a "
                       "number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
                       "(..., 3) in rad/frame, world frame; constant outside the keys.")
         .def(py::init([](py::handle times, py::handle quats, const std::string& method, const py::kwargs& kwargs) {

@@ -16,6 +16,7 @@
 #include "quatcurve/euler.hpp"
 #include "quatcurve/fit.hpp"
 #include "quatcurve/reduce.hpp"
+#include "quatcurve/slerp_keys.hpp"
 
 namespace quatcurve::bindings {
 
@@ -298,6 +299,57 @@ index in times. The channel values between keys follow the curve and join the ke
 (quaternions scaled by the keys' norms, Euler angles continuous from each segment's first key,
 axis-angle by axis_angle_span with the axis length interpolated); fit_keys then inserts as few BEZIER
 keys as `tolerance` (radians) needs, min_gap frames from the keys.)doc");
+    py::class_<SlerpKeys>(m, "SlerpKeys", "Result of reduce_slerp: the kept samples as glTF LINEAR (slerp) keys.")
+        .def_property_readonly("indices", [](const SlerpKeys& r) { return index_array(r.indices); },
+                               "kept sample indices (int64), increasing; first and last included")
+        .def_property_readonly("quats",
+                               [](const SlerpKeys& r) {
+                                   DArray a({static_cast<py::ssize_t>(r.quats.size()), static_cast<py::ssize_t>(4)});
+                                   for (std::size_t k = 0; k < r.quats.size(); ++k)
+                                       to_wxyz(r.quats[k], a.mutable_data() + 4 * k);
+                                   return a;
+                               },
+                               "(K, 4) kept samples (w, x, y, z), normalized, each in the hemisphere of the one before")
+        .def_readonly("max_error", &SlerpKeys::max_error,
+                      "largest angle (radians) between a sample and the keys' slerp")
+        .def("__len__", [](const SlerpKeys& r) { return r.indices.size(); })
+        .def("__repr__", [](const SlerpKeys& r) {
+            return "<SlerpKeys " + std::to_string(r.indices.size()) + " keys, max_error " +
+                   std::to_string(r.max_error) + " rad>";
+        });
+
+    m.def(
+        "reduce_slerp",
+        [](py::handle times, py::handle quats, double tolerance) {
+            const std::vector<double> t = read_times(times);
+            const Batch q = read_rows(quats, 4, "quats", t.size());
+            std::vector<Quat> qs(t.size());
+            for (std::size_t k = 0; k < t.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
+            py::gil_scoped_release release;
+            return reduce_slerp(t, qs, tolerance);
+        },
+        py::arg("times"), py::arg("quats"), py::arg("tolerance"),
+        R"doc(The fewest glTF LINEAR rotation keys (slerp) among dense samples, within `tolerance`.
+
+times: (N,) strictly increasing (any unit); quats: (N, 4) (w, x, y, z), nonzero; tolerance:
+radians (geodesic angle, sign-invariant), >= 0. Greedy key choice; every kept segment is verified
+on every sample inside it: glTF's slerp between consecutive keys (gltf_slerp) at each sample's time
+stays within `tolerance` of the sample. Samples are compared as given: pass them as the file stores
+them (float32) to verify what a reader plays. Returns a SlerpKeys (indices, quats, max_error).)doc");
+
+    m.def(
+        "gltf_slerp",
+        [](py::handle a, py::handle b, double t) {
+            const Batch qa = as_batch(a, {4}, "a"), qb = as_batch(b, {4}, "b");
+            if (qa.count != 1 || qb.count != 1) throw py::value_error("a, b: expected one quaternion each");
+            const Quat r = gltf_slerp(from_wxyz(qa.data()), from_wxyz(qb.data()), t);
+            DArray out(4);
+            to_wxyz(r, out.mutable_data());
+            return out;
+        },
+        py::arg("a"), py::arg("b"), py::arg("t"),
+        R"doc(glTF 2.0's slerp (Appendix C) between rotations a and b (w, x, y, z; normalized first) at t:
+the shortest way round, whatever their signs. Returns a unit (4,) quaternion.)doc");
 }
 
 }  // namespace quatcurve::bindings

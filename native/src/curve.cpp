@@ -37,10 +37,58 @@ std::vector<double>* tcb_field(CurveOptions& o, const std::string& name) {
     if (name == "bias") return &o.bias;
     if (name == "ease_in") return &o.ease_in;
     if (name == "ease_out") return &o.ease_out;
+    if (name == "turns") return &o.turns;
     return nullptr;
 }
 
 bool is_default(const std::vector<double>& v) { return v.size() == 1 && v[0] == 0.0; }
+
+bool takes_turns(Method method) { return method != Method::EULER && method != Method::QUAT_COMPONENTS; }
+
+// Turns (curve.hpp, "Turns"): whole numbers within ±kMaxTurns (as Euler segments, 1e4 turns: the
+// sub-arcs grow with the turn), one value or one per key.
+constexpr double kMaxTurns = 1e4;
+// A segment turning by less than this has no axis of its own (float32 noise between equal keys is
+// ~1e-7 rad): its turns take a neighbour's axis.
+constexpr double kMinAxisTurn = 1e-6;
+
+void check_turns(const std::vector<double>& v, std::size_t keys) {
+    if (v.size() != 1 && v.size() != keys)
+        throw InvalidArgument("turns: expected one value or one per key (" + std::to_string(keys) + "), got " +
+                              std::to_string(v.size()));
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        const std::string name = "turns[" + std::to_string(i) + "]: ";
+        if (!std::isfinite(v[i])) throw InvalidArgument(name + "not a finite number");
+        if (v[i] != std::nearbyint(v[i])) throw InvalidArgument(name + std::to_string(v[i]) + " is not a whole number");
+        if (std::fabs(v[i]) > kMaxTurns)
+            throw InvalidArgument(name + std::to_string(v[i]) + " is beyond the supported ±10000 turns");
+    }
+}
+
+// The rotation vector each key segment gains from its turns (2π·turns[i] along its axis, curve.hpp
+// "Turns"), from the segments' rotation vectors without turns. Throws naming the key of a turned
+// segment without an axis of its own or a neighbour's.
+std::vector<Vec3> turn_vectors(const std::vector<Vec3>& r, const std::vector<double>& turns) {
+    std::vector<Vec3> extra(r.size(), Vec3(0.0));
+    auto axis_of = [&](std::size_t i, Vec3& u) {
+        const double n = glm::length(r[i]);
+        if (!(n >= kMinAxisTurn)) return false;
+        u = r[i] / n;
+        return true;
+    };
+    for (std::size_t i = 0; i < r.size(); ++i) {
+        const double n = turns.size() == 1 ? turns[0] : turns[i];
+        if (n == 0.0) continue;
+        Vec3 u;
+        if (!axis_of(i, u) && !(i > 0 && axis_of(i - 1, u)) && !(i + 1 < r.size() && axis_of(i + 1, u)))
+            throw InvalidArgument("turns[" + std::to_string(i) + "]: key " + std::to_string(i) + " and key " +
+                                  std::to_string(i + 1) +
+                                  " are the same rotation and neither neighbouring segment turns: the segment has no "
+                                  "axis to turn about");
+        extra[i] = (kTwoPi * n) * u;
+    }
+    return extra;
+}
 
 // Each value of a per-key option lies in [lo, hi] and the option has one value or one per key.
 void check_per_key(const std::vector<double>& v, const char* name, double lo, double hi, std::size_t keys) {
@@ -250,12 +298,14 @@ std::vector<std::string> option_names(Method method) {
     if (method == Method::TCB) {
         std::vector<std::string> names{"clamped"};
         names.insert(names.end(), kTcbOptions.begin(), kTcbOptions.end());
+        names.push_back("turns");
         return names;
     }
     std::vector<std::string> names;
     if (method == Method::SLERP) names.push_back("shortest_path");
     if (method == Method::SQUAD || method == Method::CATMULL_ROM) names.push_back("clamped");
     names.insert(names.end(), kEaseOptions.begin(), kEaseOptions.end());
+    if (takes_turns(method)) names.push_back("turns");
     return names;
 }
 
@@ -263,8 +313,9 @@ void set_option(CurveOptions& options, Method method, const std::string& name,
                 const std::vector<double>& values) {
     const bool known = name == "shortest_path" || name == "clamped" || tcb_field(options, name) != nullptr;
     if (!known)
-        throw InvalidArgument(name + ": unknown option (options: ease_in, ease_out for every method; shortest_path "
-                              "for SLERP; clamped for SQUAD, TCB and CATMULL_ROM; tension, continuity, bias for TCB)");
+        throw InvalidArgument(name + ": unknown option (options: ease_in, ease_out for every method; turns for every "
+                              "method but EULER and QUAT_COMPONENTS; shortest_path for SLERP; clamped for SQUAD, TCB "
+                              "and CATMULL_ROM; tension, continuity, bias for TCB)");
     const auto valid = option_names(method);
     if (std::find(valid.begin(), valid.end(), name) == valid.end())
         throw InvalidArgument(name + ": not an option of method " + method_name(method) +
@@ -408,10 +459,62 @@ void Curve::build() {
             if (!is_default(*tcb_field(o, name)))
                 throw InvalidArgument(std::string(name) + ": not an option of method " + method_name(method_));
     }
+    if (!takes_turns(method_) && !is_default(options_.turns))
+        throw InvalidArgument(std::string("turns: not an option of method ") + method_name(method_));
+    check_turns(options_.turns, K);
 
+    // Turns: the knots without them give every segment's own rotation vector (and so its axis, or a
+    // neighbour's); the knots are then made again with the turns added.
+    build_knots({});
+    if (std::any_of(options_.turns.begin(), options_.turns.end(), [](double n) { return n != 0.0; }) && K > 1)
+        build_knots(turn_vectors(rotvecs_, options_.turns));
+
+    Impl& m = *impl_;
+    const bool lifted = has_euler_keys() || !path_rotvecs_.empty();
+    m.first_q = m.kq.front();
+    m.last_q = m.kq.back();
+    if (K == 1) return;
+    detail::set_ease(m, options_, K);
+
+    switch (method_) {
+        case Method::EULER: detail::build_euler(m, times_, angles_, order_); break;
+        case Method::QUAT_COMPONENTS:
+            if (lifted) {
+                detail::build_lerp(m, m.kt, m.kq);
+            } else {
+                detail::build_lerp(m, times_, raw_);
+                m.first_q = quats_.front();
+                m.last_q = quats_.back();
+            }
+            break;
+        case Method::NLERP:  // the great arc between sign-continuous knots: the path is the arc
+            detail::build_lerp(m, m.kt, m.kq);
+            m.path_rule_proven = true;
+            break;
+        case Method::SLERP:
+            detail::build_slerp(m);
+            m.path_rule_proven = true;
+            break;
+        case Method::SQUAD:
+        case Method::TCB:
+        case Method::CATMULL_ROM:
+            detail::build_tangent_curve(m, method_, options_);
+            m.path_rule_proven = options_.clamped;
+            break;
+        case Method::SPLINE_C2: detail::build_spline(m); break;
+    }
+}
+
+// The knots (keys and sub-keys) and every segment's rotation vector; extra (empty, or one per
+// segment) is added to the rotation vectors of the segments it turns (turns), which are then split
+// along their own axis whatever the keys are (quaternion, Euler or axis-angle).
+void Curve::build_knots(const std::vector<Vec3>& extra) {
+    const std::size_t K = times_.size();
     impl_ = std::make_unique<Impl>();
     Impl& m = *impl_;
+    const std::vector<Vec3> own = rotvecs_;  // without turns, when extra is given
     rotvecs_.assign(K - 1, Vec3(0.0));
+    auto turned = [&](std::size_t i) { return !extra.empty() && extra[i] != Vec3(0.0); };
     // Knots: the keys plus the sub-keys of segments that turn more than π (none for EULER and for
     // QUAT_COMPONENTS on quaternion keys, which reproduce Blender's own channels).
     auto add_knot = [&](double t, const Quat& q, int key, int seg) {
@@ -448,6 +551,14 @@ void Curve::build() {
         // Each segment turns as its Euler path turns (spins beyond π are kept in every method).
         add_knot(times_[0], euler_to_quat(angles_[0], order_), 0, -1);
         for (std::size_t i = 0; i + 1 < K; ++i) {
+            if (turned(i)) {  // the path's turn plus the turns, along the path's net axis
+                const Quat q0 = m.kq.back();
+                const Vec3 r = own[i] + extra[i];
+                Quat next = euler_to_quat(angles_[i + 1], order_);
+                if (detail::qdot(next, detail::qmul(q0, detail::qexp(r))) < 0.0) next = -next;
+                add_segment(i, r, next);
+                continue;
+            }
             const Vec3 a0 = angles_[i], da = angles_[i + 1] - angles_[i];
             const double h = times_[i + 1] - times_[i];
             std::vector<double> cum;
@@ -513,8 +624,12 @@ void Curve::build() {
             const Quat q0 = m.kq.back();
             Quat next = quats_[i + 1];
             Vec3 r;
-            const Quat d = detail::qmul(detail::qconj(q0), next);
-            if (!path_rotvecs_.empty()) {
+            // The keys as stored (a segment turned an odd number of times before leaves the chain at
+            // −quats_[i], which must not change the keyed path of this one).
+            const Quat d = detail::qmul(detail::qconj(quats_[i]), next);
+            if (turned(i)) {
+                r = own[i] + extra[i];
+            } else if (!path_rotvecs_.empty()) {
                 r = path_rotvecs_[i];
             } else if (!keyed) {
                 if (detail::qdot(q0, next) < 0.0) next = -next;
@@ -524,40 +639,9 @@ void Curve::build() {
             } else {
                 r = rotvec_keyed(d, i);
             }
+            if (!extra.empty() && detail::qdot(next, detail::qmul(q0, detail::qexp(r))) < 0.0) next = -next;
             add_segment(i, r, next);
         }
-    }
-    m.first_q = m.kq.front();
-    m.last_q = m.kq.back();
-    if (K == 1) return;
-    detail::set_ease(m, options_, K);
-
-    switch (method_) {
-        case Method::EULER: detail::build_euler(m, times_, angles_, order_); break;
-        case Method::QUAT_COMPONENTS:
-            if (lifted) {
-                detail::build_lerp(m, m.kt, m.kq);
-            } else {
-                detail::build_lerp(m, times_, raw_);
-                m.first_q = quats_.front();
-                m.last_q = quats_.back();
-            }
-            break;
-        case Method::NLERP:  // the great arc between sign-continuous knots: the path is the arc
-            detail::build_lerp(m, m.kt, m.kq);
-            m.path_rule_proven = true;
-            break;
-        case Method::SLERP:
-            detail::build_slerp(m);
-            m.path_rule_proven = true;
-            break;
-        case Method::SQUAD:
-        case Method::TCB:
-        case Method::CATMULL_ROM:
-            detail::build_tangent_curve(m, method_, options_);
-            m.path_rule_proven = options_.clamped;
-            break;
-        case Method::SPLINE_C2: detail::build_spline(m); break;
     }
 }
 

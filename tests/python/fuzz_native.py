@@ -1256,11 +1256,40 @@ TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 EASE_OPTIONS = ("ease_in", "ease_out")
 
 
-def draw_options(d: Draw, method, k):
+TURN_METHODS = ("NLERP", "SLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
+
+
+def draw_turns(d: Draw, method, k, turnable):
+    """turns for a method that takes them: whole numbers (non-zero only when `turnable`: no two
+    consecutive keys are the same rotation, so every segment has an axis), or a fraction, a non-finite
+    value, a wrong length. Returns (value or None, must_fail)."""
+    if method not in TURN_METHODS or not d.chance(0.15, "turns"):
+        return None, ""
+    rng = d.rng
+    form = d.pick(("zero", "scalar", "per_key", "fraction", "nan", "wrong_length"), "turns_form")
+    if form in ("scalar", "per_key") and not turnable:
+        form = "zero"
+    if form == "zero":
+        return 0.0, ""
+    if form == "scalar":
+        return float(rng.integers(-2, 3)), ""
+    if form == "per_key":
+        return rng.integers(-2, 3, k).astype(float), ""
+    if form == "fraction":
+        return float(rng.choice([0.5, -1.25, 1e-9])), "turns not whole"
+    if form == "nan":
+        return rng.choice([NAN, INF, -INF]), "turns non-finite"
+    return np.zeros(k + 1 if k != 0 else 2), "turns wrong length"
+
+
+def draw_options(d: Draw, method, k, turnable=False):
     """Options for a method: mostly valid, sometimes out of range, non-finite, wrong length, of
     another method, unknown, or of a junk type. Returns (kwargs, must_fail)."""
     rng = d.rng
     kwargs, must_fail = {}, ""
+    turns, must_fail = draw_turns(d, method, k, turnable)
+    if turns is not None:
+        kwargs["turns"] = turns
     if method == "SLERP" and d.chance(0.5, "sp"):
         kwargs["shortest_path"], bad = d.pick([(True, False), (False, False), (2, True), ("yes", True),
                                                (np.bool_(False), False), (None, True)], "shortest_path")
@@ -1358,7 +1387,9 @@ def build_curve(method, d: Draw) -> Case:
             must_fail = must_fail or "zero key"
     if from_axis_angle and isinstance(keys, np.ndarray) and keys.ndim == 2 and zero_axis(keys):
         must_fail = must_fail or "zero axis"
-    kwargs, opt_fail = draw_options(d, method, k)
+    # non-zero turns only where every segment has an axis (distinct random keys, Euler spins)
+    turnable = kmode in ("random", "spin") and level not in ("wild", "poison")
+    kwargs, opt_fail = draw_options(d, method, k, turnable)
     must_fail = must_fail or opt_fail
     if d.chance(0.05, "mismatch") and k:
         keys = keys[:-1]

@@ -23,6 +23,19 @@
 // warp within each key segment (curve_ease.cpp) that slows the motion into and out of a key without
 // changing the path; at full ease (1) the angular velocity at the key is zero.
 //
+// Turns (every method except EULER and QUAT_COMPONENTS, which reproduce Blender's own channels):
+// turns[i] extra signed full turns of the segment leaving key i (one value or one per key, whole
+// numbers within ±10000; the last key's value is unused): the segment's rotation vector r[i] (from
+// the keys, or from the Euler / axis-angle path, spins included) becomes r[i] + 2π·turns[i]·r̂[i], so
+// its signed turn about r̂[i] is |r[i]| + 2π·turns[i] (−1 on a 30° segment: 330° the other way).
+// A segment that turns by less than 1e-6 rad (identical keys) has no axis of its own: it takes the
+// axis of the previous segment when that one turns by at least 1e-6 rad, else the next segment's
+// (a segment's axis is the same vector in the frames of both its keys, and the still segment's two
+// keys share one frame); with neither, InvalidArgument names the key. Such a segment turns
+// 2π·turns[i] about that axis (its own rotation below 1e-6 rad added). Every method keeps the turns:
+// the segment is split into sub-arcs along its axis as any turn beyond π (a turned segment of Euler
+// keys too, so it no longer follows the Euler path's shape, only its turn).
+//
 // Tangents of SQUAD, TCB and CATMULL_ROM (curve_tangents.cpp has the rule in full): by default
 // (clamped = true) time-scaled — the mean angular velocity over the two segments around a key —
 // then clamped on the sphere as Blender's Auto Clamped handles are for scalars: a key where the
@@ -84,10 +97,12 @@ struct CurveOptions {
     std::vector<double> bias{0.0};             // TCB, each in [-1, 1]
     std::vector<double> ease_in{0.0};          // every method, each in [0, 1] (3ds Max "Ease To" / 50)
     std::vector<double> ease_out{0.0};         // every method, each in [0, 1] (3ds Max "Ease From" / 50)
+    std::vector<double> turns{0.0};            // all but EULER, QUAT_COMPONENTS: whole numbers (see "Turns")
 };
 
-// Names of the options `method` takes: "ease_in", "ease_out" for every method; "shortest_path" for
-// SLERP; "clamped" for SQUAD, TCB and CATMULL_ROM; "tension", "continuity", "bias" for TCB.
+// Names of the options `method` takes: "ease_in", "ease_out" for every method; "turns" for every
+// method but EULER and QUAT_COMPONENTS; "shortest_path" for SLERP; "clamped" for SQUAD, TCB and
+// CATMULL_ROM; "tension", "continuity", "bias" for TCB.
 std::vector<std::string> option_names(Method method);
 // Sets option `name` of `options` from `values` (a bool is {0} or {1}). Throws InvalidArgument for
 // an unknown name, a name `method` does not take, an empty or non-finite value, or a bool that is
@@ -168,7 +183,8 @@ public:
     bool has_euler_keys() const { return !angles_.empty(); }
     const std::vector<Vec3>& euler_angles() const { return angles_; }
     EulerOrder euler_order() const { return order_; }
-    // Relative rotation vector of each key segment (local frame of its first key), size keys - 1.
+    // Relative rotation vector of each key segment (local frame of its first key), size keys - 1;
+    // with turns, the turned one (q[i+1] = ±q[i]·exp(r[i]/2)).
     const std::vector<Vec3>& segment_rotvecs() const { return rotvecs_; }
 
     // Implementation data, defined in native/src/curve_impl.hpp.
@@ -182,6 +198,7 @@ public:
 private:
     Curve(Method method, CurveOptions options);
     void build();
+    void build_knots(const std::vector<Vec3>& extra);
 
     Method method_;
     CurveOptions options_;

@@ -1,0 +1,51 @@
+// The fewest slerp keys for dense quaternion samples: what a glTF LINEAR rotation sampler plays.
+//
+// glTF 2.0 (Appendix C, "Spherical Linear Interpolation") plays a LINEAR rotation sampler between
+// keys v_k, v_k+1 at t ∈ [0, 1] as
+//
+//   a = arccos(|v_k · v_k+1|),  s = sign(v_k · v_k+1),
+//   v(t) = sin(a·(1 − t))/sin(a) · v_k + s · sin(a·t)/sin(a) · v_k+1
+//
+// (the shortest way round between the two rotations, whatever their signs). gltf_slerp computes it;
+// reduce_slerp chooses keys among the samples so that this evaluation stays within `tolerance` of
+// every sample.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "quatcurve/types.hpp"
+
+namespace quatcurve {
+
+// The glTF slerp above on â = a/|a| and b̂ = b/|b|, for t in [0, 1] (any finite t extrapolates along
+// the same great circle). The angle is taken as 2·atan2(|â − s·b̂|, |â + s·b̂|) (= arccos|â·b̂|,
+// accurate near 0); below 1e-7 rad the formula's limit (â·(1 − t) + s·b̂·t, normalized) is used.
+// The result is unit. Throws InvalidArgument on zero or non-finite a, b.
+Quat gltf_slerp(const Quat& a, const Quat& b, double t);
+
+struct SlerpKeys {
+    std::vector<std::size_t> indices;  // kept samples, increasing; first and last included
+    std::vector<Quat> quats;           // the kept samples, normalized, each in the hemisphere of the one before
+    double max_error = 0.0;            // largest angle (radians) between a sample and the keys' slerp
+};
+
+// Keys among dense samples (times strictly increasing and finite, any unit; quats finite, nonzero)
+// such that gltf_slerp between consecutive kept keys, at each sample's time, stays within
+// `tolerance` (radians, geodesic angle, finite, ≥ 0) of every sample (angle_between: sign-invariant).
+//
+// Key choice: greedy from the first sample. From key i the end j grows by doubling while the segment
+// (i, j) passes, then a binary search between the last passing and the first failing end; the
+// largest end found to pass is kept. Every kept segment is verified on every sample inside it, so the
+// bound holds whatever the motion; the count is not always the minimum (a longer segment can pass
+// where a shorter one failed). Two samples give both; one sample gives it; constant motion gives
+// the first and the last. A motion that turns more than 180° between samples cannot be played by
+// slerp between those samples: both stay keys and max_error reports the miss.
+//
+// Samples are compared as given (their rounding is the caller's: pass times and quaternions as the
+// file will store them, e.g. float32, to verify what a reader evaluates). Throws InvalidArgument
+// naming the argument and element ("times[3]: not increasing", "quats[2]: zero-length quaternion",
+// "tolerance: must be finite and >= 0", "quats: 3 rows for 4 times").
+SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance);
+
+}  // namespace quatcurve
