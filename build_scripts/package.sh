@@ -13,8 +13,8 @@
 # zig links against glibc 2.28's symbol versions and links its libc++ statically, so the module needs
 # nothing newer than glibc 2.28 and no libstdc++. `auditwheel repair --plat manylinux_2_28_x86_64`
 # checks that and tags the wheel; `auditwheel show` prints the proof (tests/package/run.sh checks it).
-# The cp313 wheel is built when a Python 3.13 is found ($QUATCURVE_PYTHON313, pyenv's versions/3.13.*,
-# /usr/bin/python3.13, or python3.13 on PATH); without one, only cp311 is built, with a note.
+# The cp313 wheel is built when a Python 3.13 is found (common.sh's find_python: /usr/bin/python3.13,
+# pyenv's newest 3.13.*, or python3.13 on PATH); without one, only cp311 is built, with a note.
 # Idempotent: the build venvs and CMake trees in build-wheels/ are reused, so a second run recompiles nothing.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -59,18 +59,10 @@ EOF
 chmod +x "$tc/c++"
 
 # ---- the Pythons ----------------------------------------------------------------------------------
-python313() {
-  local p
-  for p in "${QUATCURVE_PYTHON313:-}" "$(pyenv root 2>/dev/null || echo "${PYENV_ROOT:-$HOME/.pyenv}")"/versions/3.13.*/bin/python \
-           /usr/bin/python3.13 "$(command -v python3.13 2>/dev/null)"; do
-    [ -n "$p" ] && [ -x "$p" ] && "$p" -c 'import sys; assert sys.version_info[:2] == (3, 13)' 2>/dev/null \
-      && { echo "$p"; return; }
-  done
-}
-pythons=("$(PYTHON_MINOR=3.11 base_python)")
-py313="$(python313)"
+pythons=("$(base_python 3.11)")
+py313="$(find_python 3.13)"
 if [ -n "$py313" ]; then pythons+=("$py313"); else
-  log "note: no Python 3.13 found (set QUATCURVE_PYTHON313): building the cp311 wheel only (no Blender 5.1+)"; fi
+  log "note: building the cp311 wheel only (no Blender 5.1+): no Python 3.13 found ($(python_missing 3.13))"; fi
 
 # ---- the wheels -----------------------------------------------------------------------------------
 # One build venv per Python holds pyproject.toml's build requirements (scikit-build-core, pybind11):
