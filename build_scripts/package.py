@@ -9,8 +9,8 @@
    whose native module travels as a platform wheel listed in the manifest; built and validated with
    Blender's own extension tool (`blender --command extension build/validate`, the script
    `bl_pkg/cli/blender_ext.py`) when `--blender-ext` names it.
-Several wheels (cp311 and cp313) may be given: the extension lists them all and Blender installs the
-one matching its Python.
+Several wheels (cp311 and cp313; Linux, Windows, macOS) may be given: the extension lists them all,
+its `platforms` are those of the wheels, and Blender installs the one matching its Python and system.
 """
 
 import argparse
@@ -54,6 +54,26 @@ def legacy_zip(wheels, out):
     return paths
 
 
+# Wheel platform tag → Blender extension platform.
+PLATFORMS = (
+    (r"^(many)?linux.*_x86_64$", "linux-x64"),
+    (r"^win_amd64$", "windows-x64"),
+    (r"^win_arm64$", "windows-arm64"),
+    (r"^macosx_.*_(arm64|universal2)$", "macos-arm64"),
+    (r"^macosx_.*_(x86_64|universal2)$", "macos-x64"),
+)
+
+
+def wheel_platforms(wheel):
+    """The Blender platforms a wheel serves, from its file name's platform tag(s)."""
+    found = set()
+    for tag in os.path.basename(wheel)[:-len(".whl")].split("-")[-1].split("."):
+        found.update(name for pattern, name in PLATFORMS if re.match(pattern, tag))
+    if not found:
+        raise SystemExit("no Blender platform for the wheel %s" % os.path.basename(wheel))
+    return found
+
+
 def extension_zip(wheels, out, blender_ext):
     version = manifest_version()
     stage = tempfile.mkdtemp(prefix="quatcurve-ext-")
@@ -69,6 +89,9 @@ def extension_zip(wheels, out, blender_ext):
         with open(manifest, encoding="utf-8") as f:
             text = f.read()
         text = re.sub(r"^# wheels = .*$", "wheels = [%s]" % ", ".join(listed), text, flags=re.M)
+        platforms = sorted(set().union(*(wheel_platforms(w) for w in wheels)))
+        text = re.sub(r"^platforms = .*$", "platforms = [%s]" % ", ".join('"%s"' % p for p in platforms),
+                      text, flags=re.M)
         with open(manifest, "w", encoding="utf-8") as f:
             f.write(text)
         path = os.path.join(out, "quatcurve_blender-%s-extension.zip" % version)

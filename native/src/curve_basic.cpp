@@ -22,7 +22,8 @@ struct EulerEval {
 inline Q4 axis_q4(int axis, double angle) {
     const double h = 0.5 * angle;
     Q4 q{std::cos(h), 0.0, 0.0, 0.0};
-    (&q.x)[axis] = std::sin(h);
+    // By name, not (&q.x)[axis]: indexing past a member is undefined, and Clang drops such stores.
+    (axis == 0 ? q.x : axis == 1 ? q.y : q.z) = std::sin(h);
     return q;
 }
 inline EulerEval euler_eval(const int* ax, const Vec3& a) {

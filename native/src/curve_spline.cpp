@@ -180,7 +180,13 @@ QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std:
                     exp_coeffs4<decltype(terms)::value>(th2, c, k);
                     if constexpr (decltype(terms)::value == 12) {
                         for (int l = 0; l < 4; ++l) {
-                            if (th2[l] > kTwoPi * kTwoPi) exp_coeffs(th2[l], c[l], k[l]);
+                            if (th2[l] > kTwoPi * kTwoPi) {
+                                // Through scalars: Clang binds no reference to a vector lane.
+                                double cl, kl;
+                                exp_coeffs(th2[l], cl, kl);
+                                c[l] = cl;
+                                k[l] = kl;
+                            }
                         }
                     }
                     const Q4& Q = g.Q;
