@@ -1061,6 +1061,74 @@ def build_reduce(fn, d, euler, axis_angle=False):
     return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
 
 
+def build_reduce_slerp(fn, d):
+    """reduce_slerp: glTF LINEAR keys among dense quaternion samples; every sample within the tolerance
+    of the kept keys' glTF slerp (checked here with the same formula written in numpy)."""
+    t, v, tol, must_fail = draw_samples(d, euler=False)
+    n = len(t)
+    args = [t, v, tol]
+    if d.chance(0.05, "length_mismatch") and n:
+        args[1] = v[:-1]
+        must_fail = must_fail or "lengths differ"
+    must_fail = maybe_junk(d, args, [(), (4,), ()], ["times", "quats", "tolerance"], must_fail)
+
+    def check(out):
+        expect(type(out).__name__ == "SlerpKeys", f"result {type(out).__name__}")
+        check_indices(out.indices, n, "indices")
+        k = len(out.indices)
+        expect(k >= 1 and out.indices[0] == 0 and out.indices[-1] == n - 1, "first and last samples kept")
+        shape_is(out.quats, (k, 4), "quats")
+        finite(out.quats, "quats")
+        expect(np.allclose(np.linalg.norm(out.quats, axis=1), 1.0, atol=1e-12), "keys not unit")
+        expect(np.all(np.sum(out.quats[1:] * out.quats[:-1], axis=1) >= 0), "keys not sign-continuous")
+        finite(out.max_error, "max_error")
+        expect(out.max_error <= tol or tol == 0 and out.max_error < 1e-12,
+               f"max_error {out.max_error!r} above tolerance {tol!r}")
+        if n <= 2000 and k >= 2:
+            # glTF 2.0 Appendix C: slerp the short way between consecutive keys at each sample's time.
+            seg = np.clip(np.searchsorted(t[out.indices], t, side="right") - 1, 0, k - 2)
+            a, b = out.quats[seg], out.quats[seg + 1]
+            u = (t - t[out.indices][seg]) / (t[out.indices][seg + 1] - t[out.indices][seg])
+            dot = np.sum(a * b, axis=1)
+            b = np.where(dot[:, None] < 0, -b, b)
+            theta = np.arccos(np.clip(np.abs(dot), -1, 1))
+            with np.errstate(all="ignore"):
+                wa = np.where(theta > 1e-9, np.sin((1 - u) * theta) / np.sin(theta), 1 - u)
+                wb = np.where(theta > 1e-9, np.sin(u * theta) / np.sin(theta), u)
+            played = wa[:, None] * a + wb[:, None] * b
+            if np.all(np.isfinite(played)) and np.all(np.linalg.norm(played, axis=1) > 0):
+                err = np_angle(played, v).max()
+                expect(err <= max(tol, 0) + 1e-6, f"a sample is {err!r} rad from the keys' slerp (tolerance {tol!r})")
+        repr(out)
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+
+
+def build_gltf_slerp(fn, d):
+    """gltf_slerp(a, b, t): a unit quaternion; at t = 0 and 1 the rotations a and b."""
+    rng = d.rng
+    a, b = quats(rng, (2,), d.pick(("calm", "extreme"), "level"))
+    t = d.pick((0.0, 1.0, 0.5, float(rng.uniform(0, 1)), -0.5, 2.0), "t")
+    must_fail = ""
+    if d.chance(0.1, "poison"):
+        (a if d.chance(0.5) else b)[int(rng.integers(0, 4))] = rng.choice(POISON_VALUES)
+        must_fail = "poisoned quaternion"
+    if d.chance(0.05, "zero"):
+        a = np.zeros(4)
+        must_fail = must_fail or "zero quaternion"
+    args = [a, b, t]
+    must_fail = maybe_junk(d, args, [(4,), (4,), ()], ["a", "b", "t"], must_fail)
+
+    def check(out):
+        shape_is(out, (4,), "gltf_slerp")
+        finite(out, "gltf_slerp")
+        expect(abs(np.linalg.norm(out) - 1) < 1e-9, "not unit")
+        if t in (0.0, 1.0):
+            expect(np_angle(out[None], (a if t == 0.0 else b)[None]).max() < 1e-6, "does not hit the key")
+
+    return Case(lambda: fn(*args), 1, check, must_fail, 0, args)
+
+
 def build_axis_angle_span(fn, d):
     """axis_angle_span(quats (N, 4), start (4,), end (4,)): channels of the same rotations."""
     rng = d.rng
@@ -1768,6 +1836,9 @@ REGISTRY.update({
     "blender_evaluate": build_blender_evaluate,
     "BakeJob": build_bake_job,
     "BakeQueue": build_bake_queue,
+    "reduce_slerp": build_reduce_slerp,
+    "gltf_slerp": build_gltf_slerp,
+    "SlerpKeys": _not_constructible,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
