@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fcurves, methods, native, path_rule, targets, write
+from . import fcurves, fit, methods, native, path_rule, targets, write
 from .workers import parallel_imap, parallel_map, thread_count
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
@@ -334,7 +334,7 @@ def prepare(found, settings):
         for target in found:
             targets.check_editable(target, settings.new_action)
         with fcurves.read_cache():
-            sources = [targets.read_rotation_keys(t) for t in found]
+            sources = [fit.source_keys(t) for t in found]
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))

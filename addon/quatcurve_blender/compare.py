@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, methods, native, path_rule, plot, targets
+from . import fcurves, fit, methods, native, path_rule, plot, targets
 from .workers import parallel_imap
 from .targets import TargetError
 
@@ -350,7 +350,7 @@ def read_target(target, settings):
     """The Blender side of a comparison (main thread only): _Reading. Raises CompareError."""
     qc = native.require()
     try:
-        keys = targets.read_rotation_keys(target)
+        keys = fit.source_keys(target)
     except TargetError as error:
         raise CompareError(str(error)) from None
     if len(keys.frames) < 2:

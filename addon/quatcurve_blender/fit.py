@@ -671,6 +671,16 @@ def unfit(found):
     return names
 
 
+def source_keys(target, action=None):
+    """The target's rotation keys as the tasks read them (targets.read_rotation_keys): for a fitted
+    target (a fit record in the action) only the animator's key frames — the keys the fit generated
+    are its way of making Blender play the method, not poses, so a bake, a comparison or a trail
+    builds the method through the animator's keys, as the fit did."""
+    where = action if action is not None else fcurves.active_action(target.id_data)
+    fitted = where is not None and find_record(where, target) is not None
+    return targets.read_rotation_keys(target, action, skip_key_type=KEY_TYPE_GENERATED if fitted else None)
+
+
 def fitted_targets(action):
     """Every Target whose fit record is in `action` (objects playing it, with the record's slot)."""
     found = []

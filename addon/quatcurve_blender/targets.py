@@ -230,9 +230,11 @@ def playback(target, action=None):
     return Playback(target, mode, prop, found, bool(strips))
 
 
-def read_rotation_keys(target, action=None):
+def read_rotation_keys(target, action=None, skip_key_type=None):
     """RotationKeys of `target` in its current rotation mode, from `action` (default: its active
-    action, and the NLA strips that play on it).
+    action, and the NLA strips that play on it). skip_key_type: a raw keyframe type whose keys are
+    not key frames (a fit's generated keys: fit.source_keys); Blender's evaluation is read at the
+    other keys' frames.
 
     Raises TargetError when the mode's channels have no keys, hold NaN/infinite values, have two keys
     with different values on one frame, or are driven by a driver. Notes (RotationKeys.notes) tell
@@ -258,6 +260,10 @@ def read_rotation_keys(target, action=None):
                                                      num(frames[0]), num(frames[-1])))
     else:
         frames = fcurves.key_frames(found)
+        if skip_key_type is not None:
+            kept = [fcurves.read_keys(f)[0][fcurves.read_key_types(f) != skip_key_type] for f in found if f is not None]
+            if any(len(k) for k in kept):
+                frames = np.unique(np.concatenate(kept))
         values = evaluate_channels(target, prop, found, frames)
     bad = ~np.isfinite(values)
     if bad.any():

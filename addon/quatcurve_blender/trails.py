@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import bake_ops, fcurves, native, targets
+from . import bake_ops, fcurves, fit, native, targets
 from .targets import TargetError
 
 AXIS_ITEMS = (
@@ -150,7 +150,7 @@ def compute_local(target, method=None, frame_range=None):
     trail = LocalTrail(target.name)
     action = fcurves.active_action(target.id_data)
     try:
-        keys = targets.read_rotation_keys(target, action=action)
+        keys = fit.source_keys(target, action=action)
     except (TargetError, RuntimeError) as error:
         trail.error = str(error)
         return trail

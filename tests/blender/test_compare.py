@@ -15,7 +15,7 @@ from mathutils import Euler, Quaternion
 
 from compare_helpers import image_pixels, load_png, report_schema, schema_errors
 from conftest import ROOT, SHARED
-from quatcurve_blender import bake, compare, fcurves, plot, targets
+from quatcurve_blender import bake, compare, fcurves, fit, plot, targets
 
 COMPARE_DOC = os.path.join(ROOT, "docs", "compare.md")
 
@@ -417,3 +417,22 @@ def test_bake_notes_name_the_segments_that_break_the_path_rule(linear_keys):
     obj2 = keyed_object(linear_keys, "Clamped", "XYZ", {1: (0, 0, 0), 11: (0, 0, 170), 21: (0, 0, 170), 31: (0, 0, 0)})
     result = bake.bake([targets.Target(obj2)], bake.BakeSettings(method="CATMULL_ROM"))
     assert not [n for n in result.notes() if n.startswith("path rule:")]
+
+
+def test_a_fitted_target_is_compared_through_the_animators_keys(linear_keys):
+    """After a fit, the keys the fit generated are not key frames: the comparison (like the bake and the
+    trails) builds the methods through the animator's keys, so it finds the same keys and the same
+    curves as before the fit, and no method "stops" at a generated key."""
+    s, c = math.sin(math.radians(60)), math.cos(math.radians(60))
+    keys = {1: (1, 0, 0, 0), 21: (c, s, 0, 0), 41: (-c, 0, -s, 0), 61: (0.5, 0.5, 0.5, 0.5)}
+    obj = keyed_object(linear_keys, "Fitted", "QUATERNION", keys)
+    target = targets.Target(obj)
+    before = fit.source_keys(target)
+    result = fit.fit([target], fit.FitSettings(method="SQUAD", tolerance=0.05))
+    assert result.fitted[0].generated_keys > 0  # the fit generated keys between the animator's
+    assert len(targets.read_rotation_keys(target).frames) > len(keys)
+    after = fit.source_keys(target)
+    np.testing.assert_array_equal(after.frames, before.frames)
+    np.testing.assert_allclose(np.abs(after.values), np.abs(before.values), atol=1e-6)
+    report = compare.compare([target], compare.CompareSettings())
+    assert list(report.targets[0].key_frames) == [1.0, 21.0, 41.0, 61.0]
