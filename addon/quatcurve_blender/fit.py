@@ -21,7 +21,7 @@ animator who wants to keep an inserted key changes its type to Keyframe.
 Per target the action stores a fit record (`Action.quatcurve_fits`: method, settings, the animator
 keys' signature — what live mode compares), per key ease in / ease out (`Action.quatcurve_eases`)
 and, for quaternion targets, per key turns (`Action.quatcurve_turns`: extra full turns of the segment
-leaving the key, set_turns), both by frame and carried along when keys move. Rotation modes:
+leaving the key, set_turns; axis-angle targets hold theirs in the angle keys), both by frame and carried along when keys move. Rotation modes:
 quaternion, the six Euler orders (turns over 180° between Euler keys are kept, as the bake keeps
 them) and axis-angle (the angle channel's turns are kept too: 0° → 720° spins twice, as Blender's
 own channels do; inserted keys continue the animator's angle and axis side, and the axis length may
@@ -35,7 +35,7 @@ import hashlib
 import math
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import bpy
 import numpy as np
@@ -243,12 +243,32 @@ def turns_message(message, frames):
                   if int(m.group(1)) < len(frames) else m.group(0), message)
 
 
+def axis_angle_turns(values, chosen, turns):
+    """Axis-angle key values (K, 4) whose segment leaving each `chosen` key turns `turns` extra full
+    turns: axis-angle keys carry their turns in the angle channel (90° → 450° turns once more), so the
+    angle change of such a segment becomes its change reduced to (-180°, 180°] plus turns × 360° in the
+    direction it turns (-1 on a 90° segment: 270° back), and every later key's angle moves by the same
+    whole number of turns. Each key keeps its rotation (a whole turn more about its own axis), and
+    every other segment keeps its change. Returns the new values (a copy)."""
+    out = np.array(values, dtype=np.float64)
+    for k in np.flatnonzero(chosen[:-1]):
+        delta = out[k + 1, 0] - out[k, 0]
+        base = delta - 2 * math.pi * round(delta / (2 * math.pi))
+        if base <= -math.pi:
+            base += 2 * math.pi
+        direction = -1.0 if base < 0 else 1.0
+        out[k + 1:, 0] += base + 2 * math.pi * turns * direction - delta
+    return out
+
+
 def set_turns(found, turns):
-    """Sets the turns of the segment leaving each selected animator key of each fitted quaternion
-    target and refits it with its settings and eases (the last key has no segment: its selection is
-    ignored). Returns the number of keys set. Raises FitError naming target and key frame (Euler and
-    axis-angle targets, targets not fitted, no selected key, a still segment without an axis to turn
-    about) before anything is written."""
+    """Sets the turns of the segment leaving each selected animator key of each fitted quaternion or
+    axis-angle target and refits it with its settings and eases (the last key has no segment: its
+    selection is ignored). Quaternion targets store the turns per key (Action.quatcurve_turns);
+    axis-angle targets hold them in their angle keys (axis_angle_turns: the later keys' angles move by
+    whole turns, each key the same rotation). Returns the number of keys set. Raises FitError naming
+    target and key frame (Euler targets, targets not fitted, no selected key, a still segment without
+    an axis to turn about) before anything is written."""
     if not math.isfinite(turns) or int(turns) != turns or abs(turns) > 10000:
         raise FitError("turns %r: must be a whole number from -10000 to 10000" % (turns,))
     plans, changed = [], 0
@@ -258,9 +278,6 @@ def set_turns(found, turns):
             if keys.is_euler:
                 raise FitError("%s: rotation mode %s: Euler keys already keep their turns (key the angle: 0° → 450° "
                                "turns once more); turns are for quaternion keys" % (keys.name, keys.mode))
-            if keys.is_axis_angle:
-                raise FitError("%s: rotation mode AXIS_ANGLE: axis-angle keys already keep their turns in the angle "
-                               "channel (key 90° → 450° to turn once more); turns are for quaternion keys" % keys.name)
             record = find_record(fcurves.active_action(target.id_data), target)
             if record is None:
                 raise FitError("%s: not fitted (fit it first: turns are part of the fit)" % keys.name)
@@ -269,10 +286,14 @@ def set_turns(found, turns):
             if not chosen.any():
                 continue
             ease_in, ease_out, old = refit_eases(keys, target, record)
-            new = old.copy()
-            new[chosen] = turns
             changed += int(chosen.sum())
-            plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
+            if keys.is_axis_angle:
+                keys = replace(keys, values=axis_angle_turns(keys.values, chosen, turns))
+                plan = plan_target(keys, settings_of(record), ease_in, ease_out, old)
+            else:
+                new = old.copy()
+                new[chosen] = turns
+                plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
             if plan is not None:
                 plans.append((plan, target))
         if not plans:

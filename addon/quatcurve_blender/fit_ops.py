@@ -253,8 +253,8 @@ def set_ease(found, ease_in, ease_out):
 
 
 class QUATCURVE_OT_set_turns(bpy.types.Operator):
-    """Turn the segment leaving each selected rotation key of the selected fitted quaternion targets by
-    extra full turns about its own axis, and refit them"""
+    """Turn the segment leaving each selected rotation key of the selected fitted quaternion or
+    axis-angle targets by extra full turns about its own axis, and refit them"""
     bl_idname = "quatcurve.set_turns"
     bl_label = "Set Turns on Selected Keys"
     bl_options = {"REGISTER", "UNDO"}

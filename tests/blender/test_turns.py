@@ -2,9 +2,9 @@
 target turns N extra full turns about its own axis (every method, 1, 2 and -1 turns), and Blender's own
 evaluation — in a fresh process without the add-on, from the saved .blend — plays it within the
 tolerance at every frame and 4 subframes; the turns are stored per key, kept by refits and live
-refits and carried along when keys move; refusals (a still segment without a neighbour's axis,
-Euler and axis-angle targets, no selected key, a target not fitted) change nothing; undo in a window
-(sessions/turns_undo_session.py)."""
+refits and carried along when keys move; axis-angle targets get their turns in the angle keys (every
+key the same rotation); refusals (a still segment without a neighbour's axis, Euler targets, no
+selected key, a target not fitted) change nothing; undo in a window (sessions/turns_undo_session.py)."""
 import math
 
 import bpy
@@ -174,7 +174,7 @@ def test_set_turns_from_python(scene):
             fit.set_turns([fit.targets.Target(obj)], bad)
 
 
-@pytest.mark.parametrize("case", ["still", "euler", "axis_angle", "no_selection", "not_fitted"])
+@pytest.mark.parametrize("case", ["still", "euler", "no_selection", "not_fitted"])
 def test_refusals_name_the_target_and_change_nothing(scene, case):
     if case == "still":  # two equal keys: no axis of their own and no neighbour
         obj = spin_object("Still", [(1, rz(30)), (11, rz(30))])
@@ -185,12 +185,6 @@ def test_refusals_name_the_target_and_change_nothing(scene, case):
         select_objects(obj)
         bpy.ops.quatcurve.fit(method="SLERP", tolerance=TOL)
         expect = "Euler: rotation mode XYZ: Euler keys already keep their turns"
-    elif case == "axis_angle":
-        obj = add_empty("AxisAngle", "AXIS_ANGLE")
-        key(obj, "rotation_axis_angle", [(1, (0, 0, 0, 1)), (11, (1.0, 0, 0, 1))], interpolation="BEZIER")
-        select_objects(obj)
-        bpy.ops.quatcurve.fit(method="SLERP", tolerance=TOL)
-        expect = "AxisAngle: rotation mode AXIS_ANGLE: axis-angle keys already keep their turns"
     elif case == "no_selection":
         obj = spin_object("Unselected")
         expect = "no selected rotation key"
@@ -235,3 +229,40 @@ def test_turns_apply_to_quaternion_keys_only(scene):
         got.append(obj.matrix_world.to_quaternion()[:])
     err = np.degrees(angles_between(np.array(got), want))
     assert err.max() <= TOL + 1e-3, "max %.4f° at frame %s" % (err.max(), check_times(1, 21)[err.argmax()])
+
+
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD"])
+def test_axis_angle_turns_live_in_the_angle_keys_and_play_in_a_fresh_blender(scene, tmp_path, method):
+    """Axis-angle keys 0°, 90°, 180°, 150° about Z (frames 1, 11, 21, 31): 1, 2, -1 and 0 turns on the
+    segment leaving frame 11 move the angles of the keys after it by whole turns (each key the same
+    rotation, every other segment the same change), the fit plays the spin, and the turns are not
+    stored apart (the keys carry them, so a live refit keeps them)."""
+    qc = native.require()
+    keys = [(1, (0.0, 0, 0, 1)), (11, (math.radians(90), 0, 0, 1)), (21, (math.radians(180), 0, 0, 1)),
+            (31, (math.radians(150), 0, 0, 1))]
+    frames = np.array([f for f, _ in keys], float)
+    rotations = qc.channels_to_quats(np.array([v for _, v in keys], float), "AXIS_ANGLE")
+    objects = {}
+    for n, want in ((1, [0, 90, 540, 510]), (2, [0, 90, 900, 870]), (-1, [0, 90, -180, -210]), (0, [0, 90, 180, 150])):
+        obj = add_empty("AA%s_%d" % (method, n), "AXIS_ANGLE")
+        key(obj, "rotation_axis_angle", keys, interpolation="BEZIER")
+        select_objects(obj)
+        assert bpy.ops.quatcurve.fit(method=method, tolerance=TOL) == {"FINISHED"}
+        select_keys(obj, {11})
+        assert bpy.ops.quatcurve.set_turns(turns=n) == {"FINISHED"}
+        got = fit.read_animator_keys(fit.targets.Target(obj)).values
+        np.testing.assert_allclose(np.degrees(got[:, 0]), want, atol=1e-4)
+        assert angles_between(qc.channels_to_quats(got, "AXIS_ANGLE"), rotations).max() < 1e-6
+        assert len(fcurves.active_action(obj).quatcurve_turns) == 0
+        objects[obj.name] = (n, got)
+    blend = tmp_path / "axis_turns.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    times = check_times(1, 31)
+    played = fresh_blender_quats(blend, [[name, None] for name in objects], times, tmp_path)
+    segment = (times >= 11) & (times <= 21)
+    for name, (n, got) in objects.items():
+        want = qc.Curve.from_axis_angle(frames, got, method).sample(times)
+        err = np.degrees(angles_between(played[name], want))
+        assert err.max() <= TOL + 1e-4, "%s: max %.5f° at frame %s" % (name, err.max(), times[err.argmax()])
+        turned = turn_about(played[name][segment], (0, 0, 1))
+        assert turned == pytest.approx(math.radians(90 + 360 * n), abs=math.radians(0.5)), name
