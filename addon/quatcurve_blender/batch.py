@@ -67,8 +67,9 @@ VERSION = 1
 # cli.save_atomically's temporary names: '.<name>.<12 hex>.tmp.blend' (a killed save leaves one)
 TEMPORARY = re.compile(r"^\..+\.[0-9a-f]{12}\.tmp\.blend1?$")
 # Test hook: QUATCURVE_BATCH_FAULT='crash:<input>' makes the worker kill itself (SIGKILL) when it
-# starts that file, 'kill-in-save:<input>' after the output's temporary file is written but before
-# its rename — a Blender that crashes on a file, a machine that dies mid-save.
+# starts that file, 'hang:<input>' wait there until it is stopped, 'kill-in-save:<input>' kill
+# itself after the output's temporary file is written but before its rename — a Blender that
+# crashes on a file, one that never finishes it (--timeout), a machine that dies mid-save.
 FAULT = "QUATCURVE_BATCH_FAULT"
 
 USAGE_EPILOG = """\
@@ -758,6 +759,9 @@ def work_on(plan, task, args, index):
     try:
         if fault == "crash:" + entry["input"]:
             os.kill(os.getpid(), signal.SIGKILL)
+        if fault == "hang:" + entry["input"]:
+            while True:
+                time.sleep(1)
         load_input(entry["path"])
         phases["load"] = time.perf_counter() - begin
         scene = bpy.context.scene

@@ -274,10 +274,11 @@ def test_crash_on_one_file_and_kill_during_save(library, tmp_path):
     assert records["a.blend"]["status"] == "failed" and records["b.blend"]["status"] == "done"
     assert records["a.blend"]["reason"] == "the Blender process ended with SIGKILL while working on this file"
 
-    proc = run_batch(["--jobs", "1", "--timeout", "0.01", "--output", out, shots / "a.blend"])
+    proc = run_batch(["--jobs", "1", "--timeout", "2", "--output", out, shots / "a.blend"],
+                     QUATCURVE_BATCH_FAULT="hang:a.blend")
     assert proc.returncode == 1
     records, _ = read_results(out)
-    assert records["a.blend"]["reason"] == "took longer than --timeout 0.01 s: its Blender process was stopped"
+    assert records["a.blend"]["reason"] == "took longer than --timeout 2 s: its Blender process was stopped"
 
     proc = run_batch(["--jobs", "1", "--output", out] + inputs, QUATCURVE_BATCH_FAULT="kill-in-save:a.blend")
     assert proc.returncode == 1
