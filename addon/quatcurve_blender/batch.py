@@ -67,7 +67,8 @@ VERSION = 1
 # cli.save_atomically's temporary names: '.<name>.<12 hex>.tmp.blend' (a killed save leaves one)
 TEMPORARY = re.compile(r"^\..+\.[0-9a-f]{12}\.tmp\.blend1?$")
 # Test hook: QUATCURVE_BATCH_FAULT='crash:<input>' makes the worker kill itself (SIGKILL) when it
-# starts that file, 'hang:<input>' wait there until it is stopped, 'kill-in-save:<input>' kill
+# starts that file, 'hang:<input>' wait there until it is stopped (first creating the file named by
+# QUATCURVE_BATCH_FAULT_MARK, when set, so a test knows the worker is there), 'kill-in-save:<input>' kill
 # itself after the output's temporary file is written but before its rename — a Blender that
 # crashes on a file, one that never finishes it (--timeout), a machine that dies mid-save.
 FAULT = "QUATCURVE_BATCH_FAULT"
@@ -760,6 +761,8 @@ def work_on(plan, task, args, index):
         if fault == "crash:" + entry["input"]:
             os.kill(os.getpid(), signal.SIGKILL)
         if fault == "hang:" + entry["input"]:
+            if os.environ.get(FAULT + "_MARK"):
+                open(os.environ[FAULT + "_MARK"], "w").close()
             while True:
                 time.sleep(1)
         load_input(entry["path"])

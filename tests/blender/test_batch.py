@@ -231,25 +231,27 @@ def children(pid):
 
 
 def test_killed_worker_then_rerun(library, tmp_path):
-    """A worker killed with SIGKILL from outside: the file it was on fails with the reason, the
+    """A worker killed with SIGKILL from outside while it works on a file (held there by the test hook
+    QUATCURVE_BATCH_FAULT='hang:…', which marks when it is there): that file fails with the reason, the
     others are done by a new worker; the rerun does only that file. No half-written output."""
-    out = tmp_path / "out"
+    out, mark = tmp_path / "out", tmp_path / "hanging"
     inputs = [library / "shots" / "a.blend", library / "shots" / "b.blend", library / "clips" / "walk.bvh"]
     proc = subprocess.Popen(batch_command(["--reduce", "--jobs", "1", "--output", str(out)] + [str(p) for p in inputs]),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=batch_env(), encoding="utf-8")
-    victim, deadline = None, time.monotonic() + 120
-    while victim is None and time.monotonic() < deadline and proc.poll() is None:
-        found = children(proc.pid)
-        victim = found[0] if found else None
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, encoding="utf-8",
+                            env=batch_env(QUATCURVE_BATCH_FAULT="hang:shots/a.blend",
+                                          QUATCURVE_BATCH_FAULT_MARK=str(mark)))
+    deadline = time.monotonic() + 300
+    while not mark.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
-    assert victim is not None, "no worker process seen"
-    time.sleep(0.3)
-    os.kill(victim, signal.SIGKILL)
+    assert mark.exists(), "the worker never reached shots/a.blend"
+    victims = children(proc.pid)
+    assert len(victims) == 1, victims
+    os.kill(victims[0], signal.SIGKILL)
     stdout, stderr = proc.communicate(timeout=600)
     assert proc.returncode == 1, (stdout, stderr)
     records, _ = read_results(out)
     failed = [k for k, r in records.items() if r["status"] == "failed"]
-    assert len(failed) == 1, records
+    assert failed == ["shots/a.blend"], records
     assert "SIGKILL" in records[failed[0]]["reason"]
     assert not os.path.exists(out / records[failed[0]]["output"])
     assert [k for k, r in records.items() if r["status"] == "done"] == sorted(set(records) - set(failed))
