@@ -14,7 +14,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 APT_PACKAGES="build-essential cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
-python3-pytest python3-jsonschema blender xvfb xauth slurm-wlm munge"
+python3-pytest python3-jsonschema blender xvfb xauth slurm-wlm munge nodejs"
 
 missing=()
 for pkg in $APT_PACKAGES; do
