@@ -2,7 +2,7 @@
 # Installs what a fresh Debian 12 machine lacks to build and test quatcurve. Idempotent and quiet:
 # a second run changes nothing and takes a few seconds.
 #   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
-#      Python), Xvfb
+#      Python), Xvfb; Slurm and munge (the batch's one-node cluster test), Node.js (the Flamenco job type's test)
 #   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
 #      once the module is built (a .pth file points at build/python). It is Python 3.11's; with
 #      QUATCURVE_PYTHON_MINOR=3.13 the primary build's venv is .venv-cp313 instead.
