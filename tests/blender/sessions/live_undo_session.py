@@ -42,8 +42,9 @@ def window_override():
     return bpy.context.temp_override(window=window, area=area, screen=window.screen)
 
 
-def wait_for(condition, seconds=5.0):
-    """Yields (timer steps) until condition() holds or `seconds` passed; then once more for a settle."""
+def wait_for(condition, seconds=60.0):
+    """Yields (timer steps) until condition() holds or `seconds` passed (a limit for a stuck session, not
+    a timing: a fast machine goes on at once); then once more for a settle."""
     end = time.perf_counter() + seconds
     while not condition() and time.perf_counter() < end:
         yield 0.1
@@ -90,7 +91,7 @@ def session(verdict):
                               if before.get(k) != undone.get(k)}
     with window_override():
         bpy.ops.ed.redo()
-    yield from wait_for(lambda: state() == refitted, seconds=3.0)
+    yield from wait_for(lambda: state() == refitted)
     verdict["redo_refitted"] = state() == refitted
     verdict["refits_after_redo"] = live.STATS.refits
     verdict["errors"] = list(live.STATS.errors)
