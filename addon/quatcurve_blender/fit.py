@@ -9,9 +9,12 @@ each target the animator's rotation keys stay where they are — same frames, sa
 signs may be flipped so that neighbours share a hemisphere) — and the native fitter
 (`quatcurve.fit_keys`, the reducer with forced keys) sets their Bezier handles (FREE) and inserts as
 few keys as the tolerance needs, so that Blender's evaluation, with no add-on loaded, stays within
-the tolerance of the method's curve at every frame and at `subframes` points per frame (the bound is
-verified by emulating Blender's F-curve evaluation, which tests/blender/test_blender_eval.py checks
-against Blender). Quaternion channels need not stay unit between keys: Blender normalizes when it
+the tolerance of the method's curve at every instant from the first key to the last — checked at
+every frame, `subframes` points per frame and every key, and proved between them from bounds of both
+motions' speed and acceleration (`quatcurve.fit_through_keys`, native/include/quatcurve/bound.hpp),
+on an emulation of Blender's F-curve evaluation that tests/blender/test_blender_eval.py checks
+against Blender. Euler keys at gimbal lock may be written as the equivalent triple that continues
+the path (same rotation, same frame; the result says so). Quaternion channels need not stay unit between keys: Blender normalizes when it
 builds the rotation, and the fit uses that freedom.
 
 Inserted keys are marked: keyframe type GENERATED (Blender 4.2+) or, on Blender 3.4 which lacks it,
@@ -450,7 +453,7 @@ class FitPlan:
     keys: AnimatorKeys
     settings: FitSettings
     channels: list
-    max_error: float          # radians, Blender's evaluation (emulated) against the method
+    max_error: float          # radians: proved bound of Blender's playback (emulated) against the method at every instant
     animator_count: int
     generated_count: int
     samples: int
@@ -500,13 +503,21 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
         turns = np.zeros(K)
     turns = np.asarray(turns, float)
     curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
-    # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys.
+    # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys,
+    # and the proof of the bound at every instant (KeyFit.proof).
     try:
-        t, forced, fitted = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode,
-                                                subframes=int(settings.subframes),
-                                                tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP)
+        kf = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode, subframes=int(settings.subframes),
+                                 tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP)
     except ValueError as e:
         raise FitError("%s: %s" % (keys.name, e)) from None
+    forced, fitted = kf.forced, kf.keys
+    notes = euler_notes(keys, kf)
+    if len(kf.rewritten):
+        # Keys at gimbal lock written as the same rotation on the path's branch: the record's signature
+        # is of the keys as written (float32, as Blender stores them).
+        values = keys.values.copy()
+        values[kf.rewritten] = np.asarray(kf.key_values[kf.rewritten], np.float32)
+        keys = replace(keys, values=values)
     channels, generated = [], 0
     for ch in fitted.channels:
         types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
@@ -515,8 +526,30 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
         types[is_key] = keys.types[at[is_key]]
         generated += int((~is_key).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
-    return FitPlan(keys, settings, channels, fitted.max_error, K * len(channels), generated, len(t),
-                   ease_in, ease_out, path_notes(keys.name, curve, keys.frames, settings.method), turns)
+    proof = kf.proof
+    if not proof.proven:
+        notes.append("%s: the bound holds within %.4f° at every instant, ABOVE the tolerance near frame %.3f%s" % (
+            keys.name, math.degrees(proof.bound), proof.worst_time,
+            " (a change of Euler branch: convert the target to quaternion for the method's exact path)"
+            if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
+    return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, len(kf.times),
+                   ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns)
+
+
+def euler_notes(keys, kf):
+    """What the fit did to Euler keys: keys at gimbal lock written as the equivalent triple that
+    continues the path (same rotation, same frame), and changes of branch between keys."""
+    out = []
+    for k in kf.rewritten:
+        out.append("%s: the key at frame %g sits at gimbal lock; written as (%s)° (the same rotation, on the "
+                   "path's Euler branch; was (%s)°)" % (
+                       keys.name, keys.frames[k], ", ".join("%.2f" % math.degrees(v) for v in kf.key_values[k]),
+                       ", ".join("%.2f" % math.degrees(v) for v in keys.values[k])))
+    for segment, frame in kf.switches:
+        out.append("%s: between the keys at frames %g and %g the method's path reaches the next key on another "
+                   "Euler branch; the channels change branch at frame %.3f" % (
+                       keys.name, keys.frames[segment], keys.frames[segment + 1], frame))
+    return out
 
 
 def write_plan(plan, target):

@@ -266,6 +266,27 @@ void bind_curve(py::module_& m) {
             "Per key segment (K-1, 2): the keyed arc and the sampled path length (radians). The path rule: "
             "length <= PATH_RULE_FACTOR * arc + PATH_RULE_SLACK.")
         .def(
+            "corner_times",
+            [](const Curve& c) {
+                const std::vector<double> t = c.corner_times();
+                py::array_t<double> out(static_cast<py::ssize_t>(t.size()));
+                std::copy(t.begin(), t.end(), out.mutable_data());
+                return out;
+            },
+            "Times where the curve may turn a corner (float64, sorted): the keys and the sub-keys of segments "
+            "split for turning more than 180 degrees, through the ease warp.")
+        .def(
+            "motion_bounds",
+            [](const Curve& c, double t0, double t1) {
+                double speed, accel;
+                c.motion_bounds(t0, t1, speed, accel);
+                return py::make_tuple(speed, accel);
+            },
+            py::arg("t0"), py::arg("t1"),
+            "(speed, accel): upper bounds at every time in [t0, t1] of the angular speed (radians per frame) "
+            "and of the unit quaternion's second derivative |q''| (per frame squared), between corner_times; "
+            "inf where none is known.")
+        .def(
             "path_rule_breaks",
             [](const Curve& c) {
                 std::vector<std::pair<std::size_t, SegmentPath>> b;

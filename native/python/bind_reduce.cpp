@@ -11,6 +11,7 @@
 
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "quatcurve/bound.hpp"
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
@@ -270,6 +271,61 @@ them, at samples at least min_gap frames from every forced key, until Blender's 
 F-curves stays within `tolerance` (radians) of every sample. Returns a ReducedKeys (per channel:
 indices, frames, values, handle_left/handle_right (K, 2)); max_error is what Blender's evaluation
 reaches (emulated), above `tolerance` only where no key could be inserted.)doc");
+    py::class_<PlaybackBound>(m, "PlaybackBound",
+                              "What prove_playback (and the fit) proved of Blender's playback against a curve "
+                              "over a whole time range (bound.hpp)")
+        .def_readonly("bound", &PlaybackBound::bound,
+                      "radians: the angle stays within it at EVERY time of the range, whatever the verdict")
+        .def_readonly("max_evaluated", &PlaybackBound::max_evaluated, "radians: the largest angle at an evaluated time")
+        .def_readonly("worst_time", &PlaybackBound::worst_time, "where `bound` is reached (a frame)")
+        .def_property_readonly("violations", [](const PlaybackBound& b) { return vector_array(b.violations); },
+                               "evaluated frames where the angle is above the tolerance")
+        .def_property_readonly("unproven",
+                               [](const PlaybackBound& b) {
+                                   DArray a({static_cast<py::ssize_t>(b.unproven.size()), static_cast<py::ssize_t>(2)});
+                                   for (std::size_t i = 0; i < b.unproven.size(); ++i) {
+                                       a.mutable_data()[2 * i] = b.unproven[i].first;
+                                       a.mutable_data()[2 * i + 1] = b.unproven[i].second;
+                                   }
+                                   return a;
+                               },
+                               "(M, 2) frame intervals shorter than min_step not proved within the tolerance")
+        .def_readonly("evaluations", &PlaybackBound::evaluations)
+        .def_property_readonly("proven", &PlaybackBound::proven, "within the tolerance at every time of the range")
+        .def("__repr__", [](const PlaybackBound& b) {
+            return std::string("<PlaybackBound ") + (b.proven() ? "proven" : "NOT proven") + ", bound " +
+                   std::to_string(b.bound) + " rad at frame " + std::to_string(b.worst_time) + ">";
+        });
+
+    py::class_<KeyFit>(m, "KeyFit", "Result of fit_through_keys")
+        .def_property_readonly("times", [](const KeyFit& f) { return vector_array(f.times); },
+                               "the samples: every 1/subframes frame and every key, and the times the proof added")
+        .def_property_readonly("forced", [](const KeyFit& f) { return index_array(f.forced); },
+                               "each key's index in times (int64)")
+        .def_readonly("keys", &KeyFit::keys, "the fitted keys (ReducedKeys; max_error is at `times` only)")
+        .def_property_readonly("key_values",
+                               [](const KeyFit& f) {
+                                   const std::size_t K = f.forced.size(), C = K ? f.key_values.size() / K : 0;
+                                   DArray a({static_cast<py::ssize_t>(K), static_cast<py::ssize_t>(C)});
+                                   std::copy(f.key_values.begin(), f.key_values.end(), a.mutable_data());
+                                   return a;
+                               },
+                               "(K, C) the keys as written: Euler keys at gimbal lock may be rewritten (same rotation)")
+        .def_property_readonly("rewritten", [](const KeyFit& f) { return index_array(f.rewritten); },
+                               "indices of the keys whose Euler values were rewritten")
+        .def_property_readonly("switches",
+                               [](const KeyFit& f) {
+                                   py::list out;
+                                   for (const EulerSwitch& s : f.switches) out.append(py::make_tuple(s.segment, s.frame));
+                                   return out;
+                               },
+                               "(key segment, frame) of every change of Euler branch between keys")
+        .def_readonly("proof", &KeyFit::proof, "PlaybackBound of Blender's playback of `keys` against the curve")
+        .def("__repr__", [](const KeyFit& f) {
+            return "<KeyFit " + std::to_string(f.times.size()) + " samples, " + std::to_string(f.keys.key_count()) +
+                   " keys, bound " + std::to_string(f.proof.bound) + " rad>";
+        });
+
     m.def(
         "fit_through_keys",
         [](const Curve& curve, py::handle key_frames, py::handle key_values, const std::string& mode_name,
@@ -278,27 +334,42 @@ reaches (emulated), above `tolerance` only where no key could be inserted.)doc")
             const std::vector<double> kf = read_times(key_frames);
             const Batch v = read_rows(key_values, static_cast<py::ssize_t>(channel_count(mode)), "key_values", kf.size());
             const std::vector<double> kv(v.data(), v.data() + v.count * channel_count(mode));
-            KeyFit fit;
-            {
-                py::gil_scoped_release release;
-                fit = fit_through_keys(curve, kf, kv, mode, subframes, tolerance, min_gap);
-            }
-            py::array_t<std::int64_t> forced(static_cast<py::ssize_t>(fit.forced.size()));
-            std::copy(fit.forced.begin(), fit.forced.end(), forced.mutable_data());
-            return py::make_tuple(vector_array(fit.times), forced, std::move(fit.keys));
+            py::gil_scoped_release release;
+            return fit_through_keys(curve, kf, kv, mode, subframes, tolerance, min_gap);
         },
         py::arg("curve"), py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::kw_only(),
         py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01,
         R"doc(Fit Blender F-curves through an animator's keys along `curve` (the method through them), in one
-call without the GIL: (times, forced, ReducedKeys).
+call without the GIL: a KeyFit.
 
 key_frames: (K,) increasing, K >= 2; key_values: (K, 4|3|4) channel values of `mode` ('QUATERNION', an
 Euler order, 'AXIS_ANGLE') as the fit writes them (quaternion keys with the sign the curve reaches them
-with). times: every 1/subframes frame from the first key to the last and every key; forced: each key's
-index in times. The channel values between keys follow the curve and join the keys as keyed
-(quaternions scaled by the keys' norms, Euler angles continuous from each segment's first key,
-axis-angle by axis_angle_span with the axis length interpolated); fit_keys then inserts as few BEZIER
-keys as `tolerance` (radians) needs, min_gap frames from the keys.)doc");
+with); tolerance: radians, > 0. The channel values between keys follow the curve and join the keys
+(quaternions scaled by the keys' norms, Euler angles continuous, a key at gimbal lock rewritten where
+the path needs it, axis-angle by axis_angle_span with the axis length interpolated); fit_keys inserts
+as few BEZIER keys as 90% of `tolerance` needs, min_gap frames from the keys; then the playback is
+proved against the curve at every instant between the first and the last key (KeyFit.proof), and
+the times that fail become samples of another round.)doc");
+
+    m.def(
+        "prove_playback",
+        [](const Curve& curve, const std::vector<ReducedChannel>& channels, const std::string& interpolation,
+           const std::string& mode_name, py::handle times, double tolerance, double min_step) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const std::vector<double> t = read_times(times);
+            std::vector<FCurveKeys> ch(channels.begin(), channels.end());
+            py::gil_scoped_release release;
+            const PlaybackMotion playback(std::move(ch), ipo, mode);
+            return prove_within(playback, CurveMotion(curve), t, tolerance, min_step);
+        },
+        py::arg("curve"), py::arg("channels"), py::arg("interpolation"), py::arg("mode"), py::arg("times"),
+        py::arg("tolerance"), py::kw_only(), py::arg("min_step") = 1.0 / 1024.0,
+        R"doc(Prove that Blender's playback of `channels` (ReducedChannel list, e.g. ReducedKeys.channels, in
+`mode`) stays within `tolerance` radians of `curve` at every time from times[0] to times[-1]: the
+angle at `times` (sorted), and between them a bound from both motions' speed bounds, halving
+intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
+
     py::class_<SlerpKeys>(m, "SlerpKeys", "Result of reduce_slerp: the kept samples as glTF LINEAR (slerp) keys.")
         .def_property_readonly("indices", [](const SlerpKeys& r) { return index_array(r.indices); },
                                "kept sample indices (int64), increasing; first and last included")

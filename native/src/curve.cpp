@@ -503,6 +503,7 @@ void Curve::build() {
             break;
         case Method::SPLINE_C2: detail::build_spline(m); break;
     }
+    detail::build_speed_bounds(m);
 }
 
 // The knots (keys and sub-keys) and every segment's rotation vector; extra (empty, or one per

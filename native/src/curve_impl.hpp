@@ -39,6 +39,8 @@ struct SquadSeg {
     Q4 a, Ba;  // a and a·(0, ψ)
     double r2, psi2;
     Vec3 r, psi;
+    double speed;  // upper bounds on [0, 1] of the angular speed per unit s and of |d²q/ds²|
+    double accel;  // (curve_bounds.cpp)
 };
 // Spherical cubic Bezier with control rotations b0..b3 in the cumulative form (Kim, Kim & Shin):
 // q(s) = sign·b0·exp(β1 d01/2)·exp(β2 d12/2)·exp(β3 d23/2), β1 = 1 − (1−s)³, β2 = 3s² − 2s³,
@@ -184,6 +186,11 @@ struct Curve::Impl {
     // rule (the clamped tangent methods, curve_tangents.cpp) or whose path is its keyed arc (SLERP,
     // NLERP): Curve::path_rule_breaks then has nothing left to sample.
     bool path_rule_proven = false;
+
+    // Upper bounds of the angular speed (radians per frame) and of |d²q/dt²| (per frame², q the unit
+    // quaternion), before ease, on each knot segment of kt (curve_bounds.cpp: Curve::speed_bound,
+    // Curve::accel_bound).
+    std::vector<double> kspeed, kaccel;
 };
 
 namespace detail {
@@ -193,6 +200,11 @@ void build_slerp(Curve::Impl& m);                                               
 void build_euler(Curve::Impl& m, const std::vector<double>& times, const std::vector<Vec3>& angles,
                  EulerOrder order);                                                          // curve.cpp
 void build_spline(Curve::Impl& m);                                            // curve_spline.cpp
+// kspeed from the built segments of whichever family is in use (curve_bounds.cpp).
+void build_speed_bounds(Curve::Impl& m);
+// The speed and |d²q/ds²| bounds of a quadrangle segment per unit s (curve_bounds.cpp), from its
+// tangents' control angles |α| = |out − r|/2, |β| = |r − in|/2 (make_squad_seg).
+void squad_bounds(const Vec3& r, double alpha, double beta, const Vec3& psi, double& speed, double& accel);
 
 // Ease (curve_ease.cpp): set_ease fills ease_a/ease_b from the options; ease_times writes the warped
 // time of every time into warped (and dt'/dt into rate when not null).

@@ -74,6 +74,7 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
     g.psi2 = glm::dot(psi, psi);
     g.r = r;
     g.psi = psi;
+    squad_bounds(r, glm::length(alpha), glm::length(beta), psi, g.speed, g.accel);
     return g;
 }
 

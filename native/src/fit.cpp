@@ -3,12 +3,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 
+#include "quatcurve/bound.hpp"
 #include "quatcurve/errors.hpp"
 
 namespace quatcurve {
+
+constexpr double kTwoPiFit = 6.283185307179586476925286766559;
+
 
 std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int subframes) {
     if (subframes < 1) throw InvalidArgument("subframes: must be at least 1");
@@ -38,6 +43,110 @@ std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int
     return out;
 }
 
+namespace {
+
+// The fit matches the method within this share of the tolerance at its samples: the rest is the
+// room the proof between samples needs (bound.hpp), which is what the tolerance promises.
+constexpr double kFitShare = 0.9;
+// Rounds of "prove, add the times that failed as samples, fit again".
+constexpr int kProofRounds = 8;
+// An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap, and
+// distinct in float32 up to frame ~3e4).
+constexpr double kAddedSampleGap = 1.0 / 1024.0;
+// Two Euler rows that agree within this are the same key values (float32 keys, double curve).
+constexpr double kSameAngles = 2e-5;
+// cos(middle angle) below this: the key sits at gimbal lock.
+constexpr double kAtLock = 1e-5;
+
+std::size_t middle_axis(EulerOrder order) { return static_cast<std::size_t>(euler_middle_axis(order)); }
+
+bool same_angles(const double* a, const double* b) {
+    return std::fabs(a[0] - b[0]) < kSameAngles && std::fabs(a[1] - b[1]) < kSameAngles &&
+           std::fabs(a[2] - b[2]) < kSameAngles;
+}
+
+// Rows of V (n × 3) shifted by whole turns per channel so that row r comes nearest `target`.
+void shift_turns(std::vector<double>& V, std::size_t r, const double* target) {
+    for (std::size_t c = 0; c < 3; ++c) {
+        const double turns = std::round((target[c] - V[3 * r + c]) / kTwoPiFit);
+        if (turns == 0.0) continue;
+        for (std::size_t i = c; i < V.size(); i += 3) V[i] += turns * kTwoPiFit;
+    }
+}
+
+// V (n × 3 Euler rows of one path) as the continuous lift that passes through `target` at row r, if
+// one does: the same path on the other branch ((a + π, π − b, c + π), b the middle angle) or whole
+// turns away. Returns whether row r then equals target.
+bool lift_through(std::vector<double>& V, std::size_t r, const double* target, std::size_t mid) {
+    shift_turns(V, r, target);
+    if (same_angles(&V[3 * r], target)) return true;
+    std::vector<double> W = V;
+    for (std::size_t i = 0; i < W.size(); i += 3)
+        for (std::size_t c = 0; c < 3; ++c) W[i + c] = c == mid ? kTwoPiFit / 2 - W[i + c] : W[i + c] + kTwoPiFit / 2;
+    shift_turns(W, r, target);
+    if (!same_angles(&W[3 * r], target)) return false;
+    V.swap(W);
+    return true;
+}
+
+void fit_round(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
+               const RotationMode& mode, double tolerance, double min_gap, KeyFit& fit);
+
+// Euler channel values of one key segment's samples q (its two keys included), joining the keys as
+// written: `start` (key k as it will be written: as keyed, or its gimbal-lock rewrite) and `end`
+// (key k+1 as keyed; rewritten here when it sits at gimbal lock). The path is followed continuously
+// from start; when that reaches `end` on another Euler branch:
+// - `end` at gimbal lock: written as the triple the path reaches (the same rotation: at the lock
+//   the first and last angles move together without moving it);
+// - `start` at gimbal lock and the first key (nothing arrives at it): written as the triple from
+//   which the path, followed back from `end`, leaves;
+// - otherwise the channels change branch at the sample nearest gimbal lock (the only place where
+//   both branches are close): the proof between samples (bound.hpp) measures what that costs, and
+//   EulerSwitch reports where it is.
+std::vector<double> euler_span_values(const std::vector<Quat>& q, const RotationMode& mode, double* start,
+                                      double* end, bool start_free, bool& rewrote_start, bool& rewrote_end,
+                                      std::size_t& switch_at, double& lock_distance) {
+    const std::size_t n = q.size(), mid = middle_axis(mode.order);
+    rewrote_start = rewrote_end = false;
+    switch_at = 0;
+    std::vector<double> V = quats_to_channels(q, mode, start, 1);
+    const bool starts = lift_through(V, 0, start, mid);
+    if (starts && same_angles(&V[3 * (n - 1)], end)) return V;
+    std::vector<double> B = quats_to_channels(q, mode, end, 1);
+    const bool ends = lift_through(B, n - 1, end, mid);
+    if (ends && same_angles(&B[0], start)) return B;
+    if (starts && std::fabs(std::cos(end[mid])) < kAtLock) {
+        std::copy(&V[3 * (n - 1)], &V[3 * n], end);
+        rewrote_end = true;
+        return V;
+    }
+    if (ends && start_free && std::fabs(std::cos(start[mid])) < kAtLock) {
+        std::copy(&B[0], &B[3], start);
+        rewrote_start = true;
+        return B;
+    }
+    // A change of branch inside the segment: at the interior sample nearest gimbal lock (the first
+    // interior sample when the start itself is locked and cannot be rewritten).
+    std::size_t s = 1;
+    double nearest = HUGE_VAL;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+        const double g = std::fabs(std::cos(V[3 * i + mid]));
+        if (g < nearest) {
+            nearest = g;
+            s = i;
+        }
+    }
+    if (!starts) s = 1;
+    lock_distance = gimbal_distance(Vec3(V[3 * s], V[3 * s + 1], V[3 * s + 2]), mode.order);
+    std::copy(B.begin() + static_cast<std::ptrdiff_t>(3 * s), B.end(), V.begin() + static_cast<std::ptrdiff_t>(3 * s));
+    std::copy(start, start + 3, V.begin());
+    std::copy(end, end + 3, V.end() - 3);
+    switch_at = s;
+    return V;
+}
+
+}  // namespace
+
 KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
                         const std::vector<double>& key_values, const RotationMode& mode, int subframes,
                         double tolerance, double min_gap) {
@@ -46,16 +155,57 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
     if (key_values.size() != K * C)
         throw InvalidArgument("key_values: " + std::to_string(key_values.size()) + " values for " +
                               std::to_string(K) + " keys of " + std::to_string(C) + " channels");
+    if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and > 0");
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
+    const CurveMotion method(curve);
+    for (int round = 0;; ++round) {
+        fit_round(curve, key_frames, key_values, mode, tolerance * kFitShare, min_gap, fit);
+        std::vector<FCurveKeys> channels(fit.keys.channels.begin(), fit.keys.channels.end());
+        const PlaybackMotion playback(std::move(channels), fit.keys.interpolation, mode);
+        fit.proof = prove_within(playback, method, fit.times, tolerance);
+        if (fit.proof.proven() || round + 1 >= kProofRounds) break;
+        // The times that failed (and the middle of each interval left unproven) become samples.
+        std::vector<double> add = fit.proof.violations;
+        for (const auto& span : fit.proof.unproven) add.push_back(0.5 * (span.first + span.second));
+        std::sort(add.begin(), add.end());
+        std::vector<double> merged;
+        merged.reserve(fit.times.size() + add.size());
+        std::size_t j = 0, added = 0;
+        for (double t : fit.times) {
+            for (; j < add.size() && add[j] < t; ++j) {
+                const double before = merged.empty() ? -HUGE_VAL : merged.back();
+                if (add[j] - before > kAddedSampleGap && t - add[j] > kAddedSampleGap) {
+                    merged.push_back(add[j]);
+                    ++added;
+                }
+            }
+            merged.push_back(t);
+        }
+        if (added == 0) break;
+        fit.times.swap(merged);
+    }
+    return fit;
+}
+
+namespace {
+
+// One fit at the samples fit.times (every key among them): the channel values along the curve that
+// join the keys as written, then fit_keys with the keys forced.
+void fit_round(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
+               const RotationMode& mode, double tolerance, double min_gap, KeyFit& fit) {
+    const std::size_t K = key_frames.size(), C = channel_count(mode);
     const std::vector<double>& t = fit.times;
     const std::size_t N = t.size();
     fit.forced.resize(K);
     for (std::size_t k = 0, i = 0; k < K; ++k) {
-        while (t[i] != key_frames[k]) ++i;  // every key is a sample (fit_sample_frames)
+        while (t[i] != key_frames[k]) ++i;  // every key is a sample
         fit.forced[k] = i;
     }
     const std::vector<std::size_t>& forced = fit.forced;
+    fit.key_values = key_values;
+    fit.rewritten.clear();
+    fit.switches.clear();
     // The curve at every sample (Curve::sample writes all of it: no zero-fill first).
     std::unique_ptr<double[]> qd(new double[4 * N]);
     curve.sample(t.data(), N, qd.get());
@@ -85,18 +235,37 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         }
         a.push_back(from_wxyz(kv + 4 * (K - 1)));
         fit.keys = fit_keys(t, a, forced, tolerance, KeyInterpolation::BEZIER, false, min_gap);
-        return fit;
+        return;
     }
     std::vector<Quat> q(N);
     for (std::size_t i = 0; i < N; ++i) q[i] = from_wxyz(&qd[4 * i]);
     std::vector<double> values(N * C);
+    double* written = fit.key_values.data();  // Euler keys at gimbal lock may be rewritten (same rotation)
     switch (mode.kind) {
         case RotationMode::Kind::euler:
             for (std::size_t k = 0; k + 1 < K; ++k) {
                 const std::vector<Quat> span(q.begin() + static_cast<std::ptrdiff_t>(forced[k]),
-                                             q.begin() + static_cast<std::ptrdiff_t>(forced[k + 1]));
-                const std::vector<double> v = quats_to_channels(span, mode, kv + C * k, 1);
-                std::copy(v.begin(), v.end(), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
+                                             q.begin() + static_cast<std::ptrdiff_t>(forced[k + 1]) + 1);
+                bool rewrote_start = false, rewrote_end = false;
+                std::size_t switch_at = 0;
+                double lock = 0.0;
+                const std::vector<double> v = euler_span_values(span, mode, written + C * k, written + C * (k + 1),
+                                                                k == 0, rewrote_start, rewrote_end, switch_at, lock);
+                if (switch_at > 0 && lock > tolerance / kFitShare) {
+                    // Changing branch away from gimbal lock swings the rotation by about twice the
+                    // distance from it: no channel path follows the method there.
+                    char text[400];
+                    std::snprintf(text, sizeof text,
+                                  "keys at frames %g and %g: the method's path reaches the second key on the other "
+                                  "Euler branch and passes no nearer than %.2f° to gimbal lock (near frame %.2f), so "
+                                  "Euler channels cannot follow it there: convert the target to quaternion first",
+                                  key_frames[k], key_frames[k + 1], lock * 360.0 / kTwoPiFit, t[forced[k] + switch_at]);
+                    throw InvalidArgument(text);
+                }
+                if (rewrote_start) fit.rewritten.push_back(k);
+                if (rewrote_end) fit.rewritten.push_back(k + 1);
+                if (switch_at > 0) fit.switches.push_back({k, t[forced[k] + switch_at]});
+                std::copy(v.begin(), v.end() - 3, values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
             }
             break;
         case RotationMode::Kind::axis_angle:
@@ -118,7 +287,10 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         case RotationMode::Kind::quaternion:
             break;  // above
     }
-    for (std::size_t k = 0; k < K; ++k) std::copy(kv + C * k, kv + C * (k + 1), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
+    std::sort(fit.rewritten.begin(), fit.rewritten.end());
+    fit.rewritten.erase(std::unique(fit.rewritten.begin(), fit.rewritten.end()), fit.rewritten.end());
+    for (std::size_t k = 0; k < K; ++k)
+        std::copy(written + C * k, written + C * (k + 1), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
     switch (mode.kind) {
         case RotationMode::Kind::euler: {
             std::vector<Vec3> a(N);
@@ -136,7 +308,8 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         case RotationMode::Kind::quaternion:
             break;  // above
     }
-    return fit;
 }
+
+}  // namespace
 
 }  // namespace quatcurve

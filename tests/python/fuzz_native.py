@@ -1230,7 +1230,7 @@ def build_fit_through_keys(fn, d):
         values = values * np.where(np.sum(curve.sample(frames) * values, axis=1) < 0, -1.0, 1.0)[:, None]
     subframes = d.pick((1, 2, 4, 4, 7, 0, -1), "subframes")
     tol = d.pick((0.0, 1e-4, 1e-3, 0.01, 0.1, -1.0, NAN), "tolerance")
-    must_fail = needs(subframes >= 1, f"subframes {subframes}") or needs(tol >= 0, f"tolerance {tol!r}")
+    must_fail = needs(subframes >= 1, f"subframes {subframes}") or needs(tol > 0, f"tolerance {tol!r}")
     args = [curve, frames, values, mode]
     form = d.pick(("ok", "ok", "ok", "one_key", "unsorted", "wide", "mode"), "form")
     if form == "one_key":
@@ -1248,20 +1248,29 @@ def build_fit_through_keys(fn, d):
     kwargs = {"subframes": subframes, "tolerance": tol, "min_gap": 0.01}
 
     def check(out):
-        times, forced, fitted = out
+        times, forced, fitted = out.times, out.forced, out.keys
+        expect(bool(np.all(np.diff(times) > 0)), "times are not increasing")
         if subframes >= 1:
             grid = np.arange(math.ceil(frames[0] * subframes - 1e-9), math.floor(frames[-1] * subframes + 1e-9) + 1) / subframes
             near = np.min(np.abs(grid[:, None] - frames[None, :]), axis=1) < 1e-6
-            expect(np.array_equal(times, np.union1d(grid[~near], frames)), "times are not the grid plus the keys")
+            expect(bool(np.all(np.isin(np.union1d(grid[~near], frames), times))),
+                   "times lack a grid point or a key (the proof only adds samples)")
         expect(np.array_equal(times[forced], frames), "forced indices do not point at the keys")
         expect(len(fitted.channels) == (3 if euler else 4), f"{len(fitted.channels)} channels")
         finite(fitted.max_error, "max_error")
+        expect(out.proof.bound >= out.proof.max_evaluated, "the proved bound is below an evaluated angle")
+        kv = out.key_values
+        moved = [k for k in range(len(frames)) if not np.array_equal(kv[k], values[k])]
+        expect(set(moved) <= set(out.rewritten.tolist()), f"keys {moved} changed without being rewritten")
+        if euler and moved:  # a key at gimbal lock written as the same rotation
+            same = qc.angle_between(qc.channels_to_quats(kv[moved], mode), qc.channels_to_quats(values[moved], mode))
+            expect(bool(np.all(same < 1e-5)), f"a rewritten key is another rotation: {same}")
         for c, ch in enumerate(fitted.channels):
             at = np.searchsorted(ch.indices, forced)
             expect(bool(np.all(ch.indices[np.minimum(at, len(ch.indices) - 1)] == forced)), f"channel {c} lost a key")
             kept = ch.values[at]
-            expect(np.array_equal(kept.astype(np.float32), values[:, c].astype(np.float32)),
-                   f"channel {c}: a key's value changed")
+            expect(np.array_equal(kept.astype(np.float32), kv[:, c].astype(np.float32)),
+                   f"channel {c}: a key's value is not the one written")
 
     return Case(lambda: fn(*args, **kwargs), 100 * k * max(subframes, 1), check, must_fail, 0, (args, kwargs))
 
@@ -1318,7 +1327,7 @@ def build_blender_evaluate(fn, d):
 # ---- the Curve class: one target per method ----------------------------------------------------------
 
 CURVE_MEMBERS = {"angular_velocity", "from_axis_angle", "from_channels", "from_euler", "method", "options", "quats", "path_rule_breaks",
-                 "sample", "sample_keys", "segment_paths", "times"}
+                 "sample", "sample_keys", "segment_paths", "times", "corner_times", "motion_bounds"}
 CLAMPED_METHODS = ("SQUAD", "TCB", "CATMULL_ROM")
 TCB_OPTIONS = ("tension", "continuity", "bias", "ease_in", "ease_out")
 EASE_OPTIONS = ("ease_in", "ease_out")
@@ -1523,6 +1532,16 @@ def build_curve(method, d: Draw) -> Case:
         results["keys_of_mode"] = c.sample_keys(c.times, keys_mode)
         results["paths"] = c.segment_paths()
         results["breaks"] = c.path_rule_breaks()
+        # motion bounds on a stretch between corners: 33 samples to hold them against
+        corners = c.corner_times()
+        results["corners"] = corners
+        if corners.size >= 2 and np.all(np.isfinite(corners)):
+            j = int(rng.integers(0, corners.size - 1))
+            lo, hi = corners[j], corners[j + 1]
+            span = rng.uniform(0.05, 1.0) * (hi - lo)
+            a = lo + rng.uniform(0, 1) * (hi - lo - span)
+            st = np.linspace(a, a + span, 33)
+            results["bounded"] = (st, c.sample(st), c.motion_bounds(float(st[0]), float(st[-1])))
         return results
 
     def check(r):
@@ -1562,6 +1581,26 @@ def build_curve(method, d: Draw) -> Case:
         if method in CLAMPED_METHODS and kwargs.get("clamped", True) is not False and paths.size:
             excess = paths[:, 1] - (qc.PATH_RULE_FACTOR * paths[:, 0] + qc.PATH_RULE_SLACK)
             expect(excess.max() <= 1e-9, f"segment {int(excess.argmax())} breaks the path rule by {excess.max()!r} rad")
+        # corner times: sorted, the keys among them; between two of them the curve's speed and
+        # |q''| stay within motion_bounds (finite differences of dense samples)
+        corners = r["corners"]
+        expect(bool(np.all(np.diff(corners) >= 0)) and bool(np.all(np.isin(kt, corners))),
+               "corner_times: not sorted, or a key missing")
+        if "bounded" in r:
+            st, q, (speed, accel) = r["bounded"]
+            expect(speed >= 0 and accel >= 0, f"motion_bounds negative: {speed}, {accel}")
+            for i in range(1, len(q)):  # the same sign along the samples (the curve's may flip at a key)
+                if np.dot(q[i], q[i - 1]) < 0:
+                    q[i] = -q[i]
+            dt = st[1] - st[0]
+            if dt > 1e-6 and np.isfinite(speed):
+                moved = np_angle(q[1:], q[:-1]) / dt
+                expect(moved.max() <= speed * (1 + 1e-6) + 1e-6 / dt * 1e-3,
+                       f"speed {moved.max()!r} rad/frame above motion_bounds' {speed!r} in [{st[0]!r}, {st[-1]!r}]")
+            if dt > 1e-3 and np.isfinite(accel):
+                second = np.linalg.norm(q[2:] - 2 * q[1:-1] + q[:-2], axis=1) / dt ** 2
+                expect(second.max() <= accel * (1 + 1e-6) + 1e-9 / dt ** 2,
+                       f"|q''| {second.max()!r} above motion_bounds' {accel!r} in [{st[0]!r}, {st[-1]!r}]")
         for name, tail in (("sample", (4,)), ("angular_velocity", (3,))):
             e = r[name + "_error"]
             if sample_fail:
@@ -1576,6 +1615,71 @@ def build_curve(method, d: Draw) -> Case:
               "options": kwargs, "sample_times": sample_arg}
     return Case(call, max(k, 1) + m, check, must_fail, m * 32, inputs)
 
+
+
+# ==== the bound at every instant (bound.hpp) =====================================================
+
+def build_prove_playback(fn, d):
+    """prove_playback: keys of any mode fitted (or reduced, LINEAR or BEZIER) along a curve, proved
+    against it; the verdict is checked by dense evaluation of the same keys: nowhere above the
+    proved bound (up to Blender's float32 arithmetic), and a violation is a real one."""
+    rng = d.rng
+    mode = d.pick(("QUATERNION", "AXIS_ANGLE") + ORDERS, "mode")
+    k = int(rng.integers(2, 7))
+    frames = np.cumsum(rng.uniform(0.3, 12.0, k)) + rng.uniform(-20, 20)
+    if mode in ORDERS:
+        values = rng.uniform(-4, 4, (k, 3))
+    elif mode == "AXIS_ANGLE":
+        values = np.column_stack([rng.uniform(-7, 7, k), rng.normal(size=(k, 3)) + 0.1])
+    else:
+        values = rng.normal(size=(k, 4))
+    method = d.pick(tuple(m for m in qc.METHODS if m not in ("EULER", "QUAT_COMPONENTS")), "method")
+    curve = qc.Curve.from_channels(frames, values, mode, method=method)
+    if mode == "QUATERNION":
+        values = values * np.where(np.sum(curve.sample(frames) * values, axis=1) < 0, -1.0, 1.0)[:, None]
+    tol = float(d.pick((1e-3, 1e-2, 0.05), "tolerance"))
+    interpolation = d.pick(("BEZIER", "LINEAR"), "interpolation")
+    times = np.union1d(np.arange(math.ceil(frames[0]), math.floor(frames[-1]) + 1.0), frames)
+    if interpolation == "BEZIER":
+        channels = qc.fit_through_keys(curve, frames, values, mode, subframes=2, tolerance=tol * 3).keys.channels
+    else:
+        channels = qc.reduce_keys(times, curve.sample(times), tol, "LINEAR", detailed=True).channels \
+            if mode == "QUATERNION" else None
+        if channels is None:
+            interpolation = "BEZIER"
+            channels = qc.fit_through_keys(curve, frames, values, mode, subframes=2, tolerance=tol * 3).keys.channels
+    form = d.pick(("ok", "ok", "ok", "unsorted", "tolerance", "step", "channels"), "form")
+    args, kwargs, must_fail = [curve, channels, interpolation, mode, times, tol], {}, ""
+    if form == "unsorted":
+        args[4] = times[::-1].copy()
+        must_fail = "unsorted times"
+    elif form == "tolerance":
+        args[5] = d.pick((-1.0, NAN, INF), "bad_tolerance")
+        must_fail = f"tolerance {args[5]!r}"
+    elif form == "step":
+        kwargs["min_step"] = d.pick((0.0, -1.0, NAN), "bad_step")
+        must_fail = f"min_step {kwargs['min_step']!r}"
+    elif form == "channels":
+        args[1] = list(channels)[:-1]
+        must_fail = "a channel missing"
+
+    def check(p):
+        finite(p.max_evaluated, "max_evaluated")
+        expect(p.bound >= p.max_evaluated, "bound below an evaluated angle")
+        expect(p.proven == (len(p.violations) == 0 and len(p.unproven) == 0), "proven disagrees with the lists")
+        ts = np.sort(np.concatenate([np.linspace(times[0], times[-1], 4001), rng.uniform(times[0], times[-1], 2000)]))
+        vals = np.stack([qc.blender_evaluate(c.frames, c.values, ts, interpolation, c.handle_left if len(c.handle_left) else None,
+                                             c.handle_right if len(c.handle_right) else None) for c in channels], 1)
+        if mode == "AXIS_ANGLE":
+            vals[np.all(vals[:, 1:] == 0, axis=1), 1] = 1.0  # Blender's zero axis: no rotation
+            vals[np.all(vals[:, 1:] == 0, axis=1), 0] = 0.0
+        if mode == "QUATERNION":
+            vals[np.all(vals == 0, axis=1), 1] = 1.0  # Blender's normalize of zero
+        dense = np_angle(qc.channels_to_quats(vals, mode), curve.sample(ts))
+        expect(dense.max() <= p.bound + 1e-5,
+               f"dense evaluation {dense.max()!r} rad at frame {ts[dense.argmax()]!r} above the proved {p.bound!r}")
+
+    return Case(lambda: fn(*args, **kwargs), 4 * len(times), check, must_fail, 0, (args, kwargs))
 
 
 # ==== the bake queue (bake.hpp) ==================================================================
@@ -1839,6 +1943,9 @@ REGISTRY.update({
     "reduce_slerp": build_reduce_slerp,
     "gltf_slerp": build_gltf_slerp,
     "SlerpKeys": _not_constructible,
+    "KeyFit": _not_constructible,
+    "PlaybackBound": _not_constructible,
+    "prove_playback": build_prove_playback,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).

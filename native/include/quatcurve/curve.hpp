@@ -163,6 +163,20 @@ public:
     // At a key the velocity of the segment that starts there (of the last segment at the last key).
     void angular_velocity(const double* times, std::size_t n, double* out_xyz) const;
     std::vector<Vec3> angular_velocity(const std::vector<double>& times) const;
+    // An upper bound of the angular speed |ω| (radians per frame) at every time in [t0, t1]
+    // (t0 ≤ t1; 0 outside the keys, where the curve is constant), from each knot segment's own data
+    // (native/src/curve_bounds.cpp has the bound of every method); +∞ where none is known (a
+    // QUAT_COMPONENTS segment through a zero quaternion). What lets a check at finitely many times
+    // prove a bound between them (bound.hpp).
+    double speed_bound(double t0, double t1) const;
+    // Upper bounds, at every time in [t0, t1], of |ω| (radians per frame) and of |q̈| (the second
+    // derivative of the curve's unit quaternion, per frame²; between keys — at a key a C0 method
+    // turns a corner, so intervals should end there). +∞ where none is known.
+    void motion_bounds(double t0, double t1, double& speed, double& accel) const;
+    // The times where the curve may turn a corner, sorted: the keys, and the sub-keys of segments
+    // split because they turn more than π (a Euler or axis-angle path is followed through them, so
+    // SLERP and NLERP change direction there), mapped through the ease warp.
+    std::vector<double> corner_times() const;
 
     // Per key segment (keys − 1 of them): keyed arc and path length, the path measured as the sum
     // of the angles between `samples_per_segment` + 1 equally spaced samples of every knot segment

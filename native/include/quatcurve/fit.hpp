@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "quatcurve/bound.hpp"
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/reduce.hpp"
@@ -20,10 +21,20 @@ namespace quatcurve {
 // unique). key_frames must increase; subframes ≥ 1.
 std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int subframes);
 
+// A change of Euler branch inside key segment `segment` (see fit_through_keys), at sample `frame`.
+struct EulerSwitch {
+    std::size_t segment;
+    double frame;
+};
+
 struct KeyFit {
-    std::vector<double> times;        // fit_sample_frames
+    std::vector<double> times;        // the samples: fit_sample_frames, and the times the proof added
     std::vector<std::size_t> forced;  // the index in `times` of every key
-    ReducedKeys keys;                 // the fitted keys (fit_keys*)
+    ReducedKeys keys;                 // the fitted keys (fit_keys*); max_error is at `times` only
+    std::vector<double> key_values;   // K rows: the keys as written (Euler keys at gimbal lock rewritten)
+    std::vector<std::size_t> rewritten;  // keys whose Euler values were rewritten (same rotation)
+    std::vector<EulerSwitch> switches;   // Euler branch changes between keys
+    PlaybackBound proof;              // Blender's playback of `keys` against the curve at every instant
 };
 
 // The fit of `curve` (through the keys at key_frames) in rotation mode `mode`: key_values holds K
@@ -35,8 +46,24 @@ struct KeyFit {
 // - Euler: each segment continuous from its first key (quats_to_channels with that key as reference);
 // - AXIS_ANGLE: axis_angle_span_channels from key to key, the axis scaled by the keys' axis lengths
 //   interpolated along the segment.
-// Then fit_keys (BEZIER, per channel) with every key forced; inserted keys keep min_gap frames from
-// them. Throws InvalidArgument for fewer than two keys, mismatched sizes, and whatever the steps throw.
+// Then fit_keys (BEZIER, per channel) with every key forced, within 90% of the tolerance at the
+// samples; inserted keys keep min_gap frames from them.
+//
+// The bound at every instant: prove_within (bound.hpp) then bounds the angle between Blender's
+// playback of the keys and the curve over the WHOLE range from the first key to the last, not only
+// at the samples; the times where it fails (or cannot be proved) become samples and the fit runs
+// again, up to 8 rounds. fit.proof.bound is the proved bound, whatever the verdict (above the
+// tolerance only where keys closer than min_gap would be needed, or where Euler channels must change
+// branch between keys).
+//
+// Euler branches: each segment's channels follow the curve continuously from its first key as
+// written. Where that reaches the next key on another Euler branch: a next key at gimbal lock is
+// written as the triple reached (the same rotation the animator keyed: at the lock the first and
+// last angles move together without moving it; fit.rewritten lists it, key_values holds the new
+// values); a first key at gimbal lock is written as the triple the path leaves from; otherwise the
+// channels change branch at the sample nearest gimbal lock (fit.switches), and the proof measures
+// what that costs. Throws InvalidArgument for fewer than two keys, mismatched sizes, a tolerance
+// that is not above 0, and whatever the steps throw.
 KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
                         const std::vector<double>& key_values, const RotationMode& mode, int subframes,
                         double tolerance, double min_gap = 0.01);

@@ -1,0 +1,115 @@
+// A bound at every instant: the largest angle between two motions over a whole time range, proved
+// from finitely many evaluations.
+//
+// A motion is a rotation R(t), as a unit quaternion q(t), that can be evaluated at any time, with
+// known upper bounds over any interval of its angular speed |ω| and of |q̈| (Motion::bounds), and the
+// times where it may turn a corner (breaks: keys). For two motions A and B on an interval [t0, t1]
+// with d(t) = angle(A(t), B(t)) (the geodesic angle, sign-invariant), two bounds hold at every time:
+//
+//   first order:  d(t) ≤ d(t0) + angle(A(t0), A(t)) + angle(B(t0), B(t)) ≤ d(t0) + L·(t − t0)
+//                 (the triangle inequality in SO(3), L = |ω_A| + |ω_B| bounds), and the same from t1,
+//                 so max d ≤ (d(t0) + d(t1) + L·h)/2;
+//   second order: e(t) = q_A(t) − σ·q_B(t) (σ = ±1 fixed on the interval) is C1 between breaks with
+//                 |ë| ≤ S = |q̈_A| + |q̈_B| bounds, so |e(t)| ≤ max(|e(t0)|, |e(t1)|) + S·h²/8
+//                 (linear interpolation's error), and an angle is 4·asin(|e|/2) at most.
+//
+// The smaller of the two is the interval's bound. Where it is above the tolerance the interval is
+// halved (its midpoint evaluated) until it passes, an evaluated time is above the tolerance (a
+// violation: reported, not refined further), or it is shorter than `min_step` (unproven: reported).
+// Every interval's bound is a true upper bound of d on it, so PlaybackBound::bound is an upper bound
+// of d at EVERY time in [times.front(), times.back()] — not only at the evaluated ones — whatever the
+// verdict.
+//
+// Blender's side (PlaybackMotion) is Blender's F-curve evaluation (blender_eval.hpp) of the keys of a
+// rotation's channels. Each channel's first and second derivatives are bounded from its Bezier control
+// points (the hodographs' convex hulls over the interval's curve parameters; y(t) = y(u(t)) with
+// x(u) = t), then the rotation mode combines them (Euler: |ω| ≤ Σ|θ'|, |α| ≤ Σ|θ''| + (Σ|θ'|)²;
+// quaternion: q = a/|a| with |a| bounded from below on the interval, |q̇| ≤ |a'|/|a|,
+// |q̈| ≤ 2|a''|/|a| + 5|a'|²/|a|²; axis-angle: q = (cos θ/2, sin θ/2·n), n = v/|v|,
+// |q̈| ≤ ¼θ'² + ½|θ''| + |θ'||n'| + |n''|). Blender evaluates at float32 frames and snaps a frame
+// within 1e-4 of a key to the key's value: both are steps, not slopes, and jump_bound adds them to the
+// interval they fall in; 2e-6 rad covers Blender's float32 arithmetic (as the key reducer's
+// verification margin, reduce.hpp).
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "quatcurve/blender_eval.hpp"
+#include "quatcurve/channels.hpp"
+#include "quatcurve/curve.hpp"
+#include "quatcurve/types.hpp"
+
+namespace quatcurve {
+
+class Motion {
+public:
+    virtual ~Motion() = default;
+    // The unit quaternion at t, sign-continuous in t.
+    virtual Quat at(double t) const = 0;
+    // Upper bounds of |ω| (radians per frame) and |q̈| (per frame²) at every time in [t0, t1], t0 ≤ t1
+    // (a corner at a break inside the interval is not covered: prove_within splits there).
+    virtual void bounds(double t0, double t1, double& speed, double& accel) const = 0;
+    // An upper bound of the angle of the steps the motion takes inside [t0, t1] (0: continuous).
+    virtual double jump_bound(double /*t0*/, double /*t1*/) const { return 0.0; }
+    // The times where the motion may turn a corner, sorted.
+    virtual std::vector<double> breaks() const { return {}; }
+};
+
+// A Curve as a motion (Curve::motion_bounds; Curve::corner_times are the breaks).
+class CurveMotion : public Motion {
+public:
+    explicit CurveMotion(const Curve& curve) : curve_(curve) {}
+    Quat at(double t) const override;
+    void bounds(double t0, double t1, double& speed, double& accel) const override {
+        curve_.motion_bounds(t0, t1, speed, accel);
+    }
+    std::vector<double> breaks() const override { return curve_.corner_times(); }
+
+private:
+    const Curve& curve_;
+};
+
+// The rotation Blender plays from the keys of a rotation's F-curves (channel_count(mode) of them,
+// in channel order): each channel evaluated as blender_evaluate does, the rotation built as Blender
+// builds it (a zero quaternion is (0, 1, 0, 0) after Blender's normalize; a zero axis no rotation).
+// Throws InvalidArgument for a channel count that does not fit the mode or keys check_fcurve_keys
+// refuses.
+class PlaybackMotion : public Motion {
+public:
+    PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolation interpolation, const RotationMode& mode);
+    Quat at(double t) const override;
+    void bounds(double t0, double t1, double& speed, double& accel) const override;
+    double jump_bound(double t0, double t1) const override;
+    std::vector<double> breaks() const override;  // every channel's key frames
+    // The channel values Blender shows at t (channel_count(mode) of them).
+    void values(double t, double* out) const;
+    // Upper bounds of |d value/d frame| and |d² value/d frame²| of channel c at every frame in
+    // [t0, t1] between its keys (+∞ where a Bezier segment's frame stops advancing).
+    void channel_bounds(std::size_t c, double t0, double t1, double& rate, double& curvature) const;
+
+private:
+    std::vector<FCurveKeys> channels_;
+    KeyInterpolation interpolation_;
+    RotationMode mode_;
+};
+
+struct PlaybackBound {
+    double bound = 0.0;         // radians: d(t) ≤ bound at every t in [times.front(), times.back()]
+    double max_evaluated = 0.0;  // radians: the largest d at an evaluated time
+    double worst_time = 0.0;     // the interval end or evaluated time where `bound` was reached
+    std::vector<double> violations;                    // evaluated times with d > tolerance
+    std::vector<std::pair<double, double>> unproven;   // intervals shorter than min_step still above it
+    std::size_t evaluations = 0;
+    bool proven() const { return violations.empty() && unproven.empty(); }
+};
+
+// Proves d(t) = angle(a(t), b(t)) ≤ tolerance at every t in [times.front(), times.back()] (see
+// above): times sorted, at least one; tolerance ≥ 0; min_step > 0. The result's bound holds whatever
+// the verdict. max_evaluations caps the work (intervals left then count as unproven). Throws
+// InvalidArgument for unsorted or non-finite times or a bad tolerance, min_step or cap.
+PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<double>& times, double tolerance,
+                           double min_step = 1.0 / 1024.0, std::size_t max_evaluations = 2'000'000);
+
+}  // namespace quatcurve

@@ -1,0 +1,355 @@
+// A bound at every instant (see bound.hpp for what is proved and how).
+#include "quatcurve/bound.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <string>
+
+#include "quatcurve/errors.hpp"
+#include "quatcurve/quat.hpp"
+
+namespace quatcurve {
+
+namespace {
+
+// Blender's float32 arithmetic beside the exact model the bound reasons about (reduce.hpp's margin).
+constexpr double kArithmeticSlack = 2e-6;
+// Blender's binary search takes a frame within this of a key as the key (blender_eval.hpp); the
+// snap is bounded over twice that around each key.
+constexpr double kKeySnap = 1e-4;
+
+double hypot3(double a, double b, double c) { return std::sqrt(a * a + b * b + c * c); }
+
+// The extremes of a quadratic Bezier (control values p0, p1, p2) on [u0, u1] ⊂ [0, 1] are within
+// the control values of its restriction there: its blossom at (u0, u0), (u0, u1), (u1, u1).
+void blossom(const double p[3], double u0, double u1, double out[3]) {
+    auto b = [&](double s, double t) {
+        return (1 - s) * (1 - t) * p[0] + ((1 - s) * t + s * (1 - t)) * p[1] + s * t * p[2];
+    };
+    out[0] = b(u0, u0);
+    out[1] = b(u0, u1);
+    out[2] = b(u1, u1);
+}
+
+}  // namespace
+
+Quat CurveMotion::at(double t) const {
+    double q[4];
+    curve_.sample(&t, 1, q);
+    return from_wxyz(q);
+}
+
+PlaybackMotion::PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolation interpolation,
+                               const RotationMode& mode)
+    : channels_(std::move(channels)), interpolation_(interpolation), mode_(mode) {
+    if (channels_.size() != channel_count(mode_))
+        throw InvalidArgument("channels: " + std::to_string(channels_.size()) + " F-curves for a rotation of " +
+                              std::to_string(channel_count(mode_)) + " channels");
+    for (const FCurveKeys& ch : channels_) check_fcurve_keys(ch, interpolation_);
+}
+
+void PlaybackMotion::values(double t, double* out) const {
+    const float frame = static_cast<float>(t);
+    for (std::size_t c = 0; c < channels_.size(); ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+}
+
+Quat PlaybackMotion::at(double t) const {
+    double v[4];
+    values(t, v);
+    switch (mode_.kind) {
+        case RotationMode::Kind::quaternion: {
+            const Quat q = from_wxyz(v);
+            const double n = std::sqrt(glm::dot(q, q));
+            return n > 0.0 ? q / n : Quat(0.0, 1.0, 0.0, 0.0);  // Blender's normalize_qt of zero
+        }
+        case RotationMode::Kind::axis_angle:
+            if (v[1] == 0.0 && v[2] == 0.0 && v[3] == 0.0) return Quat(1.0, 0.0, 0.0, 0.0);
+            return channels_to_quat(v, mode_);
+        case RotationMode::Kind::euler: break;
+    }
+    return channels_to_quat(v, mode_);
+}
+
+void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double& rate, double& curvature) const {
+    const FCurveKeys& ch = channels_.at(c);
+    const std::size_t n = ch.frames.size();
+    rate = curvature = 0.0;
+    if (n < 2) return;
+    const double lo = std::fmax(t0, ch.frames.front()), hi = std::fmin(t1, ch.frames.back());
+    if (lo > hi) return;  // constant extrapolation
+    std::size_t j = static_cast<std::size_t>(std::upper_bound(ch.frames.begin(), ch.frames.end(), lo) - ch.frames.begin());
+    j = j == 0 ? 0 : std::min(j - 1, n - 2);
+    for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
+        const double f0 = ch.frames[j], f1 = ch.frames[j + 1];
+        const double v0 = float(ch.values[j]), v1 = float(ch.values[j + 1]);
+        if (interpolation_ == KeyInterpolation::LINEAR) {
+            rate = std::fmax(rate, std::fabs(v1 - v0) / (f1 - f0));
+            continue;
+        }
+        double x[4] = {f0, float(ch.handle_right[2 * j]), float(ch.handle_left[2 * j + 2]), f1};
+        double y[4] = {v0, float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]), v1};
+        if (std::fabs(y[0] - y[1]) < FLT_EPSILON && std::fabs(y[1] - y[2]) < FLT_EPSILON &&
+            std::fabs(y[2] - y[3]) < FLT_EPSILON)
+            continue;  // Blender's flat-segment shortcut: the first value throughout
+        // correct_bezpart: a handle reaching farther than the segment is scaled back to it.
+        const double len = f1 - f0, len1 = std::fabs(x[0] - x[1]), len2 = std::fabs(x[3] - x[2]);
+        if (len1 > len) {
+            const double fac = len / len1;
+            x[1] = x[0] - fac * (x[0] - x[1]);
+            y[1] = y[0] - fac * (y[0] - y[1]);
+        }
+        if (len2 > len) {
+            const double fac = len / len2;
+            x[2] = x[3] - fac * (x[3] - x[2]);
+            y[2] = y[3] - fac * (y[3] - y[2]);
+        }
+        // The curve parameters of the part of [lo, hi] in this segment (the whole segment when
+        // Blender's root finder finds none).
+        const double a = std::fmax(lo, f0), b = std::fmin(hi, f1);
+        double u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+        double u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+        if (u0 < 0.0 || u1 < 0.0 || u0 > u1) {
+            u0 = 0.0;
+            u1 = 1.0;
+        }
+        u0 = std::clamp(u0, 0.0, 1.0);
+        u1 = std::clamp(u1, 0.0, 1.0);
+        // First derivatives in u (quadratic Bezier hodographs) and second ones (linear).
+        const double dx[3] = {3 * (x[1] - x[0]), 3 * (x[2] - x[1]), 3 * (x[3] - x[2])};
+        const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
+        double bx[3], by[3];
+        blossom(dx, u0, u1, bx);
+        blossom(dy, u0, u1, by);
+        const double xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
+        const double xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
+        const double ymax = std::fmax(std::fabs(by[0]), std::fmax(std::fabs(by[1]), std::fabs(by[2])));
+        auto linear_max = [&](double p0, double p1) {  // |p0 + (p1 − p0)·u| on [u0, u1]
+            return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
+        };
+        const double xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]));
+        const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]));
+        if (!(xmin > 0.0)) {
+            if (ymax > 0.0) rate = curvature = HUGE_VAL;
+            continue;
+        }
+        // y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
+        rate = std::fmax(rate, ymax / xmin);
+        curvature = std::fmax(curvature, (yy * xmax + ymax * xx) / (xmin * xmin * xmin));
+    }
+}
+
+void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) const {
+    double r[4] = {0.0, 0.0, 0.0, 0.0}, k[4] = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t c = 0; c < channels_.size(); ++c) channel_bounds(c, t0, t1, r[c], k[c]);
+    switch (mode_.kind) {
+        case RotationMode::Kind::euler: {
+            // Each axis' rotation turns at its own angle's rate, whatever frame it acts in; the axes
+            // themselves turn at most at the sum.
+            const double w = r[0] + r[1] + r[2];
+            speed = w;
+            accel = 0.5 * (k[0] + k[1] + k[2] + w * w) + 0.25 * w * w;
+            return;
+        }
+        case RotationMode::Kind::quaternion: {
+            const double d1 = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
+            const double d2 = std::sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2] + k[3] * k[3]);
+            if (d1 == 0.0 && d2 == 0.0) {
+                speed = accel = 0.0;
+                return;
+            }
+            double v0[4], v1[4];
+            values(t0, v0);
+            values(t1, v1);
+            const double n0 = std::sqrt(v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2] + v0[3] * v0[3]);
+            const double n1 = std::sqrt(v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2] + v1[3] * v1[3]);
+            const double low = std::fmin(n0, n1) - d1 * 0.5 * (t1 - t0);
+            if (!(low > 0.0)) {
+                speed = accel = HUGE_VAL;
+                return;
+            }
+            speed = 2.0 * d1 / low;  // |ω| = 2|q̇|, |q̇| ≤ |a'|/|a|
+            accel = 2.0 * d2 / low + 5.0 * d1 * d1 / (low * low);
+            return;
+        }
+        case RotationMode::Kind::axis_angle: {
+            const double dv = hypot3(r[1], r[2], r[3]), kv = hypot3(k[1], k[2], k[3]);
+            double dn = 0.0, kn = 0.0;  // bounds of |n'| and |n''|, n = v/|v|
+            if (dv > 0.0 || kv > 0.0) {
+                double v0[4], v1[4];
+                values(t0, v0);
+                values(t1, v1);
+                const double low = std::fmin(hypot3(v0[1], v0[2], v0[3]), hypot3(v1[1], v1[2], v1[3])) - dv * 0.5 * (t1 - t0);
+                if (!(low > 0.0)) {
+                    speed = accel = HUGE_VAL;
+                    return;
+                }
+                dn = dv / low;
+                kn = 2.0 * kv / low + 5.0 * dv * dv / (low * low);
+            }
+            speed = r[0] + 2.0 * dn;  // |ω| ≤ |θ'| + 2|sin(θ/2)|·|n'|
+            accel = 0.25 * r[0] * r[0] + 0.5 * k[0] + r[0] * dn + kn;
+            return;
+        }
+    }
+    speed = accel = HUGE_VAL;
+}
+
+namespace {
+
+// Blender's is_eqt(frame, key, 1e-4) in float32 (blender_eval.cpp): the frame is taken as the key.
+bool snaps(float frame, float key) {
+    return frame > key ? (frame - key) <= float(kKeySnap) : (key - frame) <= float(kKeySnap);
+}
+
+// The float32 frames where the snap zone of `key` begins and ends, and the frames just outside it:
+// from float(key ∓ 1e-4), a few float32 steps to the exact edge of Blender's comparison.
+void snap_edges(float key, std::vector<double>& out) {
+    auto edge = [&](float start, float outward) {
+        float f = start;
+        for (int i = 0; i < 64 && !snaps(f, key); ++i) f = std::nextafter(f, key);  // inside
+        for (int i = 0; i < 64; ++i) {
+            const float next = std::nextafter(f, outward);
+            if (!snaps(next, key)) break;
+            f = next;
+        }
+        return f;
+    };
+    const float lo = edge(static_cast<float>(double(key) - kKeySnap), -HUGE_VALF);
+    const float hi = edge(static_cast<float>(double(key) + kKeySnap), HUGE_VALF);
+    out.push_back(std::nextafter(lo, -HUGE_VALF));
+    out.push_back(lo);
+    out.push_back(key);
+    out.push_back(hi);
+    out.push_back(std::nextafter(hi, HUGE_VALF));
+}
+
+}  // namespace
+
+std::vector<double> PlaybackMotion::breaks() const {
+    std::vector<double> out;
+    for (const FCurveKeys& ch : channels_) {
+        if (ch.frames.size() > 4096 * 64) {  // dense keys: the key frames only
+            out.insert(out.end(), ch.frames.begin(), ch.frames.end());
+            continue;
+        }
+        for (double f : ch.frames) snap_edges(float(f), out);
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+double PlaybackMotion::jump_bound(double t0, double t1) const {
+    // Frames are float32: Blender evaluates at float(t), within half an ulp (≤ |t|·2⁻²⁴) of t. (The
+    // snap to a key within 1e-4 of it is a step at frames that are breaks: prove_within evaluates
+    // both sides of it.)
+    double speed, accel;
+    const double ulp = std::fmax(std::fabs(t0), std::fabs(t1)) * std::ldexp(1.0, -23) + 1e-30;
+    bounds(t0, t1, speed, accel);
+    return speed * 2.0 * ulp;
+}
+
+PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<double>& given, double tolerance,
+                           double min_step, std::size_t max_evaluations) {
+    if (given.empty()) throw InvalidArgument("times: at least one time");
+    for (std::size_t i = 0; i < given.size(); ++i) {
+        if (!std::isfinite(given[i])) throw InvalidArgument("times[" + std::to_string(i) + "]: not finite");
+        if (i > 0 && given[i] < given[i - 1]) throw InvalidArgument("times[" + std::to_string(i) + "]: not sorted");
+    }
+    if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and >= 0");
+    if (!(min_step > 0.0) || !std::isfinite(min_step)) throw InvalidArgument("min_step: must be finite and > 0");
+    if (max_evaluations == 0) throw InvalidArgument("max_evaluations: must be at least 1");
+    // The evaluated times: the given ones and every break of either motion between them.
+    // Frames as Blender's: float32 (an interval between two neighbouring float32 frames has no
+    // other frame Blender can evaluate).
+    std::vector<double> times;
+    times.reserve(given.size());
+    for (double t : given) times.push_back(static_cast<float>(t));
+    const double first = times.front(), last = times.back();
+    for (const Motion* m : {&a, &b})
+        for (double t : m->breaks())
+            if (t > first && t < last) times.push_back(t);
+    std::sort(times.begin(), times.end());
+    times.erase(std::unique(times.begin(), times.end()), times.end());
+
+    PlaybackBound r;
+    struct Point {
+        double t, d;
+        Quat qa, qb;
+    };
+    auto evaluate = [&](double t) {
+        ++r.evaluations;
+        Point p{t, 0.0, a.at(t), b.at(t)};
+        p.d = angle_between(p.qa, p.qb);
+        if (p.d > r.max_evaluated) r.max_evaluated = p.d;
+        return p;
+    };
+    auto reach = [&](double bound, double t) {
+        if (bound > r.bound) {
+            r.bound = bound;
+            r.worst_time = t;
+        }
+    };
+    auto interval_bound = [&](const Point& p0, const Point& p1) {
+        const double h = p1.t - p0.t;
+        double va, aa, vb, ab;
+        a.bounds(p0.t, p1.t, va, aa);
+        b.bounds(p0.t, p1.t, vb, ab);
+        if (std::nextafter(static_cast<float>(p0.t), HUGE_VALF) >= static_cast<float>(p1.t)) {
+            // Neighbouring float32 frames: a float32 motion shows one of its two ends in between (a
+            // step there, such as the snap to a key, included), the other moves by at most its speed.
+            return std::fmax(p0.d, p1.d) + (va + vb) * h + kArithmeticSlack;
+        }
+        const double first = std::fmax(0.5 * (p0.d + p1.d + (va + vb) * h), std::fmax(p0.d, p1.d));
+        const double sigma = glm::dot(p0.qa, p0.qb) < 0.0 ? -1.0 : 1.0;
+        const double c0 = glm::length(glm::dvec4(p0.qa.w - sigma * p0.qb.w, p0.qa.x - sigma * p0.qb.x,
+                                                  p0.qa.y - sigma * p0.qb.y, p0.qa.z - sigma * p0.qb.z));
+        const double c1 = glm::length(glm::dvec4(p1.qa.w - sigma * p1.qb.w, p1.qa.x - sigma * p1.qb.x,
+                                                  p1.qa.y - sigma * p1.qb.y, p1.qa.z - sigma * p1.qb.z));
+        const double chord = std::fmax(c0, c1) + (aa + ab) * h * h / 8.0;
+        const double second = chord < 2.0 ? 4.0 * std::asin(0.5 * chord) : HUGE_VAL;
+        return std::fmin(first, second) + a.jump_bound(p0.t, p1.t) + b.jump_bound(p0.t, p1.t) + kArithmeticSlack;
+    };
+    std::vector<std::pair<Point, Point>> stack;
+    Point prev = evaluate(times.front());
+    reach(prev.d, prev.t);
+    if (prev.d > tolerance) r.violations.push_back(prev.t);
+    for (std::size_t i = 1; i < times.size(); ++i) {
+        const Point next = evaluate(times[i]);
+        reach(next.d, next.t);
+        if (next.d > tolerance) r.violations.push_back(next.t);
+        stack.emplace_back(prev, next);
+        prev = next;
+        while (!stack.empty()) {
+            const auto [p0, p1] = stack.back();
+            stack.pop_back();
+            if (!(p1.t > p0.t)) continue;
+            const double bound = interval_bound(p0, p1);
+            const double mid = static_cast<float>(0.5 * (p0.t + p1.t));
+            if (bound <= tolerance || p0.d > tolerance || p1.d > tolerance) {
+                reach(bound, mid);  // proved, or a violation at an end, known already
+                continue;
+            }
+            if (p1.t - p0.t < min_step || r.evaluations >= max_evaluations || !(mid > p0.t && mid < p1.t)) {
+                r.unproven.emplace_back(p0.t, p1.t);
+                reach(bound, mid);
+                continue;
+            }
+            const Point pm = evaluate(mid);
+            if (pm.d > tolerance) {
+                r.violations.push_back(mid);
+                reach(bound, mid);
+                continue;
+            }
+            stack.emplace_back(pm, p1);
+            stack.emplace_back(p0, pm);
+        }
+    }
+    std::sort(r.violations.begin(), r.violations.end());
+    r.violations.erase(std::unique(r.violations.begin(), r.violations.end()), r.violations.end());
+    std::sort(r.unproven.begin(), r.unproven.end());
+    return r;
+}
+
+}  // namespace quatcurve
