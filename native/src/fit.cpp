@@ -53,8 +53,14 @@ constexpr int kProofRounds = 8;
 // An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap, and
 // distinct in float32 up to frame ~3e4).
 constexpr double kAddedSampleGap = 1.0 / 1024.0;
-// Two Euler rows that agree within this are the same key values (float32 keys, double curve).
-constexpr double kSameAngles = 2e-5;
+// Two Euler rows that agree within this (radians, per angle) are on the same branch: branches differ
+// by about π, while near gimbal lock the first and last angles of the same rotation are ill-conditioned
+// (a float32 key's 1e-7 rad moves them by 1e-7/cos b); the F-curve bridges what is left, and the
+// proof measures it.
+constexpr double kSameAngles = 1e-2;
+// A change of Euler branch between keys whose path passes no nearer than this to gimbal lock is
+// refused (radians: 5°, a visible swing of about 10°).
+constexpr double kSwitchRefused = 5.0 * kTwoPiFit / 360.0;
 // cos(middle angle) below this: the key sits at gimbal lock.
 constexpr double kAtLock = 1e-5;
 
@@ -158,6 +164,24 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
     if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and > 0");
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
+    if (mode.kind == RotationMode::Kind::euler) {
+        // An Euler key at gimbal lock between two others: where the path leaves it on another triple
+        // than it arrives on, the channels change branch at the first sample after it (euler_span_
+        // values). A sample 2·min_gap after the key (the nearest a generated key may sit) makes that
+        // change where the rotation is still within a few hundredths of a degree of the lock.
+        const std::size_t mid = middle_axis(mode.order);
+        std::vector<double> extra;
+        for (std::size_t k = 1; k + 1 < K; ++k) {
+            const double at = key_frames[k] + 2.0 * min_gap;
+            if (std::fabs(std::cos(key_values[C * k + mid])) < kAtLock && at < key_frames[k + 1] - min_gap)
+                extra.push_back(static_cast<float>(at));
+        }
+        if (!extra.empty()) {
+            fit.times.insert(fit.times.end(), extra.begin(), extra.end());
+            std::sort(fit.times.begin(), fit.times.end());
+            fit.times.erase(std::unique(fit.times.begin(), fit.times.end()), fit.times.end());
+        }
+    }
     const CurveMotion method(curve);
     for (int round = 0;; ++round) {
         fit_round(curve, key_frames, key_values, mode, tolerance * kFitShare, min_gap, fit);
@@ -251,9 +275,10 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
                 double lock = 0.0;
                 const std::vector<double> v = euler_span_values(span, mode, written + C * k, written + C * (k + 1),
                                                                 k == 0, rewrote_start, rewrote_end, switch_at, lock);
-                if (switch_at > 0 && lock > tolerance / kFitShare) {
+                if (switch_at > 0 && lock > kSwitchRefused) {
                     // Changing branch away from gimbal lock swings the rotation by about twice the
-                    // distance from it: no channel path follows the method there.
+                    // distance from it: no channel path follows the method there. (Nearer the lock
+                    // the change is made, the proof bounds what it costs and the result says so.)
                     char text[400];
                     std::snprintf(text, sizeof text,
                                   "keys at frames %g and %g: the method's path reaches the second key on the other "
