@@ -15,6 +15,7 @@ namespace {
 
 // Blender's float32 arithmetic beside the exact model the bound reasons about (reduce.hpp's margin).
 constexpr double kArithmeticSlack = 2e-6;
+constexpr double kPi = 3.141592653589793238462643383279502884;
 // Blender's binary search takes a frame within this of a key as the key (blender_eval.hpp); the
 // snap is bounded over twice that around each key.
 constexpr double kKeySnap = 1e-4;
@@ -71,6 +72,82 @@ Quat PlaybackMotion::at(double t) const {
     return channels_to_quat(v, mode_);
 }
 
+namespace {
+
+// The control points Blender evaluates for segment j of a channel (BEZIER; after correct_bezpart:
+// a handle reaching farther than the segment is scaled back to it). False: Blender's flat-segment
+// shortcut (the first value throughout).
+bool segment_controls(const FCurveKeys& ch, std::size_t j, double x[4], double y[4]) {
+    const double f0 = ch.frames[j], f1 = ch.frames[j + 1];
+    x[0] = f0;
+    x[1] = float(ch.handle_right[2 * j]);
+    x[2] = float(ch.handle_left[2 * j + 2]);
+    x[3] = f1;
+    y[0] = float(ch.values[j]);
+    y[1] = float(ch.handle_right[2 * j + 1]);
+    y[2] = float(ch.handle_left[2 * j + 3]);
+    y[3] = float(ch.values[j + 1]);
+    if (std::fabs(y[0] - y[1]) < FLT_EPSILON && std::fabs(y[1] - y[2]) < FLT_EPSILON &&
+        std::fabs(y[2] - y[3]) < FLT_EPSILON)
+        return false;
+    const double len = f1 - f0, len1 = std::fabs(x[0] - x[1]), len2 = std::fabs(x[3] - x[2]);
+    if (len1 > len) {
+        const double fac = len / len1;
+        x[1] = x[0] - fac * (x[0] - x[1]);
+        y[1] = y[0] - fac * (y[0] - y[1]);
+    }
+    if (len2 > len) {
+        const double fac = len / len2;
+        x[2] = x[3] - fac * (x[3] - x[2]);
+        y[2] = y[3] - fac * (y[3] - y[2]);
+    }
+    return true;
+}
+
+// Bounds of |dy/dt| and |d²y/dt²| of the Bezier (x(u), y(u)) over the frames [a, b] of it: the
+// hodographs' control values over the curve parameters of [a, b] (the whole segment when Blender's
+// root finder finds none); y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
+void bezier_bounds(const double x[4], const double y[4], double a, double b, double& rate, double& curvature) {
+    double u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+    double u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+    if (u0 < 0.0 || u1 < 0.0 || u0 > u1) {
+        u0 = 0.0;
+        u1 = 1.0;
+    }
+    u0 = std::clamp(u0, 0.0, 1.0);
+    u1 = std::clamp(u1, 0.0, 1.0);
+    const double dx[3] = {3 * (x[1] - x[0]), 3 * (x[2] - x[1]), 3 * (x[3] - x[2])};
+    const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
+    double bx[3], by[3];
+    blossom(dx, u0, u1, bx);
+    blossom(dy, u0, u1, by);
+    const double xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
+    const double xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
+    const double ymax = std::fmax(std::fabs(by[0]), std::fmax(std::fabs(by[1]), std::fabs(by[2])));
+    auto linear_max = [&](double p0, double p1) {  // |p0 + (p1 − p0)·u| on [u0, u1]
+        return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
+    };
+    const double xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]));
+    const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]));
+    if (!(xmin > 0.0)) {
+        rate = curvature = ymax > 0.0 ? HUGE_VAL : 0.0;
+        return;
+    }
+    rate = ymax / xmin;
+    curvature = (yy * xmax + ymax * xx) / (xmin * xmin * xmin);
+}
+
+// The segment of `ch` holding [lo, hi] whole (no key strictly inside), or −1.
+long segment_of(const FCurveKeys& ch, double lo, double hi) {
+    const std::size_t n = ch.frames.size();
+    if (n < 2 || lo < ch.frames.front() || hi > ch.frames.back()) return -1;
+    std::size_t j = static_cast<std::size_t>(std::upper_bound(ch.frames.begin(), ch.frames.end(), lo) - ch.frames.begin());
+    j = j == 0 ? 0 : std::min(j - 1, n - 2);
+    return hi <= ch.frames[j + 1] ? static_cast<long>(j) : -1;
+}
+
+}  // namespace
+
 void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double& rate, double& curvature) const {
     const FCurveKeys& ch = channels_.at(c);
     const std::size_t n = ch.frames.size();
@@ -82,61 +159,41 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
     for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
         const double f0 = ch.frames[j], f1 = ch.frames[j + 1];
-        const double v0 = float(ch.values[j]), v1 = float(ch.values[j + 1]);
         if (interpolation_ == KeyInterpolation::LINEAR) {
-            rate = std::fmax(rate, std::fabs(v1 - v0) / (f1 - f0));
+            rate = std::fmax(rate, std::fabs(float(ch.values[j + 1]) - float(ch.values[j])) / (f1 - f0));
             continue;
         }
-        double x[4] = {f0, float(ch.handle_right[2 * j]), float(ch.handle_left[2 * j + 2]), f1};
-        double y[4] = {v0, float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]), v1};
-        if (std::fabs(y[0] - y[1]) < FLT_EPSILON && std::fabs(y[1] - y[2]) < FLT_EPSILON &&
-            std::fabs(y[2] - y[3]) < FLT_EPSILON)
-            continue;  // Blender's flat-segment shortcut: the first value throughout
-        // correct_bezpart: a handle reaching farther than the segment is scaled back to it.
-        const double len = f1 - f0, len1 = std::fabs(x[0] - x[1]), len2 = std::fabs(x[3] - x[2]);
-        if (len1 > len) {
-            const double fac = len / len1;
-            x[1] = x[0] - fac * (x[0] - x[1]);
-            y[1] = y[0] - fac * (y[0] - y[1]);
-        }
-        if (len2 > len) {
-            const double fac = len / len2;
-            x[2] = x[3] - fac * (x[3] - x[2]);
-            y[2] = y[3] - fac * (y[3] - y[2]);
-        }
-        // The curve parameters of the part of [lo, hi] in this segment (the whole segment when
-        // Blender's root finder finds none).
-        const double a = std::fmax(lo, f0), b = std::fmin(hi, f1);
-        double u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-        double u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-        if (u0 < 0.0 || u1 < 0.0 || u0 > u1) {
-            u0 = 0.0;
-            u1 = 1.0;
-        }
-        u0 = std::clamp(u0, 0.0, 1.0);
-        u1 = std::clamp(u1, 0.0, 1.0);
-        // First derivatives in u (quadratic Bezier hodographs) and second ones (linear).
-        const double dx[3] = {3 * (x[1] - x[0]), 3 * (x[2] - x[1]), 3 * (x[3] - x[2])};
-        const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
-        double bx[3], by[3];
-        blossom(dx, u0, u1, bx);
-        blossom(dy, u0, u1, by);
-        const double xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
-        const double xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
-        const double ymax = std::fmax(std::fabs(by[0]), std::fmax(std::fabs(by[1]), std::fabs(by[2])));
-        auto linear_max = [&](double p0, double p1) {  // |p0 + (p1 − p0)·u| on [u0, u1]
-            return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
-        };
-        const double xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]));
-        const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]));
-        if (!(xmin > 0.0)) {
-            if (ymax > 0.0) rate = curvature = HUGE_VAL;
-            continue;
-        }
-        // y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
-        rate = std::fmax(rate, ymax / xmin);
-        curvature = std::fmax(curvature, (yy * xmax + ymax * xx) / (xmin * xmin * xmin));
+        double x[4], y[4], r, k;
+        if (!segment_controls(ch, j, x, y)) continue;
+        bezier_bounds(x, y, std::fmax(lo, f0), std::fmin(hi, f1), r, k);
+        rate = std::fmax(rate, r);
+        curvature = std::fmax(curvature, k);
     }
+}
+
+bool PlaybackMotion::combined_rate(std::size_t a, std::size_t c, double sign, double t0, double t1,
+                                   double& rate) const {
+    const FCurveKeys& A = channels_[a];
+    const FCurveKeys& B = channels_[c];
+    const long ja = segment_of(A, t0, t1), jc = segment_of(B, t0, t1);
+    if (ja < 0 || jc < 0) return false;
+    const std::size_t i = static_cast<std::size_t>(ja), k = static_cast<std::size_t>(jc);
+    if (A.frames[i] != B.frames[k] || A.frames[i + 1] != B.frames[k + 1]) return false;
+    if (interpolation_ == KeyInterpolation::LINEAR) {
+        const double dy = (float(A.values[i + 1]) - float(A.values[i])) + sign * (float(B.values[k + 1]) - float(B.values[k]));
+        rate = std::fabs(dy) / (A.frames[i + 1] - A.frames[i]);
+        return true;
+    }
+    double xa[4], ya[4], xc[4], yc[4];
+    const bool fa = segment_controls(A, i, xa, ya), fc = segment_controls(B, k, xc, yc);
+    if (!fa) std::fill(ya, ya + 4, ya[0]);  // flat: a constant
+    if (!fc) std::fill(yc, yc + 4, yc[0]);
+    if ((fa && fc) && !std::equal(xa, xa + 4, xc)) return false;
+    const double* x = fa ? xa : xc;
+    double y[4], curvature;
+    for (int m = 0; m < 4; ++m) y[m] = ya[m] + sign * yc[m];
+    bezier_bounds(x, y, t0, t1, rate, curvature);
+    return true;
 }
 
 void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) const {
@@ -147,7 +204,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
             // Each axis' rotation turns at its own angle's rate, whatever frame it acts in; the axes
             // themselves turn at most at the sum.
             const double w = r[0] + r[1] + r[2];
-            speed = w;
+            speed = std::fmin(w, euler_speed(t0, t1, r));
             accel = 0.5 * (k[0] + k[1] + k[2] + w * w) + 0.25 * w * w;
             return;
         }
@@ -225,6 +282,36 @@ void snap_edges(float key, std::vector<double>& out) {
 }
 
 }  // namespace
+
+// Near gimbal lock the first and last angles (a, c) turn about nearly the same axis: with κ = e_a·e_c
+// (world axes) = σ·sin b, |ω|² = b'² + a'² + c'² + 2κ·a'c' = b'² + (a' + κc')² + (1 − κ²)·c'², and
+// |a' + κc'| ≤ |a' + s·c'| + (1 − |κ|)·|c'| with s = sign κ. The rate of a + s·c is bounded from the
+// two channels' shared Bezier segment (the same key and handle frames); otherwise +∞ (the sum of the
+// rates applies).
+double PlaybackMotion::euler_speed(double t0, double t1, const double* r) const {
+    const int i = static_cast<int>(euler_order_name(mode_.order)[0] - 'X');
+    const int j = static_cast<int>(euler_order_name(mode_.order)[1] - 'X');
+    const int l = static_cast<int>(euler_order_name(mode_.order)[2] - 'X');
+    Vec3 ea(0.0), eb(0.0), ec(0.0);
+    ea[i] = eb[j] = ec[l] = 1.0;
+    const double sigma = glm::dot(glm::cross(eb, ea), ec);  // κ = σ·sin b
+    double v0[3], v1[3];
+    values(t0, v0);
+    values(t1, v1);
+    // The middle angle's range on the interval, and so |κ|'s least value and κ's sign.
+    const double spread = r[j] * 0.5 * (t1 - t0);
+    const double b_lo = std::fmin(v0[j], v1[j]) - spread, b_hi = std::fmax(v0[j], v1[j]) + spread;
+    const double s0 = std::sin(b_lo), s1 = std::sin(b_hi);
+    if (b_hi - b_lo >= kPi || s0 * s1 <= 0.0) return HUGE_VAL;  // κ may change sign (or b winds round)
+    // |sin| is smallest at an end of the range unless the range holds a multiple of π (excluded above).
+    const double kappa_min = std::fmin(std::fabs(s0), std::fabs(s1));
+    double combined;
+    if (!combined_rate(static_cast<std::size_t>(i), static_cast<std::size_t>(l), sigma * (s0 > 0 ? 1.0 : -1.0), t0, t1,
+                       combined))
+        return HUGE_VAL;
+    const double along = combined + (1.0 - kappa_min) * r[l];
+    return std::sqrt(r[j] * r[j] + along * along + (1.0 - kappa_min * kappa_min) * r[l] * r[l]);
+}
 
 std::vector<double> PlaybackMotion::breaks() const {
     std::vector<double> out;

@@ -90,6 +90,11 @@ public:
     void channel_bounds(std::size_t c, double t0, double t1, double& rate, double& curvature) const;
 
 private:
+    // |d(a + sign·c)/dt| bound of channels a and c on [t0, t1] where they share one Bezier segment.
+    bool combined_rate(std::size_t a, std::size_t c, double sign, double t0, double t1, double& rate) const;
+    // The Euler speed bound that sees the first and last axes align near gimbal lock (bound.cpp).
+    double euler_speed(double t0, double t1, const double* r) const;
+
     std::vector<FCurveKeys> channels_;
     KeyInterpolation interpolation_;
     RotationMode mode_;
