@@ -44,21 +44,21 @@ import sys
 import time
 
 if __package__:
-    from . import cli, native, targets
+    from . import cli, inputs, native, targets
     addon = sys.modules[__package__]
 else:  # `blender --python batch.py`: a script outside its package (see cli.py)
     _here = os.path.dirname(os.path.abspath(__file__))
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import cli, native, targets
+    from quatcurve_blender import cli, inputs, native, targets
 
 import bpy
 
 PROG = "quatcurve_blender.batch"
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = cli.EXIT_OK, cli.EXIT_FAILURE, cli.EXIT_USAGE
 UsageError = cli.UsageError
-EXTENSIONS = (".blend", ".bvh", ".fbx", ".glb", ".gltf")
+EXTENSIONS = inputs.EXTENSIONS
 STATE = ".quatcurve-batch"        # DIR's own folder: plan, part files, worker logs, Slurm script
 RESULTS, SUMMARY = "results.jsonl", "summary.json"
 ANSWER = b"quatcurve-batch-record "  # a worker's answer line (Blender prints its banner on the same pipe)
@@ -709,44 +709,13 @@ def collect(folder):
 
 # ---- the worker: many files, one after the other --------------------------------------------------
 
-_BVH_PATCHED = False
-
-
 def load_input(path):
-    """Resets the session to the file: a .blend is opened; anything else is imported into an empty
-    factory scene with Blender's own importer. Raises RuntimeError naming what failed."""
-    ext = os.path.splitext(path)[1].lower()
+    """Resets the session to the file (inputs.read: a .blend opened, anything else imported into an
+    empty factory scene). Raises RuntimeError: what the reader raised and the likely cause."""
     try:
-        if ext == ".blend":
-            bpy.ops.wm.open_mainfile(filepath=path, load_ui=False)
-            return
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        if ext == ".bvh":
-            patch_bvh_importer()
-            bpy.ops.import_anim.bvh(filepath=path)
-        elif ext == ".fbx":
-            bpy.ops.import_scene.fbx(filepath=path)
-        else:
-            bpy.ops.import_scene.gltf(filepath=path)
-    except (RuntimeError, ValueError, TypeError, IndexError, KeyError, UnicodeError) as error:
-        lines = [line.strip() for line in str(error).splitlines() if line.strip()]
-        raise RuntimeError("cannot read it: %s" % (lines[-1] if lines else type(error).__name__)) from None
-
-
-def patch_bvh_importer():
-    """Blender 3.x's BVH importer opens files with mode 'rU', which Python 3.11 rejects: its module
-    gets an `open` that drops the 'U' (the importer is otherwise unchanged)."""
-    global _BVH_PATCHED
-    if _BVH_PATCHED:
-        return
-    import builtins
-    from io_anim_bvh import import_bvh as importer
-
-    def open_text(file, mode="r", *args, **kwargs):
-        return builtins.open(file, mode.replace("U", ""), *args, **kwargs)
-
-    importer.open = open_text
-    _BVH_PATCHED = True
+        inputs.read(path)
+    except inputs.InputError as error:
+        raise RuntimeError("cannot read it: %s" % error) from None
 
 
 def work_on(plan, task, args, index):
@@ -786,7 +755,8 @@ def work_on(plan, task, args, index):
     except (UsageError, targets.TargetError, RuntimeError, OSError, ValueError) as error:
         # Paths as the records name them: relative to the inputs' and the outputs' folders.
         reason = str(error).replace(entry["path"], entry["input"]).replace(output, entry["output"])
-        record["reason"] = " ".join(reason.replace("Error: ", "").split())
+        # Blender's report prefix "Error: " goes, not an exception's type ("IndexError: …").
+        record["reason"] = " ".join(re.sub(r"(?<!\w)Error: ", "", reason).split())
     except Exception as error:  # a bug: still the file's one-line reason
         record["reason"] = "internal error: %s: %s" % (type(error).__name__, " ".join(str(error).split()))
     if record["status"] == "failed":

@@ -7,8 +7,12 @@ once: batch.py runs the same operations.
     blender --background IN.blend --python addon/quatcurve_blender/cli.py -- [options]
     PYTHONPATH=addon python -m quatcurve_blender.cli [options] IN.blend     (a Python with the bpy module)
 
+IN.blend may also be a .bvh, .fbx, .glb or .gltf file, imported into an empty scene with Blender's
+importer as batch.py does (inputs.read); an unreadable input is refused with the exception its
+reader raised and the likely cause ("the file ends early at line N: …").
+
 Exit status: 0 success; 2 bad arguments (unknown option, method, object or bone, bad frame range,
-missing input, output that cannot be written); 1 failure (the bake, the comparison or the save
+missing or unreadable input, output that cannot be written); 1 failure (the bake, the comparison or the save
 failed). Every error is one line on stderr, `quatcurve: error: <reason>`, without a traceback
 (QUATCURVE_DEBUG=1 adds the traceback of unexpected errors). Nothing is saved unless everything
 succeeded. IN.blend is only written with --in-place; the output is saved to a temporary file in the
@@ -36,7 +40,7 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, reduce, targets
+    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, native, reduce, targets
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -45,7 +49,8 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, native, reduce, targets
+    from quatcurve_blender import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, native,
+                                   reduce, targets)
 
 import bpy
 
@@ -93,7 +98,8 @@ def build_parser():
                            "target's curve (the quatcurve.export_gltf operator).")
     p.add_argument("input", nargs="?", metavar="IN.blend",
                    help="the file to bake (may be omitted when Blender was started with it: "
-                        "blender -b IN.blend --python cli.py -- ...)")
+                        "blender -b IN.blend --python cli.py -- ...); or a .bvh, .fbx, .glb or .gltf file, "
+                        "imported into an empty scene with Blender's importer (then --output is required)")
     add_task_arguments(p)
     g = p.add_argument_group("output", "One of them is required.")
     g.add_argument("--output", metavar="OUT.blend", help="the baked (fitted) file (IN.blend is not changed)")
@@ -372,6 +378,9 @@ def output_path(args, source):
     if args.in_place and args.output:
         raise UsageError("--output and --in-place exclude each other")
     if args.in_place:
+        if not source.lower().endswith(".blend"):
+            raise UsageError("--in-place: %s is imported, not a .blend: give --output OUT.blend"
+                             % os.path.basename(source))
         return source
     if not args.output:
         raise UsageError("no output: give --output OUT.blend (or --in-place to overwrite the input)")
@@ -405,13 +414,15 @@ def report_path(args, output):
 
 
 def open_input(path):
-    """Opens IN.blend unless Blender already did; an unreadable file is a UsageError."""
+    """Opens IN.blend unless Blender already did, or imports a .bvh, .fbx, .glb or .gltf file into an
+    empty scene (inputs.read); an unreadable file is a UsageError saying what the reader raised and
+    the likely cause."""
     if bpy.data.filepath and os.path.samefile(bpy.data.filepath, path):
         return
     try:
-        bpy.ops.wm.open_mainfile(filepath=path, load_ui=False)
-    except RuntimeError as error:
-        raise UsageError("input %s: %s" % (path, str(error).strip().replace("\n", " "))) from None
+        inputs.read(path)
+    except inputs.InputError as error:
+        raise UsageError("input %s: cannot read it: %s" % (path, error)) from None
 
 
 def register_addon():

@@ -25,6 +25,7 @@ import bpy
 import jsonschema
 import pytest
 
+import broken_files
 from quatcurve_blender import batch, fcurves
 from slurm_cluster import Cluster, Unavailable
 
@@ -173,7 +174,8 @@ def test_local_run(first_run, library):
     records, summary = read_results(out)
     assert {k: r["status"] for k, r in records.items()} == EXPECTED
     assert list(records) == sorted(records)
-    assert re.match(r"cannot read it: .*shots/bad\.blend", records["shots/bad.blend"]["reason"])
+    assert re.match(r"cannot read it: Blender: .*shots/bad\.blend.*; likely cause: it is damaged at byte 12: not a "
+                    r"block header", records["shots/bad.blend"]["reason"]), records["shots/bad.blend"]["reason"]
     assert "no object or pose bone with rotation animation" in records["shots/still.blend"]["reason"]
     for name, record in records.items():
         assert os.path.isfile(out / record["output"]) == (record["status"] == "done"), name
@@ -197,6 +199,32 @@ def test_local_run(first_run, library):
     counts = [fcurves.key_count(f) for f in fcurves.Channels.of(obj).find_all("rotation_euler", 3) if f is not None]
     assert sum(counts) == records["shots/a.blend"]["keys_after"]
     bpy.ops.wm.read_factory_settings(use_empty=True)
+
+
+def test_unreadable_files_say_why(addon, tmp_path):
+    """A BVH cut in a frame row, an FBX and a .glb cut in half (broken_files.py): each record's reason,
+    progress line and summary line give the exception Blender's importer raised and the likely cause,
+    never the 'Location:' of bpy.ops that passed it on."""
+    made = broken_files.make(str(tmp_path / "lib"))
+    out = tmp_path / "out"
+    proc = run_batch(["--reduce", "--jobs", "1", "--output", out, made["bvh"], made["fbx"], made["glb"]])
+    assert proc.returncode == 1, (proc.stdout, proc.stderr)
+    records, summary = read_results(out)
+    reasons = {name: r["reason"] for name, r in records.items() if r["status"] == "failed"}
+    assert sorted(reasons) == ["roll.fbx", "spin.glb", "walk.bvh"] and summary["failed"] == 3, records
+    assert reasons["walk.bvh"].startswith("cannot read it: Blender's BVH importer raised IndexError: list index "
+                                          "out of range (io_anim_bvh/import_bvh.py:"), reasons["walk.bvh"]
+    assert reasons["walk.bvh"].endswith(
+        "likely cause: the file ends early at line %d: the MOTION section declares 24 frames, %d are present and "
+        "the next is cut short (4 of 9 values)" % (broken_files.CUT_BVH_LINE, broken_files.CUT_BVH_ROWS))
+    assert reasons["roll.fbx"].startswith("cannot read it: Blender's FBX importer: "), reasons["roll.fbx"]
+    assert "; likely cause: the file ends early: node '" in reasons["roll.fbx"], reasons["roll.fbx"]
+    assert reasons["spin.glb"].startswith("cannot read it: Blender's glTF importer: "), reasons["spin.glb"]
+    assert "; likely cause: the file ends early: its header declares " in reasons["spin.glb"], reasons["spin.glb"]
+    assert str(tmp_path) not in " ".join(reasons.values())  # paths as the records name them
+    printed = [line for line in proc.stdout.splitlines() if "walk.bvh" in line]
+    assert len(printed) == 2 and all("IndexError: list index out of range" in line for line in printed), printed
+    assert "Location:" not in proc.stdout and "Location:" not in " ".join(reasons.values())
 
 
 def test_resume_force_and_deterministic(first_run, library, tmp_path):

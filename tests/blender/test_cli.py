@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from mathutils import Quaternion
 
+import broken_files
 from compare_helpers import load_png, schema_errors
 from quatcurve_blender import cli, compare, fcurves, fit, native, plot
 
@@ -273,6 +274,47 @@ def test_reduce(addon, source_blend, tmp_path):
     assert any(line.strip().startswith("Turn (XYZ): 6 → ") for line in lines), proc.stdout
     assert any(line.startswith("total: 1 target, rotation keys 6 → ") for line in lines), proc.stdout
     assert digest(source_blend) == before and out.is_file()
+
+
+@pytest.fixture(scope="module")
+def broken(addon, tmp_path_factory):
+    return broken_files.make(str(tmp_path_factory.mktemp("broken")))
+
+
+@pytest.mark.parametrize("kind,words", [
+    ("bvh", ("Blender's BVH importer raised IndexError: list index out of range (io_anim_bvh/import_bvh.py:",
+             "; likely cause: the file ends early at line %d: the MOTION section declares 24 frames, %d are present"
+             % (broken_files.CUT_BVH_LINE, broken_files.CUT_BVH_ROWS))),
+    ("fbx", ("Blender's FBX importer: ", "; likely cause: the file ends early: node '")),
+    ("glb", ("Blender's glTF importer: ", "; likely cause: the file ends early: its header declares ")),
+])
+def test_unreadable_input_says_why(broken, tmp_path, kind, words):
+    """An input Blender's importer cannot read (broken_files.py): status 2, one line with the exception the
+    importer raised and the likely cause, not bpy.ops' 'Location:'; nothing saved."""
+    out = tmp_path / "out.blend"
+    proc = run_cli(["--reduce", "--output", out, broken[kind]])
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    errors = error_lines(proc)
+    assert len(errors) == 1, proc.stderr
+    assert errors[0].startswith("quatcurve: error: input %s: cannot read it: " % broken[kind]), errors[0]
+    assert all(w in errors[0] for w in words), errors[0]
+    assert "Location:" not in errors[0] and not out.exists()
+
+
+def test_imported_input(addon, tmp_path):
+    """A .bvh is imported into an empty scene, as batch does, and reduced into OUT.blend; --in-place is
+    refused (the input is not a .blend)."""
+    clip = tmp_path / "walk.bvh"
+    broken_files.write_bvh(str(clip))
+    out = tmp_path / "walk.blend"
+    proc = run_cli(["--reduce", "--output", out, clip])
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    assert any(line.startswith("total: 2 targets, rotation keys ") for line in proc.stdout.splitlines()), proc.stdout
+    assert out.is_file()
+    proc = run_cli(["--reduce", "--in-place", clip])
+    assert proc.returncode == 2
+    assert error_lines(proc) == ["quatcurve: error: --in-place: walk.bvh is imported, not a .blend: give --output "
+                                 "OUT.blend"], proc.stderr
 
 
 BAD_ARGUMENTS = [
