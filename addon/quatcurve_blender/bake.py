@@ -145,8 +145,8 @@ class BakeResult:
         """One line per target, each followed by its notes (held channels, modifiers, NLA, …)."""
         out = []
         for t in self.targets:
-            out.append("%s: %s %s → %s, %d source keys → %s keys in '%s'"
-                       % (t.name, self.method, t.source_mode, t.output_mode, t.source_keys,
+            out.append("%s: %s, %s → %s, %d source keys → %s keys in '%s'"
+                       % (t.name, methods.label(self.method), t.source_mode, t.output_mode, t.source_keys,
                           f"{t.keys_written:,}", t.action))
             out.extend(t.notes)
         return out
@@ -256,7 +256,8 @@ class BakePlan:
         quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
-            raise BakeError("%s: the %s curve gave non-finite values" % (item.target.name, settings.method))
+            raise BakeError("%s: the %s curve gave non-finite values"
+                            % (item.target.name, methods.label(settings.method)))
         try:
             item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
                                        math.radians(settings.tolerance))

@@ -40,7 +40,8 @@ import traceback
 import uuid
 
 if __package__:
-    from . import bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, native, reduce, targets
+    from . import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, methods, native, reduce,
+                   targets)
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -49,8 +50,8 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, native,
-                                   reduce, targets)
+    from quatcurve_blender import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, methods,
+                                   native, reduce, targets)
 
 import bpy
 
@@ -597,8 +598,9 @@ class BakeTask(Task):
         if report is not None and hasattr(scene, "quatcurve_compare"):
             compare_ops.store_result(scene.quatcurve_compare, report)
         print("quatcurve %s (Blender %s): %s, frames %g..%g step %g, %s → %s" % (
-            native.require().__version__, bpy.app.version_string, settings.method, result.frame_start,
-            result.frame_end, settings.step, os.path.basename(source), "in place" if source == output else output))
+            native.require().__version__, bpy.app.version_string, methods.label_and_id(settings.method),
+            result.frame_start, result.frame_end, settings.step, os.path.basename(source),
+            "in place" if source == output else output))
         for line in result.lines():
             print("  " + line)
         print("total: " + result.summary())
@@ -639,8 +641,9 @@ class FitTask(Task):
             scene.quatcurve_fit.last_summary = result.summary()
             scene.quatcurve_fit.last_lines = "\n".join(result.lines())
         print("quatcurve %s (Blender %s): fit %s, tolerance %g°, %d subframes, %s → %s" % (
-            native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
-            settings.subframes, os.path.basename(source), "in place" if source == output else output))
+            native.require().__version__, bpy.app.version_string, methods.label_and_id(settings.method),
+            settings.tolerance, settings.subframes, os.path.basename(source),
+            "in place" if source == output else output))
         for line in result.lines():
             print("  " + line)
         print("total: " + result.summary())
@@ -721,8 +724,9 @@ class GltfTask(Task):
         settings = self.settings
         with blender_output_silenced():  # the exporter's progress lines
             result = gltf.export(bpy.context.scene, output, settings)
+        curve = methods.label_and_id(settings.method) if settings.method in methods.ALL else settings.method
         print("quatcurve %s (Blender %s): glTF, curve %s, tolerance %g°, %d subframes, %s -> %s" % (
-            native.require().__version__, bpy.app.version_string, settings.method, settings.tolerance,
+            native.require().__version__, bpy.app.version_string, curve, settings.tolerance,
             settings.subframes, os.path.basename(source), result.filepath))
         for line in result.lines():
             print("  " + line)

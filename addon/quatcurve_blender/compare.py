@@ -397,7 +397,7 @@ def measure(reading, settings):
             segment_paths[method] = np.asarray(curve.segment_paths(), dtype=np.float64).reshape(-1, 2)
             breaks += path_rule.breaks(curve, keys.frames, target.name, method, segment_paths[method])
         except ValueError as error:
-            raise CompareError("%s: %s: %s" % (target.name, method, error)) from None
+            raise CompareError("%s: %s: %s" % (target.name, methods.label(method), error)) from None
     reference = paths[REFERENCE_METHOD][1]
 
     tolerance = math.radians(settings.gimbal_tolerance)
@@ -507,28 +507,29 @@ def recommend(comparison):
             spread = max(spread, float(np.max(qc.angular_deviation(engine[a].quats, engine[b].quats))))
     no_difference = len(eligible) >= 1 and spread <= sampling_error + 1e-12
 
+    label = methods.label  # the text names methods as the menus do; the fields keep identifiers
     if no_difference:
         method = eligible[0]
         text = "no difference: %s agree within %.2f°, under the sampling's %.2f° (half a sample step); %s" % (
-            ", ".join(eligible) if len(eligible) < len(engine) else "all methods", math.degrees(spread),
-            math.degrees(sampling_error), method)
+            ", ".join(map(label, eligible)) if len(eligible) < len(engine) else "all methods", math.degrees(spread),
+            math.degrees(sampling_error), label(method))
     elif eligible:
         method = min(eligible, key=lambda n: (not verdicts[n]["smooth"], round(verdicts[n]["extra_path_deg"], 3),
                                               round(excess_of(n), 3), listed(n)))
         v = verdicts[method]
         text = "%s: passes the keys, obeys the path rule, steady (speed ratio at most %.2f× the keys' own), " \
                "%s, %.2f° of extra path" % (
-                   method, excess_of(method),
+                   label(method), excess_of(method),
                    "smooth at keys" if v["smooth"] else "not smooth at keys (velocity jumps %.2f°/frame; no smooth "
                    "method is eligible)" % math.degrees(engine[method].metrics["max_velocity_jump"]),
                    v["extra_path_deg"])
     else:
         method = min(engine, key=lambda n: (round(excess_of(n), 3), listed(n)))
         text = "%s, with reservations: no method is eligible (%s: %s)" % (
-            method, method, "; ".join(verdicts[method]["reasons"]))
+            label(method), label(method), "; ".join(verdicts[method]["reasons"]))
     others = [n for n in engine if n not in eligible]
     if others and not no_difference:
-        text += "; not: " + ", ".join("%s (%s)" % (n, verdicts[n]["reasons"][0]) for n in others)
+        text += "; not: " + ", ".join("%s (%s)" % (label(n), verdicts[n]["reasons"][0]) for n in others)
     steadiest = min(engine, key=lambda n: (round(excess_of(n), 3), listed(n)))
     order = max(comparison.euler_orders, key=lambda o: comparison.euler_orders[o][0])
     text += "; Euler order %s stays %.1f° from gimbal lock" % (order, math.degrees(comparison.euler_orders[order][0]))

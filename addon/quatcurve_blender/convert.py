@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit, native, targets
+from . import fcurves, fit, methods, native, targets
 from .workers import parallel_imap
 from .targets import TargetError
 
@@ -510,7 +510,7 @@ def _read(found, settings, played_by, result, work):
             if record is not None:
                 row.notes.append("%s: fitted (%s, %.3g°): the fit record follows to %s; the converted keys play "
                                  "within %.3g° of the fitted playback (fit again for the fit's own tolerance)"
-                                 % (_where(target, action), record.method, record.tolerance, new_prop,
+                                 % (_where(target, action), methods.label(record.method), record.tolerance, new_prop,
                                     settings.tolerance))
             sources.append(source)
             yield source

@@ -661,10 +661,10 @@ class FitResult:
 
     def summary(self):
         n = len(self.fitted)
-        return "Fitted %d target%s with %s (%d animator + %d generated keys, max error %.4f°) in %.2f s" % (
-            n, "" if n == 1 else "s", self.settings.method, sum(t.animator_keys for t in self.fitted),
-            sum(t.generated_keys for t in self.fitted), max([t.max_error_deg for t in self.fitted] or [0.0]),
-            self.seconds)
+        return "Fitted %d target%s with %s: %d animator + %d generated keys, max error %.4f°, %.2f s" % (
+            n, "" if n == 1 else "s", methods.label_and_id(self.settings.method),
+            sum(t.animator_keys for t in self.fitted), sum(t.generated_keys for t in self.fitted),
+            max([t.max_error_deg for t in self.fitted] or [0.0]), self.seconds)
 
     def lines(self):
         return [t.line(self.settings.tolerance) for t in self.targets] + [n for t in self.targets for n in t.notes]

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit, glb, native, targets
+from . import fcurves, fit, glb, methods, native, targets
 from .targets import TargetError
 
 METHODS = ("AUTO", "BLENDER") + fit.METHODS
@@ -200,7 +200,8 @@ def reference(target, settings):
     if keys.mode != "QUATERNION":
         turns = None  # as the fit: Euler and axis-angle keys carry their turns in their angles
     curve, _ = fit.curve_of(keys, fit_settings, ease_in, ease_out, turns)
-    how = "%s through %d keys%s" % (fit_settings.method, len(keys.frames), " (fitted)" if record is not None else "")
+    how = "%s through %d keys%s" % (methods.label(fit_settings.method), len(keys.frames),
+                                    " (fitted)" if record is not None else "")
     return curve.sample, how
 
 

@@ -40,7 +40,17 @@ _TEXT = {
 
 
 def label(method):
+    """What the menus call `method`: 'C2 Spline' for SPLINE_C2. Result lines and reports name methods
+    this way too."""
     return _TEXT.get(method, (method.replace("_", " ").title(), ""))[0]
+
+
+def label_and_id(method):
+    """'C2 Spline (SPLINE_C2)': the label and the identifier a script or the CLI's --method takes, for
+    the line of a result that names the method once (a run's header, a fit's summary); the label alone
+    where the two are the same ('TCB')."""
+    name = label(method)
+    return name if name == method else "%s (%s)" % (name, method)
 
 
 def enum_items(methods):

@@ -10,7 +10,7 @@ key segment, radians); no Blender data.
 import math
 from dataclasses import dataclass
 
-from . import native
+from . import methods, native
 
 
 @dataclass
@@ -35,8 +35,8 @@ class PathRuleBreak:
     def text(self):
         ratio = "a hold" if not math.isfinite(self.ratio) else "%.2f × its keyed arc %.1f°" % (
             self.ratio, math.degrees(self.arc))
-        return "%s: %s frames %g-%g: path %.1f° is %s (the path rule allows %.1f°)" % (
-            self.target, self.method, self.frame_start, self.frame_end, math.degrees(self.path), ratio,
+        return "%s: %s, frames %g-%g: path %.1f° is %s (the path rule allows %.1f°)" % (
+            self.target, methods.label(self.method), self.frame_start, self.frame_end, math.degrees(self.path), ratio,
             math.degrees(self.allowed))
 
     def to_json(self):

@@ -277,7 +277,7 @@ def test_panel_settings_drive_the_operator(scene):
     run_bake()
     frames, _ = fcurves.read_keys(fcurves.Channels.of(obj).find("rotation_quaternion", 0))
     np.testing.assert_array_equal(frames, [11, 21])
-    assert "NLERP" in settings.last_lines
+    assert "Cube: Nlerp, XYZ → QUATERNION" in settings.last_lines  # the method's label, as the menu says it
 
 
 def test_tolerance_goes_through_the_reduction_hook(scene, monkeypatch):

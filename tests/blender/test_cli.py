@@ -142,8 +142,9 @@ def test_bake_with_compare_writes_file_report_and_plots(addon, source_blend, tmp
     names = ["Quat", "Rig/B0", "Rig/B1", "Turn"]
     lines = proc.stdout.splitlines()
     for name in names:
-        assert sum(line.strip().startswith(name + ": SLERP") for line in lines) == 1, proc.stdout
+        assert sum(line.strip().startswith(name + ": Slerp, ") for line in lines) == 1, proc.stdout  # the label
     assert any(line.startswith("total: 4 targets") for line in lines), proc.stdout
+    assert any(": Slerp (SLERP), frames 1..21 step 1, in.blend → " in line for line in lines), proc.stdout
 
     assert digest(source_blend) == before
     assert sorted(os.listdir(out_dir)) == sorted(
@@ -177,7 +178,7 @@ def test_in_place_bakes_only_the_chosen_bones(addon, source_blend, tmp_path):
     # The binary is given IN.blend itself (the form `blender -b IN.blend --python cli.py -- …`).
     proc = run_cli(args, preloaded=str(path)) if IS_BINARY else run_cli(args + [path])
     assert proc.returncode == 0, proc.stderr
-    assert [line.split(":")[0].strip() for line in proc.stdout.splitlines() if ": SQUAD " in line] == ["Rig/B1"]
+    assert [line.split(":")[0].strip() for line in proc.stdout.splitlines() if ": Squad, " in line] == ["Rig/B1"]
     assert digest(path) != before
     assert sorted(os.listdir(tmp_path)) == ["in_place.blend"]  # no temporary file, no .blend1
 
@@ -211,11 +212,12 @@ def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, 
     assert proc.returncode == 0, proc.stderr
     assert not error_lines(proc) and "Traceback" not in proc.stderr
     lines = proc.stdout.splitlines()
-    assert any("fit SQUAD, tolerance 0.02°, 4 subframes" in line for line in lines), proc.stdout
+    assert any("fit Squad (SQUAD), tolerance 0.02°, 4 subframes" in line for line in lines), proc.stdout
     for name, count in (("Quat", 2), ("Rig/B0", 3), ("Rig/B1", 3)):
         assert any(line.strip().startswith("%s: QUATERNION, %d animator keys + " % (name, count)) for line in lines), \
             proc.stdout
-    assert any(line.startswith("total: Fitted 3 targets with SQUAD") for line in lines), proc.stdout
+    assert any(line.startswith("total: Fitted 3 targets with Squad (SQUAD): 8 animator + ") for line in lines), \
+        proc.stdout
     assert digest(source_blend) == before
 
     open_blend(out)

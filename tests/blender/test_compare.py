@@ -350,6 +350,8 @@ def test_hemisphere_recommends_a_steady_method(linear_keys):
     worst = max(compare.ENGINE_METHODS, key=lambda n: t.sources[n].metrics["speed_ratio"])
     assert chosen != worst and not rec["no_difference"]
     assert chosen == "SLERP" and "not smooth at keys" in rec["text"]
+    assert rec["text"].startswith("Slerp: passes the keys"), rec["text"]  # the label; the field keeps SLERP
+    assert "; not: " in rec["text"] and "SPLINE_C2" not in rec["text"] and "SQUAD" not in rec["text"], rec["text"]
 
 
 def test_dense_motion_capture_says_no_difference_or_picks_a_steady_method(linear_keys):
@@ -400,7 +402,7 @@ def test_compare_reports_path_rule_breaks_with_target_frames_and_ratio(linear_ke
     assert math.degrees(hold.arc) < 1e-6 and math.degrees(hold.path) > 10.0
     assert not math.isfinite(hold.ratio)
     lines = report.table_lines()
-    assert any(line.startswith("  path rule: Holds: SPLINE_C2 frames 21-31: path") for line in lines), lines
+    assert any(line.startswith("  path rule: Holds: C2 Spline, frames 21-31: path") for line in lines), lines
     path, _ = compare.write_report(report, str(tmp_path / "r.json"))
     with open(path) as f:
         data = json.load(f)
@@ -413,7 +415,7 @@ def test_bake_notes_name_the_segments_that_break_the_path_rule(linear_keys):
     obj = keyed_object(linear_keys, "Holds", "XYZ", {1: (0, 0, 0), 11: (0, 0, 170), 21: (0, 0, 170), 31: (0, 0, 0)})
     result = bake.bake([targets.Target(obj)], bake.BakeSettings(method="SPLINE_C2"))
     notes = [n for n in result.notes() if n.startswith("path rule:")]
-    assert notes == [n for n in notes if "Holds: SPLINE_C2 frames 11-21: path" in n] and len(notes) == 1
+    assert notes == [n for n in notes if "Holds: C2 Spline, frames 11-21: path" in n] and len(notes) == 1
     obj2 = keyed_object(linear_keys, "Clamped", "XYZ", {1: (0, 0, 0), 11: (0, 0, 170), 21: (0, 0, 170), 31: (0, 0, 0)})
     result = bake.bake([targets.Target(obj2)], bake.BakeSettings(method="CATMULL_ROM"))
     assert not [n for n in result.notes() if n.startswith("path rule:")]

@@ -343,7 +343,7 @@ def test_fitted_target_stays_fitted_and_live(scene):
     bpy.context.scene.quatcurve_fit.live = True
     try:
         result = convert.convert([Target(obj)], convert.ConvertSettings("YXZ", tolerance=TOL))
-        assert any("fitted (SQUAD, 0.05°): the fit record follows to rotation_euler" in n for n in result.lines())
+        assert any("fitted (Squad, 0.05°): the fit record follows to rotation_euler" in n for n in result.lines())
         bpy.context.view_layer.update()
         target = Target(obj)
         record = fit.find_record(fcurves.active_action(obj), target)

@@ -350,7 +350,10 @@ def test_path_rule_breaks_are_reported(scene):
     select_objects(obj)
     assert bpy.ops.quatcurve.fit(method="SPLINE_C2", tolerance=0.1) == {"FINISHED"}
     lines = bpy.context.scene.quatcurve_fit.last_lines
-    assert "path rule: Ease: SPLINE_C2 frames 2-102: path" in lines and "the path rule allows" in lines
+    assert "path rule: Ease: C2 Spline, frames 2-102: path" in lines and "the path rule allows" in lines
+    # the methods' labels, as the menus say them, and the identifier once in the summary
+    assert bpy.context.scene.quatcurve_fit.last_summary.startswith("Fitted 1 target with C2 Spline (SPLINE_C2): 3 "
+                                                                  "animator + ")
     assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=0.1) == {"FINISHED"}
     assert "path rule" not in bpy.context.scene.quatcurve_fit.last_lines
 
