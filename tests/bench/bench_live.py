@@ -35,22 +35,30 @@ NATIVE = [0.0]
 
 
 class _Timed:
-    """Wraps the native module (and the curves it returns): the time spent inside goes to NATIVE."""
+    """Stands in for the native module, or a class, function or curve of it: calls add their time to
+    NATIVE. Attributes are looked up on the wrapped object, so a class keeps its static constructors
+    (`Curve.from_channels`) and the module its constants. A curve a call returns comes back wrapped
+    (its `sample` is timed too); wrapped arguments are unwrapped, so native functions receive their
+    own types (`fit_through_keys(curve, ...)`)."""
 
     def __init__(self, inner):
         self._inner = inner
 
     def __getattr__(self, name):
         value = getattr(self._inner, name)
-        if not callable(value):
-            return value
+        return _Timed(value) if callable(value) else value
 
-        def timed(*args, **kwargs):
-            t = time.perf_counter()
-            out = value(*args, **kwargs)
-            NATIVE[0] += time.perf_counter() - t
-            return _Timed(out) if type(out).__name__ == "Curve" else out
-        return timed
+    def __call__(self, *args, **kwargs):
+        args = [_unwrapped(a) for a in args]
+        kwargs = {k: _unwrapped(v) for k, v in kwargs.items()}
+        t = time.perf_counter()
+        out = self._inner(*args, **kwargs)
+        NATIVE[0] += time.perf_counter() - t
+        return _Timed(out) if type(out).__name__ == "Curve" else out
+
+
+def _unwrapped(value):
+    return value._inner if isinstance(value, _Timed) else value
 
 
 def build_rig(name, bones, frames, every):
