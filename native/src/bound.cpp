@@ -433,6 +433,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             stack.emplace_back(p0, pm);
         }
     }
+    r.bound = std::fmin(r.bound, kPi);  // no two rotations are farther apart
     std::sort(r.violations.begin(), r.violations.end());
     r.violations.erase(std::unique(r.violations.begin(), r.violations.end()), r.violations.end());
     std::sort(r.unproven.begin(), r.unproven.end());
