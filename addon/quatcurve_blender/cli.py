@@ -35,6 +35,7 @@ import fnmatch
 import math
 import os
 import sys
+import tempfile
 import time
 import traceback
 import uuid
@@ -421,9 +422,42 @@ def open_input(path):
     if bpy.data.filepath and os.path.samefile(bpy.data.filepath, path):
         return
     try:
-        inputs.read(path)
+        with output_held():
+            inputs.read(path)
     except inputs.InputError as error:
         raise UsageError("input %s: cannot read it: %s" % (path, error)) from None
+
+
+@contextlib.contextmanager
+def output_held():
+    """Holds what is printed to stdout and stderr (file descriptors 1 and 2: Blender's C code and its
+    importers) meanwhile: given back when the block succeeds, dropped when it raises — a failed
+    import prints its whole traceback, which the one error line replaces (QUATCURVE_DEBUG=1: nothing
+    is held)."""
+    if os.environ.get("QUATCURVE_DEBUG"):
+        yield
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [(fd, os.dup(fd), tempfile.TemporaryFile()) for fd in (1, 2)]
+    failed = True
+    try:
+        for fd, _, held in saved:
+            os.dup2(held.fileno(), fd)
+        yield
+        failed = False
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        for fd, original, held in saved:
+            os.dup2(original, fd)
+            os.close(original)
+            if not failed:
+                held.seek(0)
+                data = held.read()
+                while data:
+                    data = data[os.write(fd, data):]
+            held.close()
 
 
 def register_addon():
