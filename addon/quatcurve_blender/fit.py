@@ -13,8 +13,8 @@ the tolerance of the method's curve at every instant from the first key to the l
 every frame, `subframes` points per frame and every key, and proved between them from bounds of both
 motions' speed and acceleration (`quatcurve.fit_through_keys`, native/include/quatcurve/bound.hpp),
 on an emulation of Blender's F-curve evaluation that tests/blender/test_blender_eval.py checks
-against Blender. Euler keys at gimbal lock may be written as the equivalent triple that continues
-the path (same rotation, same frame; the result says so). Quaternion channels need not stay unit between keys: Blender normalizes when it
+against Blender. Where the method reaches an Euler key on another branch, the channels change
+branch once, beside a key at gimbal lock or nearest the lock (the result says where). Quaternion channels need not stay unit between keys: Blender normalizes when it
 builds the rotation, and the fit uses that freedom.
 
 Inserted keys are marked: keyframe type GENERATED (Blender 4.2+) or, on Blender 3.4 which lacks it,
@@ -512,12 +512,6 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
         raise FitError("%s: %s" % (keys.name, e)) from None
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
-    if len(kf.rewritten):
-        # Keys at gimbal lock written as the same rotation on the path's branch: the record's signature
-        # is of the keys as written (float32, as Blender stores them).
-        values = keys.values.copy()
-        values[kf.rewritten] = np.asarray(kf.key_values[kf.rewritten], np.float32)
-        keys = replace(keys, values=values)
     channels, generated = [], 0
     for ch in fitted.channels:
         types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
@@ -537,19 +531,11 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
 
 
 def euler_notes(keys, kf):
-    """What the fit did to Euler keys: keys at gimbal lock written as the equivalent triple that
-    continues the path (same rotation, same frame), and changes of branch between keys."""
-    out = []
-    for k in kf.rewritten:
-        out.append("%s: the key at frame %g sits at gimbal lock; written as (%s)° (the same rotation, on the "
-                   "path's Euler branch; was (%s)°)" % (
-                       keys.name, keys.frames[k], ", ".join("%.2f" % math.degrees(v) for v in kf.key_values[k]),
-                       ", ".join("%.2f" % math.degrees(v) for v in keys.values[k])))
-    for segment, frame in kf.switches:
-        out.append("%s: between the keys at frames %g and %g the method's path reaches the next key on another "
-                   "Euler branch; the channels change branch at frame %.3f" % (
-                       keys.name, keys.frames[segment], keys.frames[segment + 1], frame))
-    return out
+    """Where the Euler channels change branch between keys (beside a key at gimbal lock, or nearest
+    the lock), one note each."""
+    return ["%s: between the keys at frames %g and %g the method's path reaches the second key on another "
+            "Euler branch; the channels change branch at frame %.3f" % (
+                keys.name, keys.frames[segment], keys.frames[segment + 1], frame) for segment, frame in kf.switches]
 
 
 def write_plan(plan, target):

@@ -303,16 +303,6 @@ reaches (emulated), above `tolerance` only where no key could be inserted.)doc")
         .def_property_readonly("forced", [](const KeyFit& f) { return index_array(f.forced); },
                                "each key's index in times (int64)")
         .def_readonly("keys", &KeyFit::keys, "the fitted keys (ReducedKeys; max_error is at `times` only)")
-        .def_property_readonly("key_values",
-                               [](const KeyFit& f) {
-                                   const std::size_t K = f.forced.size(), C = K ? f.key_values.size() / K : 0;
-                                   DArray a({static_cast<py::ssize_t>(K), static_cast<py::ssize_t>(C)});
-                                   std::copy(f.key_values.begin(), f.key_values.end(), a.mutable_data());
-                                   return a;
-                               },
-                               "(K, C) the keys as written: Euler keys at gimbal lock may be rewritten (same rotation)")
-        .def_property_readonly("rewritten", [](const KeyFit& f) { return index_array(f.rewritten); },
-                               "indices of the keys whose Euler values were rewritten")
         .def_property_readonly("switches",
                                [](const KeyFit& f) {
                                    py::list out;
@@ -345,8 +335,8 @@ call without the GIL: a KeyFit.
 key_frames: (K,) increasing, K >= 2; key_values: (K, 4|3|4) channel values of `mode` ('QUATERNION', an
 Euler order, 'AXIS_ANGLE') as the fit writes them (quaternion keys with the sign the curve reaches them
 with); tolerance: radians, > 0. The channel values between keys follow the curve and join the keys
-(quaternions scaled by the keys' norms, Euler angles continuous, a key at gimbal lock rewritten where
-the path needs it, axis-angle by axis_angle_span with the axis length interpolated); fit_keys inserts
+(quaternions scaled by the keys' norms, Euler angles continuous with one change of branch where the
+path needs it, beside a key at gimbal lock or nearest the lock, axis-angle by axis_angle_span with the axis length interpolated); fit_keys inserts
 as few BEZIER keys as 90% of `tolerance` needs, min_gap frames from the keys; then the playback is
 proved against the curve at every instant between the first and the last key (KeyFit.proof), and
 the times that fail become samples of another round.)doc");

