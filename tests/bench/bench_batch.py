@@ -17,6 +17,7 @@ equal apart from timings, or the benchmark stops.
 Run with the Blender whose workers you want to measure:
   blender -b --factory-startup --python tests/bench/bench_batch.py -- [--clips 200] [--per-file-clips N]
   ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_batch.py [--clips 200]
+`--smoke` (tests/bench/smoke.py): the same four runs on 2 clips.
 """
 
 import argparse
@@ -34,6 +35,10 @@ import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+
+import smoke  # noqa: E402
+
 ADDON_DIR = os.path.join(ROOT, "addon")
 SCRIPT = os.path.join(ADDON_DIR, "quatcurve_blender", "batch.py")
 MOCAP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap"))
@@ -113,13 +118,13 @@ def without_timings(records):
 
 
 def main():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--clips", type=int, default=200)
+    p.add_argument("--clips", type=int, default=2 if smoke.SMOKE else 200)
     p.add_argument("--per-file-clips", type=int, default=None,
                    help="clips for the one-process-per-file runs (default: all)")
     p.add_argument("--keep", metavar="DIR", help="build the library and outputs here and keep them")
-    args = p.parse_args(argv)
+    p.add_argument("--smoke", action="store_true", help="the smallest run (tests/bench/smoke.py)")
+    args = p.parse_args(smoke.script_args())
     if not os.path.isdir(MOCAP):
         print("skipped: %s is absent (the shared mocap clips)" % os.path.relpath(MOCAP, ROOT))
         return 0
@@ -185,8 +190,4 @@ def clip_mb(path):
 
 
 if __name__ == "__main__":
-    code = main()
-    sys.stdout.flush()
-    if "--" in sys.argv:
-        sys.exit(code)
-    os._exit(code)
+    smoke.run(main)

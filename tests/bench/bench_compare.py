@@ -10,6 +10,7 @@ every engine method, Blender's modes) and each stage is timed as the CLI runs it
 (compare.compare), the plots drawn (plot.py), the image datablocks saved as PNG by Blender and packed
 (compare.save_plots), and the JSON report (compare.write_report). Then the same targets are baked with SPLINE_C2, as
 the demo's last bake. Target: the whole comparison ≤ 3 s. Not a timed test: it only prints.
+`--smoke` (tests/bench/smoke.py): the same stages once, one sample per frame.
 """
 
 import os
@@ -22,11 +23,14 @@ import bpy
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "build_scripts"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
 
 import demo_scene  # noqa: E402
+import smoke  # noqa: E402
 from quatcurve_blender import bake, compare, targets  # noqa: E402
 
 DEFAULT_BVH = os.path.join(os.path.dirname(ROOT), "shared", "data", "mocap", "mocapbank.bvh")
+SUBFRAMES = 1 if smoke.SMOKE else 4
 
 
 def timed(label, timings, function, *args):
@@ -45,7 +49,8 @@ def main(bvh):
     found = targets.animated_targets(bpy.context.scene.objects)
 
     timings = []
-    report = timed("metrics (compare.compare)", timings, compare.compare, found, compare.CompareSettings(subframes=4))
+    report = timed("metrics (compare.compare)", timings, compare.compare, found,
+                   compare.CompareSettings(subframes=SUBFRAMES))
     timed("plots drawn (plot.py)", timings, lambda: [t.render_plot() for t in report.targets])
     report_path = os.path.join(folder, "report.json")
     timed("images + PNGs (save_plots)", timings, compare.save_plots, report, report_path)
@@ -57,9 +62,10 @@ def main(bvh):
     result = bake.bake(found, bake.BakeSettings(method="SPLINE_C2"))
     baked, baked_cpu = time.perf_counter() - begin, time.process_time() - cpu
 
-    print("bench_compare: Blender %s, %d targets (%s), %d sources, samples every 1/4 frame; files in %s"
+    print("bench_compare: Blender %s, %d targets (%s), %d sources, samples every 1/%d frame; files in %s"
           % (bpy.app.version_string, len(report.targets), "with motion capture" if os.path.exists(bvh)
-             else "no motion capture: %s missing" % bvh, sum(len(t.sources) for t in report.targets), folder))
+             else "no motion capture: %s missing" % bvh, sum(len(t.sources) for t in report.targets), SUBFRAMES,
+             folder))
     print("  %-34s %9s %9s" % ("", "wall", "CPU"))
     for label, seconds, cpu in timings:
         print("  %-34s %7.3f s %7.3f s" % (label, seconds, cpu))
@@ -70,6 +76,5 @@ def main(bvh):
 
 
 if __name__ == "__main__":
-    argv = sys.argv  # Blender's binary: its own options, then "--" and ours; the bpy module: the script's
-    args = argv[argv.index("--") + 1:] if "--" in argv else (argv[1:] if argv[0].endswith(".py") else [])
-    main(os.path.abspath(args[0]) if args else DEFAULT_BVH)
+    paths = [a for a in smoke.script_args() if a != "--smoke"]
+    smoke.run(main, os.path.abspath(paths[0]) if paths else DEFAULT_BVH)

@@ -11,7 +11,8 @@ Scenes (pose bones: Rigify's converter handles pose bones, Euler <-> quaternion 
 - "mocap": ../shared/data/mocap/mocapbank.bvh through Blender's BVH importer (Euler keys on every frame,
   the file's rotation orders) -> QUATERNION (skipped when the file is absent).
 Each scene is saved, converted by quatcurve.convert, reopened, converted by Rigify; the F-curves are
-grouped by bone (Rigify finds channels by group only).
+grouped by bone (Rigify finds channels by group only). `--smoke` (tests/bench/smoke.py): the same
+scenes, sampled and converted at every frame only (no subframes).
 """
 
 import math
@@ -27,12 +28,15 @@ from mathutils import Euler, Quaternion
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "build_scripts"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
 
 import quatcurve_blender  # noqa: E402
+import smoke  # noqa: E402
 from quatcurve_blender import fcurves  # noqa: E402
 
 MOCAP = os.path.join(os.path.dirname(ROOT), "shared", "data", "mocap", "mocapbank.bvh")
 TOL = 0.05
+SUBFRAMES = 1 if smoke.SMOKE else 4
 
 
 def rig_with(bone_modes):
@@ -128,7 +132,7 @@ def run_scene(label, build, mode, folder):
     rig = build()
     action = fcurves.active_action(rig)
     frames = [r for r in action.frame_range]
-    times = np.arange(math.ceil(frames[0]) * 4, math.floor(frames[1]) * 4 + 1) / 4.0
+    times = np.arange(math.ceil(frames[0]) * SUBFRAMES, math.floor(frames[1]) * SUBFRAMES + 1) / SUBFRAMES
     names = {pb.name for pb in rig.pose.bones if pb.rotation_mode != mode}
     before = played(rig, times)
     keys_before = rotation_keys(rig)
@@ -139,9 +143,9 @@ def run_scene(label, build, mode, folder):
     try:
         select_all_bones(rig, names)
         start = time.perf_counter()
-        result = bpy.ops.quatcurve.convert(rotation_mode=mode, tolerance=TOL, subframes=4)
+        result = bpy.ops.quatcurve.convert(rotation_mode=mode, tolerance=TOL, subframes=SUBFRAMES)
         ours_s = time.perf_counter() - start
-        assert result == {"FINISHED"}
+        assert result == {"FINISHED"}, result
         ours = angles(played(rig, times), before)
         keys_ours = rotation_keys(rig)
     finally:
@@ -179,7 +183,7 @@ def run_scene(label, build, mode, folder):
 
 
 def main():
-    print("Blender %s, tolerance %g°, 4 subframes" % (bpy.app.version_string, TOL))
+    print("Blender %s, tolerance %g°, %d subframes" % (bpy.app.version_string, TOL, SUBFRAMES))
     with tempfile.TemporaryDirectory() as folder:
         run_scene("Euler Bezier", euler_scene, "QUATERNION", folder)
         run_scene("quaternion Bezier", quaternion_scene, "XYZ", folder)
@@ -190,4 +194,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    smoke.run(main)

@@ -15,6 +15,8 @@ quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapp
 
   blender -b --factory-startup --python tests/bench/bench_live.py
   ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_live.py
+
+`--smoke` (tests/bench/smoke.py): each case once, the big action cut to 3 bones x 100 frames.
 """
 import os
 import statistics
@@ -26,11 +28,14 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
 
 import quatcurve_blender  # noqa: E402
+import smoke  # noqa: E402
 from quatcurve_blender import fcurves, fit, live, native, targets  # noqa: E402
 
-REPEAT = 7
+REPEAT = 1 if smoke.SMOKE else 7
+BIG_BONES, BIG_FRAMES = (3, 100) if smoke.SMOKE else (100, 1000)
 NATIVE = [0.0]
 
 
@@ -109,6 +114,7 @@ def measure(label, rig, bone_names, change=True, expect=None):
         t = time.perf_counter()
         bpy.context.view_layer.update()
         total = time.perf_counter() - t
+        assert not live.STATS.errors, (label, live.STATS)
         if expect is not None:
             assert live.STATS.refits == expect, (label, live.STATS)
         rows.append((total, dict(live.STATS.seconds), NATIVE[0], live.STATS.checks, live.STATS.refits))
@@ -130,7 +136,7 @@ def main():
     real_require = native.require
     settings = fit.FitSettings(method="SQUAD", tolerance=0.05, subframes=4)
     one = build_rig("One", 1, 491, 10)  # 50 keys
-    big = build_rig("Big", 100, 1000, 10)  # 100 keys per bone
+    big = build_rig("Big", BIG_BONES, BIG_FRAMES, 10)  # a key every 10 frames (100 per bone in a full run)
     t = time.perf_counter()
     first = fit.fit([targets.Target(one, pb.name) for pb in one.pose.bones], settings)
     t1 = time.perf_counter()
@@ -144,15 +150,13 @@ def main():
     native.require = lambda: _Timed(real_require())
     try:
         measure("1 bone x 50 keys, 1 key changed", one, ["B000"], expect=1)
-        measure("100 bones, 1 key of 1 bone", big, ["B042"], expect=1)
-        measure("100 bones, 1 key of every bone", big, [pb.name for pb in big.pose.bones], expect=100)
-        measure("100 bones, a location key", big, [], change=False, expect=0)
+        measure("%d bones, 1 key of 1 bone" % BIG_BONES, big, ["B%03d" % (42 % BIG_BONES)], expect=1)
+        measure("%d bones, 1 key of every bone" % BIG_BONES, big, [pb.name for pb in big.pose.bones],
+                expect=BIG_BONES)
+        measure("%d bones, a location key" % BIG_BONES, big, [], change=False, expect=0)
     finally:
         native.require = real_require
     quatcurve_blender.unregister()
 
 
-main()
-sys.stdout.flush()
-if not bpy.app.binary_path:
-    os._exit(0)  # the bpy module can hang in its exit-time destructors
+smoke.run(main)

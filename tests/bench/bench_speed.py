@@ -5,6 +5,8 @@
     ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_speed.py
     … -- --repeat 5 --profile     (more runs; cProfile of one bake and one reduce, by own time)
     … -- --threads 1              (worker threads of bake and reduce; default one per core)
+    … -- --smoke                  (tests/bench/smoke.py: 2 bones x 101 frames, one run, nla.bake
+                                   over 20 frames, 1 MiB settled, the profiles printed)
 
 Everything on one rig (tests/blender/rigs.py): 100 bones keyed (quaternions) every 10 frames over
 10,000 frames. Each measurement runs `--repeat` times (default 3), interleaved, and the best counts:
@@ -53,22 +55,25 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import bake, fcurves, native, reduce, workers  # noqa: E402
 import rigs  # noqa: E402
+import smoke  # noqa: E402
 
-BONES = 100
-LAST_FRAME = 10_000
+BONES = 2 if smoke.SMOKE else 100
+LAST_FRAME = 100 if smoke.SMOKE else 10_000
+NLA_FRAMES = 20 if smoke.SMOKE else 300
 KEY_EVERY = 10
 CLIPS = ("mocapbank.bvh", "freebvh.bvh")
 
 
 def options():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    repeat = int(argv[argv.index("--repeat") + 1]) if "--repeat" in argv else 3
+    argv = smoke.script_args()
+    repeat = int(argv[argv.index("--repeat") + 1]) if "--repeat" in argv else (1 if smoke.SMOKE else 3)
     threads = int(argv[argv.index("--threads") + 1]) if "--threads" in argv else None
-    return repeat, "--profile" in argv, threads
+    return repeat, "--profile" in argv or smoke.SMOKE, threads
 
 
 def clear_scene():
@@ -105,7 +110,7 @@ def release_free_memory():
 
 
 # Memory touched once before each timed stage (see settle_memory).
-SETTLE_BYTES = 1 << 30
+SETTLE_BYTES = 1 << 20 if smoke.SMOKE else 1 << 30
 
 
 def settle_memory():
@@ -212,11 +217,11 @@ def run_limit(rig, original, arrays, ipo, n):
 
 def run_nla_bake():
     clear_scene()
-    rigs.build_rig("Theirs", 300, 2, BONES, KEY_EVERY)
+    rigs.build_rig("Theirs", NLA_FRAMES, 2, BONES, KEY_EVERY)
     bpy.context.view_layer.update()
-    seconds, _ = timed(lambda: bpy.ops.nla.bake(frame_start=0, frame_end=299, step=1, only_selected=True,
-                                                visual_keying=True, bake_types={"POSE"}))
-    return seconds, BONES * 300
+    seconds, _ = timed(lambda: bpy.ops.nla.bake(frame_start=0, frame_end=NLA_FRAMES - 1, step=1,
+                                                only_selected=True, visual_keying=True, bake_types={"POSE"}))
+    return seconds, BONES * NLA_FRAMES
 
 
 def mocap_key_counts():
@@ -346,7 +351,7 @@ def main():
             ("limit (add + foreach_set co, ipo)", limit_s, limits),
             ("limit + new action + scene update", updated_s, updated_limits),
             ("reduce (0.1 deg, BEZIER per channel)", reduce_s, reduces),
-            ("nla.bake, %d bones x 300 frames" % BONES, theirs_s, [theirs_s]))
+            ("nla.bake, %d bones x %d frames" % (BONES, NLA_FRAMES), theirs_s, [theirs_s]))
     for name, best, runs in rows:
         print("  %-34s %9.3f   %s" % (name, best, " ".join("%.3f" % r for r in runs)))
     print("  bake / limit:         %.2f   (target <= 1.2; the limit's keys written, not yet evaluated, "
@@ -370,4 +375,4 @@ def main():
     quatcurve_blender.unregister()
 
 
-main()
+smoke.run(main)
