@@ -9,6 +9,8 @@
 // Prints per key set a table of M samples/s and the ratios, then the targets: SLERP ≥ 8×
 // glm::slerp, SQUAD ≥ 8× glm::squad, SPLINE_C2 ≥ 100 M samples/s. Timings on a shared machine are
 // noisy: compare ratios within one run, and repeat.
+// `bench_curve --smoke`: 20 keys, every call timed once (every code path, no meaningful time; CTest's
+// bench.smoke.bench_curve.cpp).
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtx/quaternion.hpp>
 
@@ -28,10 +30,17 @@ using namespace quatcurve;
 
 namespace {
 
+bool smoke = false;  // --smoke: each call timed once
+
 // ---- timing: best of several runs of at least ~50 ms each -------------------------------------------
 double seconds_per_call(const std::function<void()>& f) {
     using clock = std::chrono::steady_clock;
     f();  // warm up
+    if (smoke) {
+        const auto t0 = clock::now();
+        f();
+        return std::chrono::duration<double>(clock::now() - t0).count();
+    }
     int reps = 1;
     for (;;) {
         const auto t0 = clock::now();
@@ -319,8 +328,15 @@ void run_case(const char* title, const std::vector<double>& kt, const std::vecto
 
 }  // namespace
 
-int main() {
-    const std::size_t K = 1000;
+int main(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i) {
+        if (std::string(argv[i]) != "--smoke") {
+            std::fprintf(stderr, "usage: %s [--smoke]\n", argv[0]);
+            return 2;
+        }
+        smoke = true;
+    }
+    const std::size_t K = smoke ? 20 : 1000;
     std::vector<double> kt(K);
     for (std::size_t i = 0; i < K; ++i) kt[i] = static_cast<double>(i);
     std::mt19937_64 rng(12345);

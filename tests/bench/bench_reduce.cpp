@@ -1,10 +1,13 @@
 // Key reduction speed in C++: 100 bones × 10,000 frames of smooth motion (a random walk of keys
 // every 10 frames, Catmull-Rom in rotation-vector space, dense samples), reduced at 0.1° with each
-// variant. Prints seconds for the whole rig and the share of keys kept. Built, not run by ctest.
+// variant. Prints seconds for the whole rig and the share of keys kept.
+// `bench_reduce --smoke`: 2 bones × 200 frames (every code path, no meaningful time; CTest's
+// bench.smoke.bench_reduce.cpp).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "quatcurve/quat.hpp"
@@ -47,9 +50,17 @@ Bone make_bone(std::mt19937_64& rng, std::size_t frames, std::size_t every) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+    bool smoke = false;
+    for (int i = 1; i < argc; ++i) {
+        if (std::string(argv[i]) != "--smoke") {
+            std::fprintf(stderr, "usage: %s [--smoke]\n", argv[0]);
+            return 2;
+        }
+        smoke = true;
+    }
     std::mt19937_64 rng(7);
-    const std::size_t bones = 100, frames = 10000;
+    const std::size_t bones = smoke ? 2 : 100, frames = smoke ? 200 : 10000;
     std::vector<Bone> rig;
     for (std::size_t b = 0; b < bones; ++b) rig.push_back(make_bone(rng, frames, 10));
     const double tol = 0.1 * M_PI / 180.0;
