@@ -108,9 +108,18 @@ bool segment_controls(const FCurveKeys& ch, std::size_t j, double x[4], double y
 // hodographs' control values over the curve parameters of [a, b] (the whole segment when Blender's
 // root finder finds none); y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
 void bezier_bounds(const double x[4], const double y[4], double a, double b, double& rate, double& curvature) {
-    double u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-    double u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-    if (u0 < 0.0 || u1 < 0.0 || u0 > u1) {
+    double u0, u1;
+    const double len = x[3] - x[0];
+    if (std::fabs(x[1] - (x[0] + len / 3.0)) <= 1e-5 * len && std::fabs(x[2] - (x[0] + 2.0 * len / 3.0)) <= 1e-5 * len) {
+        // Handles at thirds (the fit's and the reducer's, up to float32): x(u) is within 1e-5·len of
+        // x0 + u·len with slope within 3e-5 of len, so the parameters are within 1e-4 of the linear ones.
+        u0 = (a - x[0]) / len - 1e-4;
+        u1 = (b - x[0]) / len + 1e-4;
+    } else {
+        u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+        u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+    }
+    if (u0 < -1e-3 || u1 < -1e-3 || u0 > u1) {
         u0 = 0.0;
         u1 = 1.0;
     }
@@ -327,13 +336,11 @@ std::vector<double> PlaybackMotion::breaks() const {
     return out;
 }
 
-double PlaybackMotion::jump_bound(double t0, double t1) const {
+double PlaybackMotion::jump_bound(double t0, double t1, double speed) const {
     // Frames are float32: Blender evaluates at float(t), within half an ulp (≤ |t|·2⁻²⁴) of t. (The
     // snap to a key within 1e-4 of it is a step at frames that are breaks: prove_within evaluates
     // both sides of it.)
-    double speed, accel;
     const double ulp = std::fmax(std::fabs(t0), std::fabs(t1)) * std::ldexp(1.0, -23) + 1e-30;
-    bounds(t0, t1, speed, accel);
     return speed * 2.0 * ulp;
 }
 
@@ -396,7 +403,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
                                                   p1.qa.y - sigma * p1.qb.y, p1.qa.z - sigma * p1.qb.z));
         const double chord = std::fmax(c0, c1) + (aa + ab) * h * h / 8.0;
         const double second = chord < 2.0 ? 4.0 * std::asin(0.5 * chord) : HUGE_VAL;
-        return std::fmin(first, second) + a.jump_bound(p0.t, p1.t) + b.jump_bound(p0.t, p1.t) + kArithmeticSlack;
+        return std::fmin(first, second) + a.jump_bound(p0.t, p1.t, va) + b.jump_bound(p0.t, p1.t, vb) + kArithmeticSlack;
     };
     std::vector<std::pair<Point, Point>> stack;
     Point prev = evaluate(times.front());

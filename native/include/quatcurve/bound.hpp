@@ -51,8 +51,9 @@ public:
     // Upper bounds of |ω| (radians per frame) and |q̈| (per frame²) at every time in [t0, t1], t0 ≤ t1
     // (a corner at a break inside the interval is not covered: prove_within splits there).
     virtual void bounds(double t0, double t1, double& speed, double& accel) const = 0;
-    // An upper bound of the angle of the steps the motion takes inside [t0, t1] (0: continuous).
-    virtual double jump_bound(double /*t0*/, double /*t1*/) const { return 0.0; }
+    // An upper bound of the angle of the steps the motion takes inside [t0, t1] (0: continuous),
+    // given its speed bound there.
+    virtual double jump_bound(double /*t0*/, double /*t1*/, double /*speed*/) const { return 0.0; }
     // The times where the motion may turn a corner, sorted.
     virtual std::vector<double> breaks() const { return {}; }
 };
@@ -81,7 +82,7 @@ public:
     PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolation interpolation, const RotationMode& mode);
     Quat at(double t) const override;
     void bounds(double t0, double t1, double& speed, double& accel) const override;
-    double jump_bound(double t0, double t1) const override;
+    double jump_bound(double t0, double t1, double speed) const override;
     std::vector<double> breaks() const override;  // every channel's key frames
     // The channel values Blender shows at t (channel_count(mode) of them).
     void values(double t, double* out) const;
