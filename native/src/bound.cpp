@@ -51,8 +51,20 @@ PlaybackMotion::PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolatio
 }
 
 void PlaybackMotion::values(double t, double* out) const {
+    // The proof asks for each interval end several times (the angle there, then the bounds of the
+    // intervals on either side): the last few frames are kept.
     const float frame = static_cast<float>(t);
-    for (std::size_t c = 0; c < channels_.size(); ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    const std::size_t C = channels_.size();
+    for (const Cached& c : cache_)
+        if (c.frame == frame && c.valid) {
+            std::copy(c.values, c.values + C, out);
+            return;
+        }
+    for (std::size_t c = 0; c < C; ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    Cached& slot = cache_[next_++ % kCache];
+    slot.frame = frame;
+    slot.valid = true;
+    std::copy(out, out + C, slot.values);
 }
 
 Quat PlaybackMotion::at(double t) const {

@@ -91,6 +91,15 @@ public:
     void channel_bounds(std::size_t c, double t0, double t1, double& rate, double& curvature) const;
 
 private:
+    // Channel values of the last few frames evaluated (values): not thread-safe, one proof at a time.
+    static constexpr std::size_t kCache = 8;
+    struct Cached {
+        float frame = 0.0f;
+        bool valid = false;
+        double values[4] = {0.0, 0.0, 0.0, 0.0};
+    };
+    mutable Cached cache_[kCache];
+    mutable std::size_t next_ = 0;
     // |d(a + sign·c)/dt| bound of channels a and c on [t0, t1] where they share one Bezier segment.
     bool combined_rate(std::size_t a, std::size_t c, double sign, double t0, double t1, double& rate) const;
     // The Euler speed bound that sees the first and last axes align near gimbal lock (bound.cpp).
