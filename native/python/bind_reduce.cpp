@@ -101,6 +101,49 @@ py::object linear_or_full(const ReducedKeys& r, bool synchronized, bool detailed
     return per_channel;
 }
 
+// One F-curve's keys from (frames, values) or (frames, values, handle_left, handle_right): 1-D
+// frames and values, (K, 2) handles (None for LINEAR). Named "channels[c]" in messages; the keys
+// themselves are checked by the native side (check_fcurve_keys).
+FCurveKeys read_fcurve_keys(py::handle item, std::size_t c) {
+    const std::string name = "channels[" + std::to_string(c) + "]";
+    if (!py::isinstance<py::sequence>(item) || py::isinstance<py::str>(item))
+        throw py::type_error(name + ": expected (frames, values[, handle_left, handle_right])");
+    const py::sequence parts = py::reinterpret_borrow<py::sequence>(item);
+    if (parts.size() != 2 && parts.size() != 4)
+        throw py::value_error(name + ": expected (frames, values[, handle_left, handle_right]), got " +
+                              std::to_string(parts.size()) + " items");
+    FCurveKeys keys;
+    keys.frames = read_times(parts[0]);
+    const std::vector<double> values = read_times(parts[1]);
+    if (values.size() != keys.frames.size())
+        throw py::value_error(name + ": " + std::to_string(values.size()) + " values for " +
+                              std::to_string(keys.frames.size()) + " frames");
+    keys.values = values;
+    for (std::size_t side = 0; parts.size() == 4 && side < 2; ++side) {
+        if (parts[2 + side].is_none()) continue;
+        const Batch h = as_batch(parts[2 + side], {2}, side ? "handle_right" : "handle_left");
+        if (h.batch_shape.size() != 1 || h.count != keys.frames.size())
+            throw py::value_error(name + (side ? ".handle_right" : ".handle_left") + ": expected shape (" +
+                                  std::to_string(keys.frames.size()) + ", 2), got " + shape_string(h.array));
+        (side ? keys.handle_right : keys.handle_left).assign(h.data(), h.data() + 2 * h.count);
+    }
+    return keys;
+}
+
+std::vector<double> read_channel_rows(py::handle values, const RotationMode& mode, std::size_t n) {
+    const Batch v = read_rows(values, static_cast<py::ssize_t>(channel_count(mode)), "values", n);
+    return std::vector<double>(v.data(), v.data() + v.count * channel_count(mode));
+}
+
+DArray pairs_array(const std::vector<std::pair<double, double>>& v) {
+    DArray a({static_cast<py::ssize_t>(v.size()), static_cast<py::ssize_t>(2)});
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        a.mutable_data()[2 * i] = v[i].first;
+        a.mutable_data()[2 * i + 1] = v[i].second;
+    }
+    return a;
+}
+
 }  // namespace
 
 void bind_reduce(py::module_& m) {
@@ -359,6 +402,81 @@ the times that fail become samples of another round.)doc");
 `mode`) stays within `tolerance` radians of `curve` at every time from times[0] to times[-1]: the
 angle at `times` (sorted), and between them a bound from both motions' speed bounds, halving
 intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
+
+    py::class_<ProvedKeys>(m, "ProvedKeys",
+                           "Result of reduce_keys_proved and reduce_curve_proved: the reduced keys and the proof "
+                           "of their playback against the reference at every instant (reduce.hpp)")
+        .def_readonly("keys", &ProvedKeys::keys, "the reduced keys (ReducedKeys; max_error is at `times` only)")
+        .def_readonly("proof", &ProvedKeys::proof,
+                      "PlaybackBound of the reduced keys' playback against the reference over every proved span")
+        .def_property_readonly("excluded", [](const ProvedKeys& r) { return pairs_array(r.excluded); },
+                               "(M, 2) sample intervals left out of the proof: the original's own quaternion sign "
+                               "flips, where Blender swings through them and the reduction takes the short way")
+        .def_property_readonly("times", [](const ProvedKeys& r) { return vector_array(r.times); },
+                               "the samples of the last reduction: the given ones and those added (midpoints and the "
+                               "proof's failing times; never keys)")
+        .def_readonly("rounds", &ProvedKeys::rounds, "reductions made (1: the first was proved)")
+        .def("__repr__", [](const ProvedKeys& r) {
+            return std::string("<ProvedKeys ") + std::to_string(r.keys.key_count()) + " keys, " +
+                   (r.proof.proven() ? "proven" : "NOT proven") + ", bound " + std::to_string(r.proof.bound) +
+                   " rad, " + std::to_string(r.excluded.size()) + " excluded, " + std::to_string(r.rounds) +
+                   " rounds>";
+        });
+
+    m.def(
+        "reduce_keys_proved",
+        [](py::sequence channels, const std::string& channel_interpolation, const std::string& mode_name,
+           py::handle times, py::handle values, double tolerance, const std::string& interpolation,
+           bool synchronized) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const KeyInterpolation original_ipo = parse_key_interpolation(channel_interpolation);
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            std::vector<FCurveKeys> original;
+            for (std::size_t c = 0; c < channels.size(); ++c) original.push_back(read_fcurve_keys(channels[c], c));
+            const std::vector<double> t = read_times(times);
+            const std::vector<double> v = read_channel_rows(values, mode, t.size());
+            py::gil_scoped_release release;
+            return reduce_keys_proved(original, original_ipo, mode, t, v, tolerance, ipo, synchronized);
+        },
+        py::arg("channels"), py::arg("channel_interpolation"), py::arg("mode"), py::arg("times"), py::arg("values"),
+        py::arg("tolerance"), py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+        R"doc(Reduce a rotation's samples and prove the reduced keys against the original keys' own playback at
+every instant, in one call without the GIL: a ProvedKeys.
+
+channels: the original F-curves of `mode` ('QUATERNION', an Euler order, 'AXIS_ANGLE'), one per channel
+in order, each (frames, values) or (frames, values, handle_left, handle_right) as Blender stores them
+(handles (K, 2) absolute (frame, value), required for BEZIER); channel_interpolation: 'LINEAR' or
+'BEZIER', of every segment of every channel. times: (N,) increasing frames; values: (N, C) Blender's
+evaluation of the channels there (quaternions are made hemisphere-continuous first); tolerance:
+radians, >= 0.
+
+The samples are reduced as reduce_keys* does at 90% of `tolerance`; Blender's playback of the result
+is proved against the original's playback (blender_evaluate) at every time from times[0] to
+times[-1] (prove_playback's method); the times that fail become samples of another reduction (the
+original's values there), up to 8 reductions. Left out of the proof: the sample intervals where the
+original's quaternion channels flip sign (ProvedKeys.excluded), where Blender swings through the flip
+and the reduction takes the short way. Tolerance 0 keeps every sample and proves nothing between them
+(bound inf).)doc");
+
+    m.def(
+        "reduce_curve_proved",
+        [](const Curve& curve, const std::string& mode_name, py::handle times, py::handle values, double tolerance,
+           const std::string& interpolation, bool synchronized) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const KeyInterpolation ipo = parse_key_interpolation(interpolation);
+            const std::vector<double> t = read_times(times);
+            const std::vector<double> v = read_channel_rows(values, mode, t.size());
+            py::gil_scoped_release release;
+            return reduce_curve_proved(curve, mode, t, v, tolerance, ipo, synchronized);
+        },
+        py::arg("curve"), py::arg("mode"), py::arg("times"), py::arg("values"), py::arg("tolerance"),
+        py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+        R"doc(Reduce samples of `curve` and prove the reduced keys against the curve at every instant: a
+ProvedKeys (as reduce_keys_proved, the reference being the curve; nothing is excluded).
+
+times: (N,) increasing frames; values: (N, C) the curve's rotations there as channel values of `mode`
+(quats_to_channels, with any reference; kept as given, quaternions made hemisphere-continuous); a
+sample the proof adds takes the curve's rotation as channel values continuous with the sample before.)doc");
 
     py::class_<SlerpKeys>(m, "SlerpKeys", "Result of reduce_slerp: the kept samples as glTF LINEAR (slerp) keys.")
         .def_property_readonly("indices", [](const SlerpKeys& r) { return index_array(r.indices); },

@@ -30,7 +30,7 @@ std::size_t ReducedKeys::key_count() const {
 
 using namespace reduce_impl;
 
-namespace {
+namespace reduce_impl {
 
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized) {
     check_tolerance(tolerance);
@@ -117,7 +117,7 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     return best;
 }
 
-}  // namespace
+}  // namespace reduce_impl
 
 ReducedKeys reduce_keys(const std::vector<double>& times, const std::vector<Quat>& quats,
                         double tolerance, KeyInterpolation interpolation, bool synchronized) {

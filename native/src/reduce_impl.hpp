@@ -335,4 +335,11 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
                                               const std::vector<std::vector<int>>& groups,
                                               double& max_error);
 
+// ---- the whole reduction (reduce.cpp) --------------------------------------------------------------
+
+// The keys of Problem p (its forced and candidate samples as set) within `tolerance`: the stages
+// above, synchronized and (unless `synchronized`) per channel, the fewer keys kept. fit_keys* call it;
+// so does reduce_proved.cpp, whose samples added by the proof are candidates of no key.
+ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized);
+
 }  // namespace quatcurve::reduce_impl

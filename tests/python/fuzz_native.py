@@ -42,7 +42,8 @@ import quatcurve as qc
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
-                 "fit_through_keys": 0.5}  # slower targets: fewer examples
+                 "fit_through_keys": 0.5,
+                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -1678,6 +1679,163 @@ def build_prove_playback(fn, d):
     return Case(lambda: fn(*args, **kwargs), 4 * len(times), check, must_fail, 0, (args, kwargs))
 
 
+def playback_quats(channels, interpolation, mode, ts):
+    """Blender's rotation (N, 4) from F-curves [(frames, values, handle_left, handle_right)] at ts, by
+    the emulation (a zero quaternion is (0, 1, 0, 0), a zero axis no rotation, as Blender builds them)."""
+    vals = np.stack([qc.blender_evaluate(c[0], c[1], ts, interpolation,
+                                         c[2] if interpolation == "BEZIER" else None,
+                                         c[3] if interpolation == "BEZIER" else None) for c in channels], 1)
+    if mode == "AXIS_ANGLE":
+        zero = np.all(vals[:, 1:] == 0, axis=1)
+        vals[zero, 0], vals[zero, 1] = 0.0, 1.0
+    if mode == "QUATERNION":
+        vals[np.all(vals == 0, axis=1), 1] = 1.0
+    return qc.channels_to_quats(vals, mode)
+
+
+def proved_keys_checks(out, tol, mode, interpolation_out, reference, t0, t1, excluded, rng):
+    """What every ProvedKeys must hold: its lists and verdict agree, and Blender's playback of its keys
+    (emulated at 2000 even and 1000 random times) is nowhere above the proved bound outside
+    `excluded`; tolerance 0 proves nothing (bound inf)."""
+    expect(type(out).__name__ == "ProvedKeys", f"result {type(out).__name__}")
+    keys, proof = out.keys, out.proof
+    expect(len(keys.channels) == _channel_count(mode), f"{len(keys.channels)} channels")
+    expect(keys.interpolation == interpolation_out, f"interpolation {keys.interpolation}")
+    finite(keys.max_error, "max_error")
+    expect(proof.proven == (len(proof.violations) == 0 and len(proof.unproven) == 0), "proven disagrees with the lists")
+    expect(np.array_equal(out.excluded, excluded), lambda: f"excluded {out.excluded!r}, expected {excluded!r}")
+    expect(out.times.ndim == 1 and np.all(np.diff(out.times) > 0), "times not increasing")
+    expect(1 <= out.rounds <= 8, f"{out.rounds} rounds")
+    repr(out)
+    if tol == 0:
+        expect(math.isinf(proof.bound) and not proof.proven, "tolerance 0 proved something")
+        return
+    finite(proof.bound, "bound")
+    expect(proof.bound >= proof.max_evaluated, "bound below an evaluated angle")
+    if t1 <= t0:
+        return
+    ts = np.sort(np.concatenate([np.linspace(t0, t1, 2001), rng.uniform(t0, t1, 1000)]))
+    inside = np.zeros(len(ts), dtype=bool)
+    for a, b in excluded:
+        inside |= (ts > a) & (ts < b)
+    ts = ts[~inside]
+    got = playback_quats([(c.frames, c.values, c.handle_left, c.handle_right) for c in keys.channels],
+                         keys.interpolation, mode, ts)
+    dense = np_angle(got, reference(ts))
+    expect(dense.max() <= proof.bound + 1e-6,
+           f"dense evaluation {dense.max()!r} rad at frame {ts[dense.argmax()]!r} above the proved {proof.bound!r}")
+
+
+def draw_original(d, mode):
+    """Original F-curves of `mode` keyed every 0.3-3 frames (smooth random walks; quaternions with
+    sign flips; BEZIER handles from calm to swinging) and the reducer's samples of them: (channels,
+    interpolation, times, values)."""
+    rng = d.rng
+    k = int(rng.integers(2, 40))
+    frames = (np.cumsum(rng.uniform(0.3, 3.0, k)) + rng.uniform(-50, 50)).astype(np.float32).astype(np.float64)
+    width = _channel_count(mode)
+    values = np.cumsum(rng.normal(0, 0.15, (k, width)), 0)
+    if mode == "QUATERNION":
+        values += [2.0, 0, 0, 0]
+        values *= np.where(rng.uniform(size=(k, 1)) < 0.1, -1.0, 1.0)  # stored signs that flip
+    elif mode == "AXIS_ANGLE":
+        values[:, 1:] += [0.3, 0.2, 1.0]
+    values = values.astype(np.float32).astype(np.float64)
+    interpolation = d.pick(("BEZIER", "BEZIER", "LINEAR"), "channel_interpolation")
+    swing = float(d.pick((0.0, 1.0, 4.0), "swing"))
+    channels = []
+    for c in range(width):
+        slope = np.gradient(values[:, c], frames) if k > 1 else np.zeros(k)
+        span = rng.uniform(0.05, 0.6, (k, 2)) * np.minimum(np.diff(frames, prepend=frames[0] - 1),
+                                                           np.diff(frames, append=frames[-1] + 1))[:, None]
+        lean = slope * swing + rng.normal(0, 0.05, k) * swing
+        handle_left = np.column_stack([frames - span[:, 0], values[:, c] - lean * span[:, 0]])
+        handle_right = np.column_stack([frames + span[:, 1], values[:, c] + lean * span[:, 1]])
+        channels.append((frames, values[:, c], handle_left.astype(np.float32).astype(np.float64),
+                         handle_right.astype(np.float32).astype(np.float64)))
+    times = qc.whole_frame_samples(frames)
+    sampled = np.stack([qc.blender_evaluate(c[0], c[1], times, interpolation, c[2] if interpolation == "BEZIER" else None,
+                                            c[3] if interpolation == "BEZIER" else None) for c in channels], 1)
+    return channels, interpolation, times, sampled
+
+
+def build_reduce_keys_proved(fn, d):
+    """reduce_keys_proved: random original F-curves of any mode (LINEAR or BEZIER, handles that swing
+    between keys, quaternion sign flips), reduced and proved against their own playback; the proof is
+    checked by dense evaluation of both (emulated), nowhere above the bound outside the excluded sign
+    flips, which are exactly the sample pairs in opposite hemispheres."""
+    rng = d.rng
+    mode = d.pick(("QUATERNION", "AXIS_ANGLE") + ORDERS, "mode")
+    channels, channel_ipo, times, values = draw_original(d, mode)
+    tol = float(d.pick((0.0, 1e-4, 1e-3, 0.01, 0.05), "tolerance"))
+    interpolation = d.pick(("BEZIER", "LINEAR"), "interpolation")
+    synchronized = d.pick((False, True), "synchronized")
+    excluded = np.zeros((0, 2))
+    if mode == "QUATERNION":
+        flip = np.flatnonzero(np.sum(values[1:] * values[:-1], axis=1) < 0)
+        t32 = times.astype(np.float32).astype(np.float64)
+        excluded = np.column_stack([t32[flip], t32[flip + 1]]).reshape(-1, 2)
+    form = d.pick(("ok",) * 6 + ("unsorted", "tolerance", "channels", "handles", "width", "junk"), "form")
+    args, must_fail = [channels, channel_ipo, mode, times, values, tol, interpolation, synchronized], ""
+    if form == "unsorted" and len(times) > 1:
+        args[3] = times[::-1].copy()
+        must_fail = "unsorted times"
+    elif form == "tolerance":
+        args[5] = d.pick((-1.0, NAN, INF), "bad_tolerance")
+        must_fail = f"tolerance {args[5]!r}"
+    elif form == "channels":
+        args[0] = channels[:-1]
+        must_fail = "a channel missing"
+    elif form == "handles" and channel_ipo == "BEZIER":
+        args[0] = [channels[0][:2] + (channels[0][2][:-1], channels[0][3])] + channels[1:]
+        must_fail = "a handle missing"
+    elif form == "width":
+        args[4] = values[:, :-1]
+        must_fail = "values of the wrong width"
+    elif form == "junk":
+        args[0] = d.pick(([None] * len(channels), [(1, 2, 3)] * len(channels), "abc"), "junk_channels")
+        must_fail = "junk channels"
+
+    def reference(ts):
+        return playback_quats(channels, channel_ipo, mode, ts)
+
+    def check(out):
+        proved_keys_checks(out, tol, mode, interpolation, reference, times[0], times[-1], excluded, rng)
+
+    return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
+
+
+def build_reduce_curve_proved(fn, d):
+    """reduce_curve_proved: samples of a method's curve through random keys as channel values of any
+    mode, reduced and proved against the curve; checked by dense evaluation, nowhere above the bound."""
+    rng = d.rng
+    mode = d.pick(("QUATERNION", "AXIS_ANGLE") + ORDERS, "mode")
+    k = int(rng.integers(2, 7))
+    frames = np.cumsum(rng.uniform(0.5, 12.0, k)) + rng.uniform(-20, 20)
+    method = d.pick(tuple(m for m in qc.METHODS if m not in ("EULER", "QUAT_COMPONENTS")), "method")
+    curve = qc.Curve(frames, rng.normal(size=(k, 4)), method=method)
+    times = qc.whole_frame_samples(frames.astype(np.float32).astype(np.float64))
+    values = qc.quats_to_channels(curve.sample(times), mode)
+    tol = float(d.pick((0.0, 1e-3, 0.01, 0.05), "tolerance"))
+    interpolation = d.pick(("BEZIER", "LINEAR"), "interpolation")
+    form = d.pick(("ok",) * 5 + ("unsorted", "tolerance", "width"), "form")
+    args, must_fail = [curve, mode, times, values, tol, interpolation, d.pick((False, True), "synchronized")], ""
+    if form == "unsorted" and len(times) > 1:
+        args[2] = times[::-1].copy()
+        must_fail = "unsorted times"
+    elif form == "tolerance":
+        args[4] = d.pick((-1.0, NAN, INF), "bad_tolerance")
+        must_fail = f"tolerance {args[4]!r}"
+    elif form == "width":
+        args[3] = values[:, :-1]
+        must_fail = "values of the wrong width"
+
+    def check(out):
+        proved_keys_checks(out, tol, mode, interpolation, curve.sample, times[0], times[-1], np.zeros((0, 2)), rng)
+
+    return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
+
+
 # ==== the bake queue (bake.hpp) ==================================================================
 
 def draw_bake_job(d: Draw):
@@ -1942,6 +2100,9 @@ REGISTRY.update({
     "KeyFit": _not_constructible,
     "PlaybackBound": _not_constructible,
     "prove_playback": build_prove_playback,
+    "reduce_keys_proved": build_reduce_keys_proved,
+    "reduce_curve_proved": build_reduce_curve_proved,
+    "ProvedKeys": _not_constructible,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).

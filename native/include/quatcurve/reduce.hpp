@@ -30,8 +30,9 @@
 //
 // Limits, stated: the keys themselves are input values rounded to float32, so a sample on a key is
 // off by up to ~2.5e-7 rad; a tolerance below that cannot be met and keeps every key (max_error then
-// reports the float32 floor). Between samples nothing is promised by the bound; the fit is guarded
-// there (see reduce.cpp): midway between samples the result stays within twice the tolerance plus a
+// reports the float32 floor). Between samples nothing is promised by this bound (reduce_keys_proved
+// and reduce_curve_proved below prove one there against a reference); the fit is guarded there (see
+// reduce.cpp): midway between samples the result stays within twice the tolerance plus a
 // quarter of the local per-sample rotation step of the dense input's own LINEAR evaluation. Samples closer than 1e-4 frames to a key evaluate to that key in Blender.
 // Quaternion input should be hemisphere-continuous (consecutive dot products ≥ 0; flip signs first
 // if needed): values are kept as given, and Blender interpolates a sign flip through zero, so a flip
@@ -47,9 +48,13 @@
 #pragma once
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "quatcurve/blender_eval.hpp"
+#include "quatcurve/bound.hpp"
+#include "quatcurve/channels.hpp"
+#include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
 #include "quatcurve/types.hpp"
 
@@ -123,5 +128,58 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
                                 const std::vector<std::size_t>& forced, double tolerance,
                                 KeyInterpolation interpolation = KeyInterpolation::BEZIER,
                                 bool synchronized = false, double min_gap = 0.01);
+
+// ---- a reduction proved at every instant ---------------------------------------------------------
+// The bound above holds at the samples. These reduce against a REFERENCE that can be evaluated at any
+// time — the original keys' own playback (Blender's evaluation of them, bound.hpp's PlaybackMotion),
+// or a method's curve — and prove with prove_within (bound.hpp) that the reduced keys' playback
+// stays within `tolerance` of it at EVERY time from the first sample to the last:
+//   1. reduce the samples as reduce_keys* does, at 90% of the tolerance (the rest is the room the
+//      proof between samples needs, as fit_through_keys leaves it), with the reference midway
+//      between each two samples as a further sample;
+//   2. prove the reduced playback against the reference between the samples;
+//   3. where that fails — the times where the angle is above the tolerance, and the middle of every
+//      interval left unproven — add samples (there and at the quarters of the sample intervals
+//      around: the reference's channel values, continuous with the sample before) and reduce again;
+//      at most 8 reductions.
+// Keys sit on given samples only: the samples added (midpoints, the proof's) are checked like the
+// others but never become keys. The proof of the last reduction is returned whatever its verdict:
+// its bound holds at every instant of the proved spans either way.
+//
+// Left out of the proof (reduce_keys_proved, quaternion mode only): the sample intervals across
+// which the original's quaternion channels flip hemisphere (consecutive samples with a negative dot
+// product). Blender interpolates the four channels through near zero there — a fast turn of up to
+// 360° inside the interval — while the reduction, made of hemisphere-continuous samples, takes the
+// short way: there the two differ by up to 180° by design. They are reported in `excluded`.
+//
+// tolerance 0 keeps every sample (as reduce_keys does) and proves nothing between them: the proof
+// then has bound +∞ and the whole range unproven.
+struct ProvedKeys {
+    ReducedKeys keys;     // the reduced keys (max_error: at `times`, emulated)
+    PlaybackBound proof;  // the reduced playback against the reference over every proved span, merged
+    std::vector<std::pair<double, double>> excluded;  // sample intervals left out (the original's sign flips)
+    std::vector<double> times;  // the samples of the last reduction: the given ones and those added (never keys)
+    int rounds = 0;             // reductions made (1: the first was proved)
+};
+
+// Reduce the samples (times, values: n rows of channel_count(mode) channel values, Blender's
+// evaluation of `original`) of a rotation whose keys are `original` (channel_count(mode) F-curves,
+// every segment of each `original_interpolation`; the channels of `mode` in order), proved against
+// the original's own playback. Quaternion values are made hemisphere-continuous first (as reduce_keys
+// wants them); Euler and axis-angle values are kept as given. Throws InvalidArgument as
+// PlaybackMotion (the original keys), as reduce_keys* (times, values, tolerance), and for a values
+// count that is not n rows.
+ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
+                              const RotationMode& mode, const std::vector<double>& times,
+                              const std::vector<double>& values, double tolerance,
+                              KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
+
+// The same against a method's curve: values are the curve's rotations at `times` as channel values of
+// `mode` (quats_to_channels, with whatever reference the caller chose: they are kept as given, made
+// hemisphere-continuous for quaternions); a sample the proof adds takes the curve's rotation there
+// as channel values continuous with the sample before. Nothing is left out (`excluded` is empty).
+ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
+                               const std::vector<double>& values, double tolerance,
+                               KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
 
 }  // namespace quatcurve

@@ -1,0 +1,316 @@
+// Key reduction proved at every instant (reduce.hpp, "a reduction proved at every instant"): the
+// reducer at 90% of the tolerance, prove_within (bound.hpp) of its playback against a reference, and
+// the times that fail added as samples, round after round.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <utility>
+
+#include "quatcurve/errors.hpp"
+#include "quatcurve/reduce.hpp"
+#include "reduce_impl.hpp"
+
+namespace quatcurve {
+
+namespace {
+
+// The reducer matches the samples within this share of the tolerance: the rest is the room the proof
+// between samples needs (as fit_through_keys leaves it, fit.cpp).
+constexpr double kReduceShare = 0.9;
+// Reductions at most: the first, then one per round of added samples.
+constexpr int kProofRounds = 8;
+// An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap).
+constexpr double kAddedSampleGap = 1.0 / 1024.0;
+// A sample interval where the proof fails, and the one on either side of it, get samples at their
+// quarters too (add_samples).
+constexpr int kQuarters = 4;
+// prove_within halves an interval down to this (frames), as the fit's proof does.
+constexpr double kMinStep = 1.0 / 16384.0;
+// Evaluations the proof may spend per sample (and at least kMinEvaluations): a cap that only a
+// proof stuck at min_step everywhere reaches (what is left then counts as unproven).
+constexpr std::size_t kEvaluationsPerSample = 4096;
+constexpr std::size_t kMinEvaluations = 2'000'000;
+
+// The reference's channel values at t, continuous with `before` (the sample before t).
+using ValuesAt = std::function<void(double t, const double* before, double* out)>;
+
+// The samples of a reduction: the given ones (candidates for keys) and those the proof added (checked,
+// never keys: a reduction keeps keys on the frames it was given).
+struct Samples {
+    std::vector<double> times;
+    std::vector<double> values;        // rows of channel_count(mode)
+    std::vector<unsigned char> given;  // 1: a given sample, 0: added by the proof
+};
+
+// The reducer's Problem of the samples (its checks name times[k], quats[k], angles[k], values[k]).
+reduce_impl::Problem make_problem(const Samples& s, const RotationMode& mode, KeyInterpolation ipo) {
+    using namespace reduce_impl;
+    const std::size_t n = s.times.size();
+    switch (mode.kind) {
+        case RotationMode::Kind::quaternion: {
+            std::vector<Quat> q(n);
+            for (std::size_t i = 0; i < n; ++i) q[i] = from_wxyz(&s.values[4 * i]);
+            return make_quat_problem(s.times, q, ipo == KeyInterpolation::BEZIER);
+        }
+        case RotationMode::Kind::euler: {
+            std::vector<Vec3> a(n);
+            for (std::size_t i = 0; i < n; ++i) a[i] = Vec3(s.values[3 * i], s.values[3 * i + 1], s.values[3 * i + 2]);
+            return make_euler_problem(s.times, a, mode.order);
+        }
+        case RotationMode::Kind::axis_angle: break;
+    }
+    std::vector<Vec4> a(n);
+    for (std::size_t i = 0; i < n; ++i) a[i] = Vec4(s.values[4 * i], s.values[4 * i + 1], s.values[4 * i + 2], s.values[4 * i + 3]);
+    return make_axis_angle_problem(s.times, a);
+}
+
+ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double tolerance, KeyInterpolation ipo,
+                           bool synchronized) {
+    reduce_impl::Problem p = make_problem(s, mode, ipo);
+    reduce_impl::set_forced_keys(p, {}, 0.0);
+    p.candidate.assign(s.given.begin(), s.given.end());
+    return reduce_impl::reduce(p, tolerance, ipo, synchronized);
+}
+
+// Quaternion rows in place: each row negated where it disagrees in sign with the one before.
+void make_continuous(std::vector<double>& values) {
+    for (std::size_t i = 1; 4 * i < values.size(); ++i) {
+        const double* a = &values[4 * (i - 1)];
+        double* b = &values[4 * i];
+        if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0)
+            for (int c = 0; c < 4; ++c) b[c] = -b[c];
+    }
+}
+
+void merge_into(PlaybackBound& all, const PlaybackBound& part) {
+    if (part.bound > all.bound || all.evaluations == 0) {
+        all.bound = std::fmax(all.bound, part.bound);
+        all.worst_time = part.worst_time;
+    }
+    all.max_evaluated = std::fmax(all.max_evaluated, part.max_evaluated);
+    all.violations.insert(all.violations.end(), part.violations.begin(), part.violations.end());
+    all.unproven.insert(all.unproven.end(), part.unproven.begin(), part.unproven.end());
+    all.evaluations += part.evaluations;
+}
+
+// The reduced keys' playback against `reference` over every span of `times` between the excluded
+// intervals (each excluded interval joins two neighbouring samples).
+PlaybackBound prove_spans(const ReducedKeys& keys, const RotationMode& mode, const Motion& reference,
+                          const std::vector<double>& times, const std::vector<std::pair<double, double>>& excluded,
+                          double tolerance) {
+    std::vector<FCurveKeys> channels(keys.channels.begin(), keys.channels.end());
+    const PlaybackMotion reduced(std::move(channels), keys.interpolation, mode);
+    const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * times.size());
+    PlaybackBound all;
+    std::size_t e = 0;  // the next excluded interval
+    for (std::size_t begin = 0; begin < times.size();) {
+        std::size_t last = begin;  // the span's last sample: where an excluded interval starts, or the end
+        while (last + 1 < times.size() &&
+               !(e < excluded.size() && excluded[e].first == static_cast<float>(times[last])))
+            ++last;
+        if (e < excluded.size() && excluded[e].first == static_cast<float>(times[last])) ++e;
+        const std::vector<double> span(times.begin() + static_cast<std::ptrdiff_t>(begin),
+                                       times.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+        merge_into(all, prove_within(reduced, reference, span, tolerance, kMinStep, cap));
+        begin = last + 1;
+    }
+    std::sort(all.violations.begin(), all.violations.end());
+    std::sort(all.unproven.begin(), all.unproven.end());
+    return all;
+}
+
+// The times to add after a failed proof: every violation and the middle of every unproven interval,
+// and with each the quarters of the sample interval it falls in and of the one on either side (where
+// the reference turns between two samples in a way the reduction missed, one new sample rarely
+// shows the reducer its shape there, and the next reduction moves its keys: on random BEZIER
+// channels whose handles swing between frames this took 3-6 reductions where the failing times
+// alone took 5-8 or more), as float32 frames, each kAddedSampleGap clear of the samples and of each
+// other and none inside an excluded interval. Inserts them (with the reference's values) into
+// times/values; returns how many.
+std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, std::size_t C,
+                        const std::vector<std::pair<double, double>>& excluded, Samples& s) {
+    const std::vector<double>& times = s.times;
+    std::vector<double> failed = proof.violations;
+    for (const auto& span : proof.unproven) failed.push_back(0.5 * (span.first + span.second));
+    std::vector<double> add;
+    for (double t : failed) {
+        add.push_back(t);
+        const std::size_t i = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), t) - times.begin());
+        if (i == 0 || i >= times.size()) continue;
+        for (std::size_t j = i >= 2 ? i - 2 : 0; j < std::min(times.size() - 1, i + 1); ++j) {
+            const double a = times[j], b = times[j + 1];
+            for (int q = 1; q < kQuarters; ++q) add.push_back(a + (b - a) * q / kQuarters);
+        }
+    }
+    for (double& t : add) t = static_cast<float>(t);
+    // Nothing inside an excluded interval (the reduction takes the short way there).
+    add.erase(std::remove_if(add.begin(), add.end(),
+                             [&](double t) {
+                                 for (const auto& e : excluded)
+                                     if (t > e.first && t < e.second) return true;
+                                 return false;
+                             }),
+              add.end());
+    std::sort(add.begin(), add.end());
+    Samples out;
+    out.times.reserve(times.size() + add.size());
+    out.values.reserve(s.values.size() + C * add.size());
+    out.given.reserve(times.size() + add.size());
+    std::size_t j = 0, added = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        for (; j < add.size() && add[j] < times[i]; ++j) {
+            const double before = out.times.empty() ? -HUGE_VAL : out.times.back();
+            if (out.times.empty() || !(add[j] - before > kAddedSampleGap) || !(times[i] - add[j] > kAddedSampleGap))
+                continue;
+            // Distinct from both neighbours as float32 (Blender's frames).
+            if (!(static_cast<float>(add[j]) > static_cast<float>(before)) ||
+                !(static_cast<float>(add[j]) < static_cast<float>(times[i])))
+                continue;
+            out.times.push_back(add[j]);
+            const std::size_t row = out.values.size();
+            out.values.resize(row + C);
+            values_at(add[j], &out.values[row - C], &out.values[row]);
+            out.given.push_back(0);
+            ++added;
+        }
+        out.times.push_back(times[i]);
+        out.values.insert(out.values.end(), s.values.begin() + static_cast<std::ptrdiff_t>(C * i),
+                          s.values.begin() + static_cast<std::ptrdiff_t>(C * (i + 1)));
+        out.given.push_back(s.given[i]);
+    }
+    if (added) s = std::move(out);
+    return added;
+}
+
+// The first reduction's samples: the given ones and, as added samples (checked, never keys), the
+// reference midway between each two of them outside the excluded intervals. The reducer's own
+// between-samples guard measures its fit midway against the samples' LINEAR mean, loosely (reduce_fit.cpp);
+// the reference's own value there lets the first reduction pass the proof far more often (the 19
+// joints of mocapbank.bvh keyed at every frame, BEZIER and LINEAR: 25 of 38 proved after the first
+// reduction instead of 8, in half the time).
+void add_midpoints(const ValuesAt& values_at, std::size_t C, const std::vector<std::pair<double, double>>& excluded,
+                   Samples& s) {
+    Samples out;
+    out.times.reserve(2 * s.times.size());
+    out.values.reserve(2 * s.values.size());
+    out.given.reserve(2 * s.times.size());
+    std::size_t e = 0;  // the next excluded interval
+    for (std::size_t i = 0; i < s.times.size(); ++i) {
+        if (i > 0) {
+            const double a = s.times[i - 1], b = s.times[i], t = static_cast<float>(0.5 * (a + b));
+            while (e < excluded.size() && excluded[e].second <= static_cast<float>(a)) ++e;
+            const bool left_out = e < excluded.size() && excluded[e].first == static_cast<float>(a);
+            if (!left_out && t - a > kAddedSampleGap && b - t > kAddedSampleGap) {
+                out.times.push_back(t);
+                const std::size_t row = out.values.size();
+                out.values.resize(row + C);
+                values_at(t, &out.values[row - C], &out.values[row]);
+                out.given.push_back(0);
+            }
+        }
+        out.times.push_back(s.times[i]);
+        out.values.insert(out.values.end(), s.values.begin() + static_cast<std::ptrdiff_t>(C * i),
+                          s.values.begin() + static_cast<std::ptrdiff_t>(C * (i + 1)));
+        out.given.push_back(s.given[i]);
+    }
+    s = std::move(out);
+}
+
+ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, const RotationMode& mode,
+                         const std::vector<double>& times, std::vector<double> values,
+                         std::vector<std::pair<double, double>> excluded, double tolerance, KeyInterpolation ipo,
+                         bool synchronized) {
+    ProvedKeys out;
+    out.excluded = std::move(excluded);
+    const std::size_t C = channel_count(mode);
+    Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1)};
+    // The given samples checked as the reducer checks them, before any is added (errors name them).
+    reduce_impl::check_float32_storage(make_problem(s, mode, ipo), tolerance);
+    if (tolerance == 0.0) {
+        // Every sample kept; between them nothing can be promised at 0.
+        out.keys = reduce_samples(s, mode, 0.0, ipo, synchronized);
+        out.rounds = 1;
+        out.proof.bound = HUGE_VAL;
+        out.proof.worst_time = times.front();
+        if (times.size() > 1) out.proof.unproven.emplace_back(times.front(), times.back());
+        out.times = std::move(s.times);
+        return out;
+    }
+    add_midpoints(values_at, C, out.excluded, s);
+    for (int round = 1;; ++round) {
+        out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
+        out.rounds = round;
+        out.proof = prove_spans(out.keys, mode, reference, s.times, out.excluded, tolerance);
+        if (out.proof.proven() || round >= kProofRounds) break;
+        if (add_samples(out.proof, values_at, C, out.excluded, s) == 0) break;
+    }
+    out.times = std::move(s.times);
+    return out;
+}
+
+// Checks what the reducer does not see before it runs: the values count, the tolerance.
+void check_rows(const std::vector<double>& times, const std::vector<double>& values, const RotationMode& mode,
+                double tolerance) {
+    const std::size_t C = channel_count(mode);
+    if (values.size() != C * times.size())
+        throw InvalidArgument("values: " + std::to_string(values.size()) + " numbers for " +
+                              std::to_string(times.size()) + " times of " + std::to_string(C) + " channels");
+    if (times.empty()) throw InvalidArgument("times: at least one sample");
+    if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and >= 0");
+    for (std::size_t i = 0; i < times.size(); ++i)
+        if (!std::isfinite(times[i])) throw InvalidArgument("times[" + std::to_string(i) + "]: not finite");
+}
+
+}  // namespace
+
+ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
+                              const RotationMode& mode, const std::vector<double>& times,
+                              const std::vector<double>& values, double tolerance, KeyInterpolation interpolation,
+                              bool synchronized) {
+    check_rows(times, values, mode, tolerance);
+    const PlaybackMotion playback(original, original_interpolation, mode);
+    const std::size_t C = channel_count(mode);
+    std::vector<double> rows = values;
+    std::vector<std::pair<double, double>> excluded;
+    if (mode.kind == RotationMode::Kind::quaternion) {
+        // The original's own sign flips, from its values as given: Blender swings through them.
+        for (std::size_t i = 1; i < times.size(); ++i) {
+            const double* a = &values[4 * (i - 1)];
+            const double* b = &values[4 * i];
+            if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0)
+                excluded.emplace_back(static_cast<float>(times[i - 1]), static_cast<float>(times[i]));
+        }
+        make_continuous(rows);
+    }
+    const ValuesAt values_at = [&](double at, const double* before, double* out) {
+        playback.values(at, out);
+        if (mode.kind == RotationMode::Kind::quaternion &&
+            before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
+            for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
+    };
+    return reduce_proved(playback, values_at, mode, times, std::move(rows), std::move(excluded), tolerance,
+                         interpolation, synchronized);
+}
+
+ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
+                               const std::vector<double>& values, double tolerance, KeyInterpolation interpolation,
+                               bool synchronized) {
+    check_rows(times, values, mode, tolerance);
+    const CurveMotion motion(curve);
+    const std::size_t C = channel_count(mode);
+    std::vector<double> rows = values;
+    if (mode.kind == RotationMode::Kind::quaternion) make_continuous(rows);
+    const ValuesAt values_at = [&](double at, const double* before, double* out) {
+        double q[4];
+        curve.sample(&at, 1, q);
+        const std::vector<double> v = quats_to_channels({from_wxyz(q)}, mode, before, 1);
+        std::copy(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(C), out);
+        if (mode.kind == RotationMode::Kind::quaternion &&
+            before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
+            for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
+    };
+    return reduce_proved(motion, values_at, mode, times, rows, {}, tolerance, interpolation, synchronized);
+}
+
+}  // namespace quatcurve

@@ -1,0 +1,306 @@
+// Key reduction proved at every instant (reduce.hpp: reduce_keys_proved, reduce_curve_proved): the
+// reduced keys' playback against the original keys' own playback (random BEZIER and LINEAR
+// channels keyed at every frame, handles that swing between frames, quaternion sign flips) and
+// against a method's curve. Every proved bound is held against Blender's evaluation (emulated,
+// blender_eval.hpp) at 64 points per frame and as many random times; the only intervals left out
+// are the original's own sign flips.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "quatcurve/blender_eval.hpp"
+#include "quatcurve/bound.hpp"
+#include "quatcurve/channels.hpp"
+#include "quatcurve/curve.hpp"
+#include "quatcurve/errors.hpp"
+#include "quatcurve/quat.hpp"
+#include "quatcurve/reduce.hpp"
+
+using namespace quatcurve;
+
+namespace {
+
+constexpr double kPi = 3.141592653589793238462643383279502884;
+constexpr double kDeg = kPi / 180.0;
+
+// A rotation's original keys, keyed at every frame, and the reducer's samples of them (Blender's
+// evaluation, emulated, at every whole frame).
+struct Original {
+    RotationMode mode;
+    KeyInterpolation interpolation = KeyInterpolation::BEZIER;
+    std::vector<FCurveKeys> channels;
+    std::vector<double> times;
+    std::vector<double> values;  // n rows of channel_count(mode)
+};
+
+// Mocap-like motion: rotation vectors on a smooth random walk with per-frame noise, as channel values
+// of `mode` continuous along it; quaternions negated from every `flip_every`-th frame on (0: never),
+// as a file whose stored signs flip. Keys at frames 1 … n; BEZIER handles at ±1/3 frame along the
+// central-difference slope times `wiggle` (1: about Blender's automatic handles; more: the F-curves
+// overshoot between frames) plus noise.
+Original make_original(unsigned seed, const RotationMode& mode, std::size_t n, KeyInterpolation ipo, double wiggle,
+                       std::size_t flip_every = 0) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> step(0.0, 0.05), noise(0.0, 0.004);
+    std::vector<Quat> q(n);
+    Vec3 v(0.3, -0.2, 0.5), vel(0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+        vel = 0.9 * vel + Vec3(step(rng), step(rng), step(rng));
+        v += 0.1 * vel;
+        const Vec3 w = v + Vec3(noise(rng), noise(rng), noise(rng));
+        const double a = glm::length(w);
+        q[i] = axis_angle_to_quat(w / a, a);
+    }
+    Original o;
+    o.mode = mode;
+    o.interpolation = ipo;
+    const std::size_t C = channel_count(mode);
+    std::vector<double> rows = quats_to_channels(q, mode);
+    if (mode.kind == RotationMode::Kind::quaternion && flip_every > 0)
+        for (std::size_t i = flip_every; i < n; i += 2 * flip_every)
+            for (std::size_t j = i; j < std::min(n, i + flip_every); ++j)
+                for (std::size_t c = 0; c < 4; ++c) rows[4 * j + c] = -rows[4 * j + c];
+    for (double& x : rows) x = static_cast<float>(x);
+    o.channels.resize(C);
+    std::uniform_real_distribution<double> jitter(0.6, 1.4);
+    for (std::size_t c = 0; c < C; ++c) {
+        FCurveKeys& ch = o.channels[c];
+        for (std::size_t i = 0; i < n; ++i) {
+            const double f = static_cast<double>(i + 1), y = rows[C * i + c];
+            const double prev = rows[C * (i ? i - 1 : i) + c], next = rows[C * (i + 1 < n ? i + 1 : i) + c];
+            const double slope = 0.5 * (next - prev) * wiggle * jitter(rng);
+            ch.frames.push_back(f);
+            ch.values.push_back(y);
+            ch.handle_left.insert(ch.handle_left.end(), {static_cast<float>(f - 1.0 / 3), static_cast<float>(y - slope / 3)});
+            ch.handle_right.insert(ch.handle_right.end(), {static_cast<float>(f + 1.0 / 3), static_cast<float>(y + slope / 3)});
+        }
+    }
+    o.times.resize(n);
+    for (std::size_t i = 0; i < n; ++i) o.times[i] = static_cast<double>(i + 1);
+    o.values.resize(C * n);
+    for (std::size_t c = 0; c < C; ++c) {
+        std::vector<double> out;
+        blender_evaluate(o.channels[c], ipo, o.times, out);
+        for (std::size_t i = 0; i < n; ++i) o.values[C * i + c] = out[i];
+    }
+    return o;
+}
+
+// The times of a dense check of [t0, t1]: `per_frame` evenly spaced points per frame and as many
+// random ones.
+std::vector<double> dense_times(double t0, double t1, std::size_t per_frame, std::mt19937& rng) {
+    const std::size_t n = static_cast<std::size_t>((t1 - t0) * static_cast<double>(per_frame)) + 1;
+    std::uniform_real_distribution<double> u(t0, t1);
+    std::vector<double> t;
+    for (std::size_t i = 0; i < n; ++i) t.push_back(t0 + (t1 - t0) * static_cast<double>(i) / static_cast<double>(n - 1));
+    for (std::size_t i = 0; i < n; ++i) t.push_back(u(rng));
+    std::sort(t.begin(), t.end());
+    return t;
+}
+
+bool inside_excluded(double t, const std::vector<std::pair<double, double>>& excluded) {
+    for (const auto& e : excluded)
+        if (t > e.first && t < e.second) return true;
+    return false;
+}
+
+// The largest angle between the playback of `keys` and `reference` at the dense times outside
+// `excluded`.
+double dense_max(const ReducedKeys& keys, const RotationMode& mode, const Motion& reference,
+                 const std::vector<double>& times, const std::vector<std::pair<double, double>>& excluded,
+                 double* where = nullptr) {
+    std::vector<FCurveKeys> ch(keys.channels.begin(), keys.channels.end());
+    const PlaybackMotion playback(std::move(ch), keys.interpolation, mode);
+    double worst = 0.0;
+    for (double t : times) {
+        if (inside_excluded(t, excluded)) continue;
+        const double d = angle_between(playback.at(t), reference.at(t));
+        if (d > worst) {
+            worst = d;
+            if (where) *where = t;
+        }
+    }
+    return worst;
+}
+
+// The excluded intervals are exactly the pairs of neighbouring samples whose original quaternion
+// values lie in opposite hemispheres.
+void expect_excluded_at_sign_flips(const Original& o, const ProvedKeys& r) {
+    std::vector<std::pair<double, double>> flips;
+    if (o.mode.kind == RotationMode::Kind::quaternion)
+        for (std::size_t i = 1; i < o.times.size(); ++i) {
+            const double* a = &o.values[4 * (i - 1)];
+            const double* b = &o.values[4 * i];
+            if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0) flips.emplace_back(o.times[i - 1], o.times[i]);
+        }
+    EXPECT_EQ(r.excluded, flips);
+}
+
+template <class F>
+void expect_invalid(F f, const std::string& fragment) {
+    try {
+        f();
+        ADD_FAILURE() << "no InvalidArgument (expected '" << fragment << "')";
+    } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+
+// Random original channels of every mode, BEZIER with handles from calm to swinging and LINEAR,
+// quaternions with sign flips: the reduction is proved within the tolerance at every instant outside
+// the original's sign flips, and 64 points per frame plus random times find nothing above the proved
+// bound. The plain reduction of the same samples, proved the same way, shows what the rounds buy.
+TEST(ReduceProved, BoundHoldsAgainstTheOriginalPlaybackDenserThanProved) {
+    std::mt19937 rng(3);
+    const double tol = 0.1 * kDeg;
+    const RotationMode modes[] = {parse_rotation_mode("QUATERNION"), parse_rotation_mode("XYZ"),
+                                  parse_rotation_mode("ZXY"), parse_rotation_mode("AXIS_ANGLE")};
+    const double wiggles[] = {1.0, 4.0};
+    double plain_worst = 0.0, proved_worst = 0.0;
+    unsigned seed = 100;
+    for (const RotationMode& mode : modes) {
+        for (KeyInterpolation ipo : {KeyInterpolation::BEZIER, KeyInterpolation::LINEAR}) {
+            for (double wiggle : wiggles) {
+                if (ipo == KeyInterpolation::LINEAR && wiggle != 1.0) continue;
+                for (bool synchronized : {false, true}) {
+                    const std::size_t flips = mode.kind == RotationMode::Kind::quaternion ? 23 : 0;
+                    const Original o = make_original(++seed, mode, 120, ipo, wiggle, flips);
+                    const std::string what = "mode " + std::to_string(int(mode.kind)) + " order " +
+                                             std::to_string(int(mode.order)) + " " + key_interpolation_name(ipo) +
+                                             " wiggle " + std::to_string(wiggle) + (synchronized ? " sync" : "");
+                    const ProvedKeys r = reduce_keys_proved(o.channels, ipo, mode, o.times, o.values, tol,
+                                                            KeyInterpolation::BEZIER, synchronized);
+                    expect_excluded_at_sign_flips(o, r);
+                    EXPECT_TRUE(r.proof.proven()) << what << ": bound " << r.proof.bound / kDeg << "° at "
+                                                  << r.proof.worst_time << " after " << r.rounds << " rounds";
+                    EXPECT_LE(r.proof.bound, tol) << what;
+                    // Handles that swing far between frames may need every key (each frame's own curve).
+                    EXPECT_LE(r.keys.key_count(), o.channels.size() * o.times.size()) << what;
+                    if (wiggle == 1.0) EXPECT_LT(r.keys.key_count(), o.channels.size() * o.times.size()) << what;
+                    const PlaybackMotion original(o.channels, ipo, mode);
+                    const std::vector<double> dense = dense_times(o.times.front(), o.times.back(), 64, rng);
+                    double where = 0.0;
+                    const double d = dense_max(r.keys, mode, original, dense, r.excluded, &where);
+                    EXPECT_LE(d, r.proof.bound) << what << ": " << d / kDeg << "° at frame " << where;
+                    proved_worst = std::max(proved_worst, d);
+                    // The plain reduction at the full tolerance, checked the same way.
+                    std::vector<double> rows = o.values;
+                    if (mode.kind == RotationMode::Kind::quaternion) {
+                        std::vector<Quat> q(o.times.size());
+                        for (std::size_t i = 0; i < q.size(); ++i) q[i] = from_wxyz(&rows[4 * i]);
+                        hemisphere_continuous(q.data(), q.size());
+                        const ReducedKeys k = reduce_keys(o.times, q, tol, KeyInterpolation::BEZIER, synchronized);
+                        plain_worst = std::max(plain_worst, dense_max(k, mode, original, dense, r.excluded));
+                    }
+                }
+            }
+        }
+    }
+    std::printf("reduce_keys_proved: between frames at most %.4f°; the plain quaternion reduction %.4f°\n",
+                proved_worst / kDeg, plain_worst / kDeg);
+}
+
+// Inside the excluded intervals Blender swings the original's channels through near zero: the
+// reduction, which takes the short way, is far from that there — which is why they are left out.
+TEST(ReduceProved, SignFlipsAreLeftOutAndOnlyThey) {
+    const RotationMode mode = parse_rotation_mode("QUATERNION");
+    const Original o = make_original(7, mode, 60, KeyInterpolation::BEZIER, 1.0, 10);
+    const ProvedKeys r = reduce_keys_proved(o.channels, o.interpolation, mode, o.times, o.values, 0.1 * kDeg);
+    expect_excluded_at_sign_flips(o, r);
+    ASSERT_EQ(r.excluded.size(), 5u);  // flips at frames 10|11, 20|21, …, 50|51
+    EXPECT_TRUE(r.proof.proven());
+    std::vector<FCurveKeys> ch(r.keys.channels.begin(), r.keys.channels.end());
+    const PlaybackMotion reduced(std::move(ch), r.keys.interpolation, mode);
+    const PlaybackMotion original(o.channels, o.interpolation, mode);
+    for (const auto& e : r.excluded) {
+        double widest = 0.0;
+        for (int i = 1; i < 64; ++i) {
+            const double t = e.first + (e.second - e.first) * i / 64.0;
+            widest = std::max(widest, angle_between(reduced.at(t), original.at(t)));
+        }
+        EXPECT_GT(widest, 90.0 * kDeg) << "flip at " << e.first;
+    }
+}
+
+// Against a method's curve (the bake's reduction): every method, quaternion, Euler and axis-angle
+// output, proved at every instant and checked at 64 points per frame.
+TEST(ReduceProved, CurveReductionIsProvedDenserThanChecked) {
+    std::mt19937 rng(5);
+    const double tol = 0.1 * kDeg;
+    std::normal_distribution<double> nd;
+    const Method methods[] = {Method::SLERP, Method::SQUAD, Method::CATMULL_ROM, Method::SPLINE_C2, Method::NLERP};
+    const RotationMode modes[] = {parse_rotation_mode("QUATERNION"), parse_rotation_mode("XYZ"),
+                                  parse_rotation_mode("AXIS_ANGLE")};
+    for (Method method : methods) {
+        for (const RotationMode& mode : modes) {
+            std::vector<double> key_t;
+            std::vector<Quat> key_q;
+            for (std::size_t k = 0; k < 6; ++k) {
+                key_t.push_back(1.0 + 12.0 * static_cast<double>(k));
+                Quat q(nd(rng), nd(rng), nd(rng), nd(rng));
+                key_q.push_back(q / std::sqrt(glm::dot(q, q)));
+            }
+            const Curve curve(key_t, key_q, method, {});
+            std::vector<double> times;
+            for (double t = key_t.front(); t <= key_t.back(); t += 1.0) times.push_back(t);
+            const std::vector<double> values = quats_to_channels(curve.sample(times), mode);
+            const std::string what = std::string(method_name(method)) + " mode " + std::to_string(int(mode.kind));
+            const ProvedKeys r = reduce_curve_proved(curve, mode, times, values, tol);
+            EXPECT_TRUE(r.excluded.empty());
+            EXPECT_TRUE(r.proof.proven()) << what << ": bound " << r.proof.bound / kDeg << "° at "
+                                          << r.proof.worst_time << " after " << r.rounds << " rounds";
+            EXPECT_LT(r.keys.key_count(), channel_count(mode) * times.size()) << what;
+            const CurveMotion reference(curve);
+            double where = 0.0;
+            const double d = dense_max(r.keys, mode, reference, dense_times(times.front(), times.back(), 64, rng), {},
+                                       &where);
+            EXPECT_LE(d, r.proof.bound) << what << ": " << d / kDeg << "° at frame " << where;
+        }
+    }
+}
+
+// Tolerance 0 keeps every sample, as reduce_keys does, and promises nothing between them.
+TEST(ReduceProved, ToleranceZeroKeepsEverySampleAndProvesNothing) {
+    const RotationMode mode = parse_rotation_mode("XYZ");
+    const Original o = make_original(9, mode, 20, KeyInterpolation::BEZIER, 1.0);
+    const ProvedKeys r = reduce_keys_proved(o.channels, o.interpolation, mode, o.times, o.values, 0.0);
+    EXPECT_EQ(r.keys.key_count(), 3 * o.times.size());
+    EXPECT_FALSE(r.proof.proven());
+    EXPECT_TRUE(std::isinf(r.proof.bound));
+    EXPECT_EQ(r.rounds, 1);
+}
+
+TEST(ReduceProved, BadInputIsNamed) {
+    const RotationMode quat = parse_rotation_mode("QUATERNION");
+    const Original o = make_original(11, quat, 10, KeyInterpolation::BEZIER, 1.0);
+    std::vector<double> short_values(o.values.begin(), o.values.end() - 1);
+    expect_invalid([&] { reduce_keys_proved(o.channels, o.interpolation, quat, o.times, short_values, 0.01); },
+                   "values: 39 numbers for 10 times of 4 channels");
+    expect_invalid([&] { reduce_keys_proved(o.channels, o.interpolation, quat, o.times, o.values, NAN); },
+                   "tolerance");
+    expect_invalid([&] { reduce_keys_proved(o.channels, o.interpolation, quat, o.times, o.values, -1.0); },
+                   "tolerance");
+    std::vector<FCurveKeys> three(o.channels.begin(), o.channels.begin() + 3);
+    expect_invalid([&] { reduce_keys_proved(three, o.interpolation, quat, o.times, o.values, 0.01); }, "channels");
+    std::vector<double> backwards = o.times;
+    std::swap(backwards[3], backwards[4]);
+    expect_invalid([&] { reduce_keys_proved(o.channels, o.interpolation, quat, backwards, o.values, 0.01); }, "times[4]");
+    std::vector<double> bad_t = o.times;
+    bad_t[2] = INFINITY;
+    expect_invalid([&] { reduce_keys_proved(o.channels, o.interpolation, quat, bad_t, o.values, 0.01); }, "times[2]");
+    FCurveKeys broken = o.channels[1];
+    broken.handle_left.pop_back();
+    std::vector<FCurveKeys> with_broken = o.channels;
+    with_broken[1] = broken;
+    expect_invalid([&] { reduce_keys_proved(with_broken, KeyInterpolation::BEZIER, quat, o.times, o.values, 0.01); },
+                   "handle_left");
+    const Curve curve(o.times, std::vector<Quat>(o.times.size(), Quat(1, 0, 0, 0)), Method::SLERP, {});
+    expect_invalid([&] { reduce_curve_proved(curve, quat, o.times, short_values, 0.01); }, "values");
+    expect_invalid([&] { reduce_curve_proved(curve, quat, {}, {}, 0.01); }, "times");
+}
