@@ -414,7 +414,7 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
                                "flips, where Blender swings through them and the reduction takes the short way")
         .def_property_readonly("times", [](const ProvedKeys& r) { return vector_array(r.times); },
                                "the samples of the last reduction: the given ones and those added (midpoints and the "
-                               "proof's failing times; never keys)")
+                               "proof's failing times)")
         .def_readonly("rounds", &ProvedKeys::rounds, "reductions made (1: the first was proved)")
         .def("__repr__", [](const ProvedKeys& r) {
             return std::string("<ProvedKeys ") + std::to_string(r.keys.key_count()) + " keys, " +
@@ -453,7 +453,8 @@ radians, >= 0.
 The samples are reduced as reduce_keys* does at 90% of `tolerance`; Blender's playback of the result
 is proved against the original's playback (blender_evaluate) at every time from times[0] to
 times[-1] (prove_playback's method); the times that fail become samples of another reduction (the
-original's values there), up to 8 reductions. Left out of the proof: the sample intervals where the
+original's values there; keys between the given frames only where keys on them cannot meet those), up
+to 8 reductions. Left out of the proof: the sample intervals where the
 original's quaternion channels flip sign (ProvedKeys.excluded), where Blender swings through the flip
 and the reduction takes the short way. Tolerance 0 keeps every sample and proves nothing between them
 (bound inf).)doc");

@@ -35,12 +35,13 @@ constexpr std::size_t kMinEvaluations = 2'000'000;
 // The reference's channel values at t, continuous with `before` (the sample before t).
 using ValuesAt = std::function<void(double t, const double* before, double* out)>;
 
-// The samples of a reduction: the given ones (candidates for keys) and those the proof added (checked,
-// never keys: a reduction keeps keys on the frames it was given).
+// The samples of a reduction: the given ones (candidates for keys) and those added (checked, and keys
+// only where open_candidates opens them: a reduction keeps keys on the frames it was given).
 struct Samples {
     std::vector<double> times;
-    std::vector<double> values;        // rows of channel_count(mode)
-    std::vector<unsigned char> given;  // 1: a given sample, 0: added by the proof
+    std::vector<double> values;            // rows of channel_count(mode)
+    std::vector<unsigned char> given;      // 1: a given sample, 0: added (midpoints, the proof's)
+    std::vector<unsigned char> candidate;  // 1: may become a key (the given ones; added ones opened)
 };
 
 // The reducer's Problem of the samples (its checks name times[k], quats[k], angles[k], values[k]).
@@ -69,7 +70,7 @@ ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double to
                            bool synchronized) {
     reduce_impl::Problem p = make_problem(s, mode, ipo);
     reduce_impl::set_forced_keys(p, {}, 0.0);
-    p.candidate.assign(s.given.begin(), s.given.end());
+    p.candidate.assign(s.candidate.begin(), s.candidate.end());
     return reduce_impl::reduce(p, tolerance, ipo, synchronized);
 }
 
@@ -172,18 +173,20 @@ std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, s
             out.values.resize(row + C);
             values_at(add[j], &out.values[row - C], &out.values[row]);
             out.given.push_back(0);
+            out.candidate.push_back(0);
             ++added;
         }
         out.times.push_back(times[i]);
         out.values.insert(out.values.end(), s.values.begin() + static_cast<std::ptrdiff_t>(C * i),
                           s.values.begin() + static_cast<std::ptrdiff_t>(C * (i + 1)));
         out.given.push_back(s.given[i]);
+        out.candidate.push_back(s.candidate[i]);
     }
     if (added) s = std::move(out);
     return added;
 }
 
-// The first reduction's samples: the given ones and, as added samples (checked, never keys), the
+// The first reduction's samples: the given ones and, as added samples (checked, not keys), the
 // reference midway between each two of them outside the excluded intervals. The reducer's own
 // between-samples guard measures its fit midway against the samples' LINEAR mean, loosely (reduce_fit.cpp);
 // the reference's own value there lets the first reduction pass the proof far more often (the 19
@@ -207,14 +210,42 @@ void add_midpoints(const ValuesAt& values_at, std::size_t C, const std::vector<s
                 out.values.resize(row + C);
                 values_at(t, &out.values[row - C], &out.values[row]);
                 out.given.push_back(0);
+                out.candidate.push_back(0);
             }
         }
         out.times.push_back(s.times[i]);
         out.values.insert(out.values.end(), s.values.begin() + static_cast<std::ptrdiff_t>(C * i),
                           s.values.begin() + static_cast<std::ptrdiff_t>(C * (i + 1)));
         out.given.push_back(s.given[i]);
+        out.candidate.push_back(s.candidate[i]);
     }
     s = std::move(out);
+}
+
+// Where keys on the given samples cannot meet an added sample (a Euler path sweeping through
+// gimbal lock within a frame, a fast turn between two frames), the added samples between the two
+// given ones around it become candidates for keys too: a key between frames where nothing else
+// follows the reference. Returns whether any did.
+bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double target, Samples& s) {
+    std::vector<FCurveKeys> channels(keys.channels.begin(), keys.channels.end());
+    const PlaybackMotion reduced(std::move(channels), keys.interpolation, mode);
+    const std::size_t C = channel_count(mode), n = s.times.size();
+    bool opened = false;
+    std::size_t done = 0;  // samples before this are decided
+    for (std::size_t i = 0; i < n; ++i) {
+        if (s.given[i] || i < done) continue;
+        const Quat want = channels_to_quat(&s.values[C * i], mode);
+        if (!(angle_between(reduced.at(s.times[i]), want) > target)) continue;
+        std::size_t a = i, b = i;
+        while (a > 0 && !s.given[a]) --a;
+        while (b + 1 < n && !s.given[b]) ++b;
+        for (std::size_t k = a + 1; k < b; ++k) {
+            opened = opened || !s.candidate[k];
+            s.candidate[k] = 1;
+        }
+        done = b;
+    }
+    return opened;
 }
 
 ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, const RotationMode& mode,
@@ -224,7 +255,8 @@ ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, con
     ProvedKeys out;
     out.excluded = std::move(excluded);
     const std::size_t C = channel_count(mode);
-    Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1)};
+    Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1),
+              std::vector<unsigned char>(times.size(), 1)};
     // The given samples checked as the reducer checks them, before any is added (errors name them).
     reduce_impl::check_float32_storage(make_problem(s, mode, ipo), tolerance);
     if (tolerance == 0.0) {
@@ -240,6 +272,8 @@ ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, con
     add_midpoints(values_at, C, out.excluded, s);
     for (int round = 1;; ++round) {
         out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
+        if (out.keys.max_error > kReduceShare * tolerance && open_candidates(out.keys, mode, kReduceShare * tolerance, s))
+            out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
         out.rounds = round;
         out.proof = prove_spans(out.keys, mode, reference, s.times, out.excluded, tolerance);
         if (out.proof.proven() || round >= kProofRounds) break;

@@ -142,9 +142,11 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 //      interval left unproven — add samples (there and at the quarters of the sample intervals
 //      around: the reference's channel values, continuous with the sample before) and reduce again;
 //      at most 8 reductions.
-// Keys sit on given samples only: the samples added (midpoints, the proof's) are checked like the
-// others but never become keys. The proof of the last reduction is returned whatever its verdict:
-// its bound holds at every instant of the proved spans either way.
+// Keys sit on given samples: the samples added (midpoints, the proof's) are checked like the others
+// and become candidates for keys only between two given samples where keys on given samples cannot
+// meet them (a Euler path sweeping through gimbal lock within a frame). The proof of the last
+// reduction is returned whatever its verdict: its bound holds at every instant of the proved spans
+// either way.
 //
 // Left out of the proof (reduce_keys_proved, quaternion mode only): the sample intervals across
 // which the original's quaternion channels flip hemisphere (consecutive samples with a negative dot
@@ -158,7 +160,7 @@ struct ProvedKeys {
     ReducedKeys keys;     // the reduced keys (max_error: at `times`, emulated)
     PlaybackBound proof;  // the reduced playback against the reference over every proved span, merged
     std::vector<std::pair<double, double>> excluded;  // sample intervals left out (the original's sign flips)
-    std::vector<double> times;  // the samples of the last reduction: the given ones and those added (never keys)
+    std::vector<double> times;  // the samples of the last reduction: the given ones and those added
     int rounds = 0;             // reductions made (1: the first was proved)
 };
 
