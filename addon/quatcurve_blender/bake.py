@@ -125,7 +125,7 @@ class TargetResult:
     keys_written: int
     action: str
     notes: list = field(default_factory=list)
-    max_error_deg: float = None  # the key reduction's measured bound (tolerance > 0), else None
+    max_error_deg: float = None  # the key reduction's bound (tolerance > 0; at every instant), else None
 
 
 @dataclass
@@ -259,13 +259,14 @@ class BakePlan:
             raise BakeError("%s: the %s curve gave non-finite values"
                             % (item.target.name, methods.label(settings.method)))
         try:
+            # Proved against the curve at every instant, not only at the baked frames.
             item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
-                                       math.radians(settings.tolerance))
+                                       math.radians(settings.tolerance), curve=curve)
         except ValueError as error:
             raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
-        item.notes.append("%s: reduced to %s keys within %s° (max error %.4f°)" % (
+        item.notes.append("%s: reduced to %s keys within %s° (%s)" % (
             item.target.name, f"{item.reduced.key_count:,}", num(settings.tolerance),
-            math.degrees(item.reduced.max_error)))
+            item.reduced.error_text(settings.tolerance)))
 
     def write(self):
         """Writes every target (write.write_rotations), computing first what is not computed yet;
@@ -310,10 +311,16 @@ class BakePlan:
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
                                                len(item.source.frames), count, action.name,
                                                item.source.notes + item.notes,
-                                               None if item.reduced is None else math.degrees(item.reduced.max_error)))
+                                               None if item.reduced is None else self._reduced_error_deg(item)))
         self.seconds += time.perf_counter() - begin
         result.seconds = self.seconds
         return result
+
+    @staticmethod
+    def _reduced_error_deg(item):
+        """The reduction's bound in degrees: proved at every instant where it was, else at the frames."""
+        bound = item.reduced.bound
+        return math.degrees(item.reduced.max_error if bound is None else bound)
 
     @staticmethod
     def _write_of(item):

@@ -373,6 +373,19 @@ def read_handles(fcurve):
     return left.astype(np.float64).reshape(n, 2), right.astype(np.float64).reshape(n, 2)
 
 
+def segment_interpolations(fcurve):
+    """The interpolations Blender evaluates between the F-curve's keys (each key's, the last one's
+    excepted: a key's interpolation shapes the segment after it), as a set of identifiers ('LINEAR',
+    'BEZIER', 'CONSTANT', 'BOUNCE', …). Read in bulk."""
+    n = len(fcurve.keyframe_points)
+    if n < 2:
+        return set()
+    raw = _get_enum(fcurve.keyframe_points, "interpolation", n)[:-1]
+    items = {item.value: item.identifier
+             for item in bpy.types.Keyframe.bl_rna.properties["interpolation"].enum_items}
+    return {items.get(int(v), str(int(v))) for v in np.unique(raw)}
+
+
 def key_frames(fcurves):
     """Sorted union of the key frames of the given F-curves (None entries are skipped)."""
     parts = [read_keys(f)[0] for f in fcurves if f is not None]

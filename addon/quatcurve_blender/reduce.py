@@ -12,16 +12,26 @@ targets (targets.py: reading), the native reducer, and write.py (writing).
     print(result.summary())
 
 Samples: a target's rotation channels as Blender evaluates them at every whole frame of its keyed
-range and at every key frame — so the reduced keys stay within the tolerance of the original at
-every frame and at every original key. Quaternion samples are made hemisphere-continuous first
-(signs flipped where neighbours disagree: the same rotations, and no forced keys at the flips).
+range and at every key frame. Quaternion samples are made hemisphere-continuous first (signs flipped
+where neighbours disagree: the same rotations, and no forced keys at the flips).
+
+The bound at every instant: when Blender's playback of the original keys can be emulated (every
+segment of the rotation channels LINEAR, or every one BEZIER; no NLA strips playing; constant
+extrapolation where a channel's keys end early), the native `quatcurve.reduce_keys_proved` reduces
+against that playback and proves the reduced keys within the tolerance of it at every instant from
+the first key to the last, not only at frames — except inside the frames where the original's own
+quaternion channels flip sign (Blender turns through the flip there, up to 360° inside one frame,
+while the reduction takes the short way); the result line names those frames' count. Otherwise the
+reduction holds at frames and keys (`reduce_values`) and the result line says why between frames is
+not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
 builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
 with modifiers are refused (the bound is for the keys alone).
 Everything is read and computed before anything is written, so an error leaves the file untouched.
 
-The bake calls `reduce_values` (imported by bake.py) when its tolerance is above 0, so
-`quatcurve.bake` with tolerance > 0 writes BEZIER keys, per channel where that saves keys.
+The bake calls `reduce_values` (imported by bake.py) with its method's curve when its tolerance is
+above 0, so `quatcurve.bake` with tolerance > 0 writes BEZIER keys, per channel where that saves keys,
+proved within the tolerance of the curve at every instant (`quatcurve.reduce_curve_proved`).
 """
 
 import math
@@ -32,7 +42,7 @@ import numpy as np
 
 from . import fcurves, native, targets, write
 from .workers import parallel_imap
-from .targets import TargetError
+from .targets import TargetError, num
 
 INTERPOLATIONS = ("LINEAR", "BEZIER")
 
@@ -69,24 +79,96 @@ def check_settings(settings):
 class ReducedChannels:
     """Reduced keys of one target's rotation channels. keys[i] = (frames, values, handle_left,
     handle_right) of channel i (handles (K, 2) for BEZIER, None for LINEAR); max_error in radians
-    (Blender's evaluation, emulated, against the samples)."""
+    (Blender's evaluation, emulated, against the samples).
+
+    proof: the quatcurve.PlaybackBound of Blender's playback of the keys against the reference (the
+    original keys' playback, or the bake's curve) at every instant from the first sample to the last
+    outside `excluded` — None when nothing was proved between frames (`between` then says why);
+    excluded: (M, 2) frame intervals left out of the proof (the original's own quaternion sign
+    flips)."""
     interpolation: str
     keys: list
     max_error: float
+    proof: object = None
+    excluded: np.ndarray = None
+    between: str = ""
 
     @property
     def key_count(self):
         return sum(len(k[0]) for k in self.keys)
 
+    @property
+    def bound(self):
+        """Radians: Blender's playback stays within it at every instant (outside `excluded`), or None."""
+        return None if self.proof is None else self.proof.bound
 
-def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", synchronized=False):
+    def error_text(self, tolerance_deg):
+        """The error for a result line: 'max error X° at every instant' (the proved bound), or where
+        the proof did not get within the tolerance the bound, what it found and where; with the count
+        of the original's sign-flip frames left out. Without a proof: 'max error X° at frames and
+        keys (between frames not proved: why)'."""
+        if self.proof is None:
+            return "max error %.4f° at frames and keys (between frames not proved: %s)" % (
+                math.degrees(self.max_error), self.between)
+        proof = self.proof
+        bound = math.degrees(proof.bound)
+        text = "max error %.4f° at every instant" % bound
+        if not proof.proven and len(proof.violations):
+            text += " — ABOVE the tolerance: %.4f° found, near frame %s" % (
+                math.degrees(proof.max_evaluated), num(proof.worst_time))
+        elif not proof.proven:
+            text = ("max error %.4f° at frames and keys; between frames within the tolerance except near "
+                    "frame %s, where it is not proved (bounded by %.4f°)" % (
+                        math.degrees(self.max_error), num(proof.worst_time), bound))
+        flips = 0 if self.excluded is None else len(self.excluded)
+        if flips:
+            text += (", except inside %d frame%s where the original's quaternion keys flip sign (Blender turns "
+                     "through the flip there, the reduction takes the short way)" % (flips, "" if flips == 1 else "s"))
+        return text
+
+
+def _channels_of(result, interpolation):
+    bezier = interpolation == "BEZIER"
+    return [(ch.frames, ch.values, ch.handle_left if bezier else None, ch.handle_right if bezier else None)
+            for ch in result.channels]
+
+
+def _proved(proved, interpolation):
+    """ReducedChannels of a quatcurve.ProvedKeys (tolerance 0 proves nothing between samples)."""
+    proof = proved.proof if math.isfinite(proved.proof.bound) else None
+    return ReducedChannels(interpolation, _channels_of(proved.keys, interpolation), proved.keys.max_error,
+                           proof=proof, excluded=proved.excluded,
+                           between="" if proof is not None else "a tolerance of 0 keeps every sample")
+
+
+def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", synchronized=False, curve=None,
+                  original=None):
     """Reduces dense channel values (N, 4) of mode 'QUATERNION' or 'AXIS_ANGLE' (angle, x, y, z) or
     (N, 3) of an Euler order, sampled at `frames`, to ReducedChannels. Quaternions are made
     hemisphere-continuous first; Euler and axis-angle values are kept as given. Raises ReduceError
-    for other modes or input the native reducer refuses."""
+    for other modes or input the native reducer refuses.
+
+    curve: the quatcurve.Curve the values sample (the bake): the reduction is proved against it at
+    every instant (quatcurve.reduce_curve_proved). original: (channels, interpolation) of the keys the
+    values are Blender's evaluation of (read_original): proved against their playback
+    (quatcurve.reduce_keys_proved). Neither: proved at the samples only."""
     qc = native.require()
     frames = np.asarray(frames, dtype=np.float64)
     values = np.asarray(values, dtype=np.float64)
+    if mode not in ("QUATERNION", "AXIS_ANGLE") + fcurves.EULER_ORDERS:
+        raise ReduceError("rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
+                          "rotations" % mode)
+    if curve is not None or original is not None:
+        try:
+            if curve is not None:
+                proved = qc.reduce_curve_proved(curve, mode, frames, values, tolerance_rad, interpolation,
+                                                synchronized)
+            else:
+                proved = qc.reduce_keys_proved(original[0], original[1], mode, frames, values, tolerance_rad,
+                                               interpolation, synchronized)
+        except ValueError as error:
+            raise ReduceError(str(error)) from error
+        return _proved(proved, interpolation)
     try:
         if mode == "QUATERNION":
             values = qc.quats_to_channels(values, "QUATERNION")
@@ -95,18 +177,57 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
         elif mode in fcurves.EULER_ORDERS:
             result = qc.reduce_keys_euler(frames, values, mode, tolerance_rad, interpolation,
                                           synchronized, detailed=True)
-        elif mode == "AXIS_ANGLE":
+        else:
             result = qc.reduce_keys_axis_angle(frames, values, tolerance_rad, interpolation,
                                                synchronized, detailed=True)
-        else:
-            raise ReduceError("rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
-                              "rotations" % mode)
     except ValueError as error:
         raise ReduceError(str(error)) from error
-    bezier = interpolation == "BEZIER"
-    keys = [(ch.frames, ch.values, ch.handle_left if bezier else None, ch.handle_right if bezier else None)
-            for ch in result.channels]
-    return ReducedChannels(interpolation, keys, result.max_error)
+    return ReducedChannels(interpolation, _channels_of(result, interpolation), result.max_error)
+
+
+# ---- the original keys' playback, for the proof ------------------------------------------------------
+
+EMULATED = ("LINEAR", "BEZIER")  # interpolations quatcurve.blender_evaluate plays as Blender does
+
+
+def read_original(playback, frames):
+    """(channels, interpolation) of the original keys behind `playback` (targets.Playback), as
+    quatcurve.reduce_keys_proved takes them — each channel (frames, values, handle_left,
+    handle_right), an unkeyed channel as one key holding the property's value — or (None, why) when
+    Blender's playback of them is not emulated bit for bit: NLA strips, another interpolation than
+    LINEAR or BEZIER, LINEAR and BEZIER segments mixed, keys out of order, or linear extrapolation
+    where a channel's keys end before the others'. (Easing shapes only Blender's dynamic-effect
+    interpolations, never LINEAR or BEZIER ones; modifiers are refused before this is read.)"""
+    if playback.nla:
+        return None, "NLA strips play on it"
+    kinds = set()
+    for index, fcurve in enumerate(playback.fcurves):
+        if fcurve is None:
+            continue
+        found = fcurves.segment_interpolations(fcurve)
+        odd = sorted(found - set(EMULATED))
+        if odd:
+            return None, "%s[%d] has %s keys" % (playback.prop, index, "/".join(odd))
+        kinds |= found
+    if len(kinds) > 1:
+        return None, "its rotation channels mix LINEAR and BEZIER keys"
+    interpolation = kinds.pop() if kinds else "LINEAR"
+    current = getattr(playback.target.owner, playback.prop)
+    channels = []
+    for index, fcurve in enumerate(playback.fcurves):
+        if fcurve is None:
+            value = float(current[index])
+            point = np.array([[frames[0], value]])
+            channels.append((frames[:1].copy(), np.array([value]), point, point))
+            continue
+        key_f, key_v = fcurves.read_keys(fcurve)
+        if len(key_f) > 1 and not (key_f[1:] > key_f[:-1]).all():
+            return None, "%s[%d]'s keys are not in frame order" % (playback.prop, index)
+        if fcurve.extrapolation != "CONSTANT" and (key_f[0] > frames[0] or key_f[-1] < frames[-1]):
+            return None, "%s[%d] extrapolates linearly" % (playback.prop, index)
+        left, right = fcurves.read_handles(fcurve)
+        channels.append((np.array(key_f), np.array(key_v), left, right))
+    return (channels, interpolation), ""
 
 
 # ---- reducing existing keys (the operator) ----------------------------------------------------------
@@ -119,6 +240,8 @@ class TargetReduce:
     frames: np.ndarray          # sample frames
     values: np.ndarray          # (N, C) Blender's evaluation of the channels there
     keys_before: int
+    original: tuple = None      # read_original's (channels, interpolation); None: not emulated
+    between: str = ""           # why nothing is proved between frames (original is None)
     reduced: ReducedChannels = None
 
 
@@ -128,8 +251,12 @@ class TargetResult:
     mode: str
     keys_before: int
     keys_after: int
-    max_error_deg: float
+    max_error_deg: float        # at the samples (every frame and key), Blender's evaluation emulated
     action: str
+    error_text: str = ""        # ReducedChannels.error_text: the bound at every instant, or why not
+    bound_deg: float = None     # at every instant (outside the original's sign flips); None: no proof ran
+    proven: bool = False        # bound_deg is within the tolerance
+    sign_flips: list = field(default_factory=list)  # (start, end) frames left out: the original's sign flips
 
 
 @dataclass
@@ -144,13 +271,18 @@ class ReduceResult:
 
     def summary(self):
         share = 100.0 * self.keys_after / self.keys_before if self.keys_before else 0.0
-        return ("%d target%s, rotation keys %s → %s (%.1f %%), max error %.4f° (bound %g°), %.2f s"
+        proved = [t.bound_deg for t in self.targets if t.proven]
+        if proved and len(proved) == len(self.targets):
+            between = ", %.4f° at every instant" % max(proved)
+        else:
+            between = ", between frames not proved within it for %d of them" % (len(self.targets) - len(proved))
+        return ("%d target%s, rotation keys %s → %s (%.1f %%), max error %.4f° (bound %g°)%s, %.2f s"
                 % (len(self.targets), "" if len(self.targets) == 1 else "s", f"{self.keys_before:,}",
-                   f"{self.keys_after:,}", share, self.max_error_deg, self.tolerance, self.seconds))
+                   f"{self.keys_after:,}", share, self.max_error_deg, self.tolerance, between, self.seconds))
 
     def lines(self):
-        return ["%s (%s): %d → %d keys, max error %.4f° in '%s'"
-                % (t.name, t.mode, t.keys_before, t.keys_after, t.max_error_deg, t.action)
+        return ["%s (%s): %d → %d keys, %s in '%s'"
+                % (t.name, t.mode, t.keys_before, t.keys_after, t.error_text, t.action)
                 for t in self.targets]
 
 
@@ -168,10 +300,12 @@ def read_target(target):
             raise ReduceError("%s: %s[%d] has F-curve modifiers; the bound holds for keys alone "
                               "(apply or remove the modifiers first)" % (target.name, source.prop, index))
     frames = native.require().whole_frame_samples(source.frames)  # every whole frame and key
-    values = targets.playback(target).evaluate(frames)
+    playback = targets.playback(target)
+    values = playback.evaluate(frames)
     if not np.isfinite(values).all():
         raise ReduceError("%s: %s evaluates to non-finite values" % (target.name, source.prop))
-    return TargetReduce(target, source.mode, source.prop, frames, values, source.key_count)
+    original, between = read_original(playback, frames)
+    return TargetReduce(target, source.mode, source.prop, frames, values, source.key_count, original, between)
 
 
 def reduce(found, settings):
@@ -196,7 +330,9 @@ def reduce(found, settings):
     def reduce_item(item):
         try:
             item.reduced = reduce_values(item.frames, item.values, item.mode, tol, settings.interpolation,
-                                         settings.synchronized)
+                                         settings.synchronized, original=item.original)
+            if item.original is None:
+                item.reduced.between = item.between
         except ReduceError as error:
             raise ReduceError("%s: %s" % (item.target.name, error)) from error
         return item
@@ -220,8 +356,13 @@ def reduce(found, settings):
     for item, action in zip(items, actions):
         after = item.reduced.key_count
         error_deg = math.degrees(item.reduced.max_error)
+        bound = item.reduced.bound
         result.targets.append(TargetResult(item.target.name, item.mode, item.keys_before, after,
-                                           error_deg, action.name))
+                                           error_deg, action.name, item.reduced.error_text(settings.tolerance),
+                                           None if bound is None else math.degrees(bound),
+                                           item.reduced.proof is not None and item.reduced.proof.proven,
+                                           [] if item.reduced.excluded is None else
+                                           [tuple(map(float, e)) for e in item.reduced.excluded]))
         result.keys_before += item.keys_before
         result.keys_after += after
         result.max_error_deg = max(result.max_error_deg, error_deg)

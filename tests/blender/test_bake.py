@@ -282,19 +282,24 @@ def test_panel_settings_drive_the_operator(scene):
 
 def test_tolerance_goes_through_the_reduction_hook(scene, monkeypatch):
     """With a reducer plugged into bake.reduce_keys, tolerance > 0 writes its keys (here: every
-    other frame, LINEAR) and reports them."""
+    other frame, LINEAR) and reports them; the reducer gets the method's curve, to prove its keys
+    against at every instant."""
     class Reduced:
         interpolation = "LINEAR"
 
         def __init__(self, frames, values):
             self.keys = [(frames[::2], values[::2, i], None, None) for i in range(values.shape[1])]
             self.key_count = sum(len(k[0]) for k in self.keys)
-            self.max_error = math.radians(0.05)
+            self.max_error = self.bound = math.radians(0.05)
+
+        def error_text(self, tolerance):
+            return "max error 0.0500° at every instant"
 
     calls = []
 
-    def reducer(frames, values, mode, tolerance):
+    def reducer(frames, values, mode, tolerance, curve=None):
         calls.append((mode, tolerance))
+        assert type(curve).__name__ == "Curve"
         return Reduced(frames, values)
 
     monkeypatch.setattr(bake, "reduce_keys", reducer)

@@ -129,7 +129,9 @@ def test_quaternion_bound_holds_under_blender_evaluation(reducer, interpolation,
         before += 4 * len(frames)
         after += key_total(curves)
     if tolerance >= 0.1:  # at 0.001° the clips' own noise leaves little to remove
-        assert after < before * (0.6 if interpolation == "LINEAR" else 0.25)
+        # (LINEAR synchronized keeps 63% of freebvh's keys: within the bound at every instant, the
+        # chords must also follow the original's corners at every frame; 58% at frames alone)
+        assert after < before * (0.65 if interpolation == "LINEAR" else 0.25)
     else:
         assert after <= before
 
@@ -230,6 +232,110 @@ def test_hemisphere_flips_in_the_source_are_harmless(reducer):
     curves = rotation_curves(obj, "rotation_quaternion", 4)
     assert max_angle_deg(blender_quats(curves, frames, "QUATERNION"), q) <= 0.1
     assert key_total(curves) < len(frames)
+
+
+# ---- the bound between frames (issue 27) ----------------------------------------------------------------
+
+def swinging_object(name, frames, values, mode, swing=3.0):
+    """An object keyed at every frame with BEZIER keys whose handles Blender computed (AUTO_CLAMPED, as
+    keyframe_insert and the BVH importer make them), then made FREE and `swing` times as steep: the
+    F-curves swing between frames, where the samples at frames do not see them."""
+    obj = keyed_object(name, frames, values, mode)
+    prop, count = fcurves.rotation_property(mode)
+    for fcurve in rotation_curves(obj, prop, count):
+        key_f, key_v = fcurves.read_keys(fcurve)
+        key_f, key_v = np.array(key_f), np.array(key_v)
+        for point in fcurve.keyframe_points:
+            point.interpolation = "BEZIER"
+            point.handle_left_type = point.handle_right_type = "AUTO_CLAMPED"
+        fcurve.update()  # Blender computes the automatic handles
+        left, right = fcurves.read_handles(fcurve)
+        left[:, 1] = key_v + swing * (left[:, 1] - key_v)
+        right[:, 1] = key_v + swing * (right[:, 1] - key_v)
+        fcurves.write_keys(fcurve, key_f, key_v, "BEZIER", left, right)
+    return obj
+
+
+def played(curves, times, mode):
+    """Blender's own rotation (fcurve.evaluate) of the F-curves at `times`: (N, 4) unit quaternions."""
+    values = np.stack([np.array([f.evaluate(float(t)) for t in times]) for f in curves], axis=1)
+    return native.require().channels_to_quats(values, mode)
+
+
+def test_bound_holds_between_frames_against_the_original_playback(reducer):
+    """Motion capture keyed at every frame with swinging BEZIER handles (quaternion, with stored signs
+    that flip every 7th frame on one joint, and Euler), reduced at 0.1°: Blender's own evaluation of the
+    reduced keys at 8 points per frame stays within 0.1° (+1e-4) of the original keys' own playback,
+    except inside the frames where the original's quaternion channels flip sign — which the result
+    reports. The plain reduction of the same samples (proved at frames only) is measured the same way."""
+    tol = 0.1
+    joints = clip_motion("mocapbank.bvh", count=3)
+    qc = native.require()
+    cases = []
+    for k, (name, frames, q, e, order) in enumerate(joints):
+        frames, q, e = frames[:240], q[:240], e[:240]  # 8 s of the clip
+        if k == 0:
+            stored = q.copy()
+            stored[np.arange(len(q)) // 7 % 2 == 1] *= -1  # the stored signs flip every 7th frame
+            cases.append((swinging_object(name + "_flips", frames, stored, "QUATERNION"), "QUATERNION", frames))
+        cases.append((swinging_object(name + "_q", frames, q, "QUATERNION"), "QUATERNION", frames))
+        cases.append((swinging_object(name + "_e", frames, e, order), order, frames))
+    originals = [fcurves.active_action(obj) for obj, _, _ in cases]
+    samples = [reduce.read_target(targets.Target(obj)) for obj, _, _ in cases]
+    result = reduce.reduce([targets.Target(obj) for obj, _, _ in cases], reduce.ReduceSettings(tolerance=tol))
+    print("\n" + "\n".join(result.lines()))
+    print(result.summary())
+    worst_before = worst_after = 0.0
+    for (obj, mode, frames), original, item, line, target in zip(cases, originals, samples, result.lines(),
+                                                                 result.targets):
+        prop, count = fcurves.rotation_property(mode)
+        times = np.arange(frames[0] * 8, frames[-1] * 8 + 1) / 8.0
+        want = played(rotation_curves(obj, prop, count, original), times, mode)
+        got = played(rotation_curves(obj, prop, count), times, mode)
+        # The original's own sign flips: whole frames whose stored quaternions lie in opposite hemispheres.
+        flips = []
+        if mode == "QUATERNION":
+            whole = np.stack([fcurves.evaluate(c, frames) for c in rotation_curves(obj, prop, count, original)], 1)
+            flips = [(frames[i], frames[i + 1]) for i in np.flatnonzero(np.sum(whole[1:] * whole[:-1], axis=1) < 0)]
+        assert target.sign_flips == flips, line
+        assert target.proven and target.bound_deg <= tol, line
+        assert "at every instant" in line and "ABOVE" not in line, line
+        assert ("flip sign" in line) == bool(flips), line
+        inside = np.zeros(len(times), dtype=bool)
+        for a, b in flips:
+            inside |= (times > a) & (times < b)
+        deviation = np.degrees(qc.angle_between(got, want))[~inside]
+        assert deviation.max() <= tol + 1e-4, "%s: %.5f° at frame %s" % (
+            line, deviation.max(), times[~inside][deviation.argmax()])
+        assert deviation.max() <= target.bound_deg + 1e-4, line
+        worst_after = max(worst_after, deviation.max())
+        # Before: the same samples reduced at frames and keys only (reduce_values without the original).
+        plain = reduce.reduce_values(item.frames, item.values, mode, math.radians(tol))
+        plain_values = np.stack([qc.blender_evaluate(k[0], k[1], times, "BEZIER", k[2], k[3]) for k in plain.keys], 1)
+        before = np.degrees(qc.angle_between(qc.channels_to_quats(plain_values, mode), want))[~inside]
+        worst_before = max(worst_before, before.max())
+        print("%s: between frames at 8 points per frame: plain reduction %.4f°, proved %.4f° (bound %.4f°), "
+              "%d → %d keys" % (obj.name, before.max(), deviation.max(), target.bound_deg,
+                                plain.key_count, target.keys_after))
+    print("largest deviation between frames (8 points per frame): before %.4f°, after %.4f°"
+          % (worst_before, worst_after))
+    assert worst_before > tol  # the swinging handles are what the samples at frames miss
+
+
+def test_between_frames_not_proved_says_why(reducer):
+    """Keys Blender's playback of which is not emulated (CONSTANT segments here): reduced at frames and
+    keys as before, and the result line says that between frames is not proved and why."""
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object(name, frames[:60], q[:60], "QUATERNION")
+    for fcurve in rotation_curves(obj, "rotation_quaternion", 4):
+        for point in fcurve.keyframe_points[:5]:
+            point.interpolation = "CONSTANT"
+    result = reduce.reduce([targets.Target(obj)], reduce.ReduceSettings(tolerance=0.1))
+    line = result.lines()[0]
+    print("\n" + line)
+    assert "between frames not proved: rotation_quaternion[0] has CONSTANT keys" in line, line
+    assert result.targets[0].bound_deg is None
+    assert "between frames not proved within it for 1 of them" in result.summary()
 
 
 # ---- errors: CANCELLED, nothing changed --------------------------------------------------------------
