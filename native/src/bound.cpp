@@ -404,7 +404,9 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         b.bounds(p0.t, p1.t, vb, ab);
         if (std::nextafter(static_cast<float>(p0.t), HUGE_VALF) >= static_cast<float>(p1.t)) {
             // Neighbouring float32 frames: a float32 motion shows one of its two ends in between (a
-            // step there, such as the snap to a key, included), the other moves by at most its speed.
+            // step there, such as the snap to a key, included), the other moves by at most its speed;
+            // two float32 motions show the same end (Blender evaluates both at the same frame).
+            if (a.float32_frames() && b.float32_frames()) return std::fmax(p0.d, p1.d) + kArithmeticSlack;
             return std::fmax(p0.d, p1.d) + (va + vb) * h + kArithmeticSlack;
         }
         const double first = std::fmax(0.5 * (p0.d + p1.d + (va + vb) * h), std::fmax(p0.d, p1.d));
@@ -415,7 +417,12 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
                                                   p1.qa.y - sigma * p1.qb.y, p1.qa.z - sigma * p1.qb.z));
         const double chord = std::fmax(c0, c1) + (aa + ab) * h * h / 8.0;
         const double second = chord < 2.0 ? 4.0 * std::asin(0.5 * chord) : HUGE_VAL;
-        return std::fmin(first, second) + a.jump_bound(p0.t, p1.t, va) + b.jump_bound(p0.t, p1.t, vb) + kArithmeticSlack;
+        // Two float32 motions are both evaluated at float(t), a frame inside [t0, t1] (its ends are
+        // float32 frames): the bounds of the interval cover it with no jump for the rounding.
+        const double jumps = a.float32_frames() && b.float32_frames()
+                                 ? 0.0
+                                 : a.jump_bound(p0.t, p1.t, va) + b.jump_bound(p0.t, p1.t, vb);
+        return std::fmin(first, second) + jumps + kArithmeticSlack;
     };
     std::vector<std::pair<Point, Point>> stack;
     Point prev = evaluate(times.front());

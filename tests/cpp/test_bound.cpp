@@ -233,6 +233,27 @@ TEST(FitProof, EulerBranchChangeFarFromGimbalLockIsRefused) {
     }
 }
 
+// Two playbacks are evaluated at the same float32 frame: near frame 10,000 (float32 steps of 2^-10)
+// a fast spin's keys against the same keys turned by 1e-3 rad are proved within 1e-3 + 1e-5 rad, with
+// no jump for float32 rounding (which alone would be ~4e-3 rad there at this speed).
+TEST(ProveWithin, TwoPlaybacksShareTheirFloat32Frames) {
+    std::vector<FCurveKeys> a(3), b(3);
+    for (int k = 0; k <= 40; ++k) {
+        const double f = 10000.0 + k;
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double v = c == 2 ? 0.8 * k : 0.1 * std::sin(0.3 * k + static_cast<double>(c));
+            a[c].frames.push_back(f);
+            b[c].frames.push_back(f);
+            a[c].values.push_back(static_cast<float>(v));
+            b[c].values.push_back(static_cast<float>(v + (c == 2 ? 1e-3 : 0.0)));
+        }
+    }
+    const RotationMode mode = parse_rotation_mode("XYZ");
+    const PlaybackMotion pa(a, KeyInterpolation::LINEAR, mode), pb(b, KeyInterpolation::LINEAR, mode);
+    const PlaybackBound r = prove_within(pa, pb, {10000.0, 10040.0}, 1e-3 + 1e-5);
+    EXPECT_TRUE(r.proven()) << r.bound << " at " << r.worst_time;
+}
+
 // A violation between samples is found and reported: LINEAR quaternion keys every 2 frames against
 // the SLERP through them (nlerp sags up to ~0.3° mid-segment on 60° arcs), proved at the keys alone.
 TEST(ProveWithin, FindsWhatTheSamplesMiss) {

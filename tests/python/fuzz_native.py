@@ -1732,7 +1732,9 @@ def draw_original(d, mode):
     interpolation, times, values)."""
     rng = d.rng
     k = int(rng.integers(2, 40))
-    frames = (np.cumsum(rng.uniform(0.3, 3.0, k)) + rng.uniform(-50, 50)).astype(np.float32).astype(np.float64)
+    # Far frames too: float32 steps of 2^-10 frames near 10,000 (both playbacks evaluate at them).
+    offset = float(d.pick((0.0, 0.0, 9000.0, 30000.0), "frame_offset"))
+    frames = (np.cumsum(rng.uniform(0.3, 3.0, k)) + rng.uniform(-50, 50) + offset).astype(np.float32).astype(np.float64)
     width = _channel_count(mode)
     values = np.cumsum(rng.normal(0, 0.15, (k, width)), 0)
     if mode == "QUATERNION":

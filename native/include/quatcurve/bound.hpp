@@ -28,8 +28,9 @@
 // |q̈| ≤ 2|a''|/|a| + 5|a'|²/|a|²; axis-angle: q = (cos θ/2, sin θ/2·n), n = v/|v|,
 // |q̈| ≤ ¼θ'² + ½|θ''| + |θ'||n'| + |n''|). Blender evaluates at float32 frames and snaps a frame
 // within 1e-4 of a key to the key's value: both are steps, not slopes, and jump_bound adds them to the
-// interval they fall in; 2e-6 rad covers Blender's float32 arithmetic (as the key reducer's
-// verification margin, reduce.hpp).
+// interval they fall in — except between two playbacks (the key reducer's proof, reduce.hpp), which
+// Blender evaluates at the same float32 frame; 2e-6 rad covers Blender's float32 arithmetic (as the
+// key reducer's verification margin, reduce.hpp).
 #pragma once
 
 #include <cstddef>
@@ -56,6 +57,10 @@ public:
     virtual double jump_bound(double /*t0*/, double /*t1*/, double /*speed*/) const { return 0.0; }
     // The times where the motion may turn a corner, sorted.
     virtual std::vector<double> breaks() const { return {}; }
+    // Whether the motion is evaluated at float32 frames (Blender's playback): at(t) is at(float(t)).
+    // Two such motions show the same float32 frame at any time, so between neighbouring float32
+    // frames their angle is the angle at one of them.
+    virtual bool float32_frames() const { return false; }
 };
 
 // A Curve as a motion (Curve::motion_bounds; Curve::corner_times are the breaks).
@@ -84,6 +89,7 @@ public:
     void bounds(double t0, double t1, double& speed, double& accel) const override;
     double jump_bound(double t0, double t1, double speed) const override;
     std::vector<double> breaks() const override;  // every channel's key frames
+    bool float32_frames() const override { return true; }
     // The channel values Blender shows at t (channel_count(mode) of them).
     void values(double t, double* out) const;
     // Upper bounds of |d value/d frame| and |d² value/d frame²| of channel c at every frame in
