@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -25,12 +26,13 @@ constexpr double kAddedSampleGap = 1.0 / 1024.0;
 // A sample interval where the proof fails, and the one on either side of it, get samples at their
 // quarters too (add_samples).
 constexpr int kQuarters = 4;
-// prove_within halves an interval down to this (frames), as the fit's proof does.
+// prove_within halves an interval down to this (frames): finer than the fit's 1/1024, since a reduction
+// at 90% of the tolerance may run close to it between samples where both playbacks turn fast.
 constexpr double kMinStep = 1.0 / 16384.0;
-// Evaluations the proof may spend per sample (and at least kMinEvaluations): a cap that only a
-// proof stuck at min_step everywhere reaches (what is left then counts as unproven).
+// Evaluations the proof of a piece may spend per sample (and at least kMinEvaluations): a cap that only
+// a proof stuck at min_step everywhere reaches (what is left then counts as unproven).
 constexpr std::size_t kEvaluationsPerSample = 4096;
-constexpr std::size_t kMinEvaluations = 2'000'000;
+constexpr std::size_t kMinEvaluations = 65536;
 
 // The reference's channel values at t, continuous with `before` (the sample before t).
 using ValuesAt = std::function<void(double t, const double* before, double* out)>;
@@ -95,28 +97,122 @@ void merge_into(PlaybackBound& all, const PlaybackBound& part) {
     all.evaluations += part.evaluations;
 }
 
-// The reduced keys' playback against `reference` over every span of `times` between the excluded
-// intervals (each excluded interval joins two neighbouring samples).
-PlaybackBound prove_spans(const ReducedKeys& keys, const RotationMode& mode, const Motion& reference,
-                          const std::vector<double>& times, const std::vector<std::pair<double, double>>& excluded,
-                          double tolerance) {
-    std::vector<FCurveKeys> channels(keys.channels.begin(), keys.channels.end());
-    const PlaybackMotion reduced(std::move(channels), keys.interpolation, mode);
-    const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * times.size());
+// ---- the proof, piece by piece ---------------------------------------------------------------------
+// The range is cut at every kPiece-th given sample (and at the excluded intervals) into pieces, each
+// proved on its own with the keys that shape Blender's playback there: a piece whose keys did not
+// change since the last reduction keeps its proof (the playback there is the same, whatever samples
+// were added), so the rounds after the first prove only where the keys moved, and every evaluation
+// searches a few keys rather than all of them.
+
+constexpr std::size_t kPiece = 32;
+
+// The keys of `ch` that shape Blender's evaluation on [t0, t1]: from the one before the last key at or
+// before t0 to the one after the first key at or after t1 (a frame within 1e-4 of a key takes its
+// value, and keys are farther apart than that), as their own F-curve.
+FCurveKeys slice_keys(const FCurveKeys& ch, double t0, double t1) {
+    const std::size_t n = ch.frames.size();
+    if (n == 0) return ch;
+    const auto first = std::upper_bound(ch.frames.begin(), ch.frames.end(), t0);
+    const auto last = std::lower_bound(ch.frames.begin(), ch.frames.end(), t1);
+    std::size_t i0 = static_cast<std::size_t>(first - ch.frames.begin()), i1 = static_cast<std::size_t>(last - ch.frames.begin());
+    i0 = i0 >= 2 ? i0 - 2 : 0;
+    i1 = std::min(n - 1, i1 + 1);
+    FCurveKeys out;
+    out.frames.assign(ch.frames.begin() + static_cast<std::ptrdiff_t>(i0), ch.frames.begin() + static_cast<std::ptrdiff_t>(i1) + 1);
+    out.values.assign(ch.values.begin() + static_cast<std::ptrdiff_t>(i0), ch.values.begin() + static_cast<std::ptrdiff_t>(i1) + 1);
+    if (ch.handle_left.size() == 2 * n && ch.handle_right.size() == 2 * n) {
+        out.handle_left.assign(ch.handle_left.begin() + static_cast<std::ptrdiff_t>(2 * i0),
+                               ch.handle_left.begin() + static_cast<std::ptrdiff_t>(2 * i1) + 2);
+        out.handle_right.assign(ch.handle_right.begin() + static_cast<std::ptrdiff_t>(2 * i0),
+                                ch.handle_right.begin() + static_cast<std::ptrdiff_t>(2 * i1) + 2);
+    }
+    return out;
+}
+
+// A motion whose breaks are computed once (prove_within asks every piece's proof for all of them).
+class KeptBreaks : public Motion {
+public:
+    explicit KeptBreaks(const Motion& m) : m_(m), breaks_(m.breaks()) {}
+    Quat at(double t) const override { return m_.at(t); }
+    void bounds(double t0, double t1, double& speed, double& accel) const override { m_.bounds(t0, t1, speed, accel); }
+    double jump_bound(double t0, double t1, double speed) const override { return m_.jump_bound(t0, t1, speed); }
+    bool float32_frames() const override { return m_.float32_frames(); }
+    std::vector<double> breaks() const override { return breaks_; }
+
+private:
+    const Motion& m_;
+    std::vector<double> breaks_;
+};
+
+// The reference on one piece: the original keys sliced to it (a PlaybackMotion of a few keys), or the
+// whole reference (a curve).
+using ReferenceOn = std::function<std::unique_ptr<Motion>(double t0, double t1)>;
+
+struct Piece {
+    double t0 = 0.0, t1 = 0.0;          // given samples (float32 frames)
+    std::unique_ptr<Motion> reference;  // null: the whole reference
+    std::vector<FCurveKeys> keys;       // the reduced keys last proved here (sliced)
+    PlaybackBound proof;
+    bool proved = false;
+};
+
+bool same_keys(const std::vector<FCurveKeys>& a, const std::vector<FCurveKeys>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t c = 0; c < a.size(); ++c)
+        if (a[c].frames != b[c].frames || a[c].values != b[c].values || a[c].handle_left != b[c].handle_left ||
+            a[c].handle_right != b[c].handle_right)
+            return false;
+    return true;
+}
+
+// The pieces of the given samples `times`: each span between the excluded intervals (each joins two
+// neighbouring samples) cut at every kPiece-th sample; the pieces of a span share their ends.
+std::vector<Piece> make_pieces(const std::vector<double>& times, const std::vector<std::pair<double, double>>& excluded,
+                               const ReferenceOn& reference_on) {
+    std::vector<Piece> pieces;
+    std::size_t e = 0, begin = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        const bool left_out = e < excluded.size() && excluded[e].first == static_cast<float>(times[i]);
+        if (!left_out && i + 1 < times.size()) continue;
+        for (std::size_t a = begin;; a += kPiece) {  // the span [begin, i]
+            const std::size_t b = std::min(a + kPiece, i);
+            Piece piece;
+            piece.t0 = static_cast<float>(times[a]);
+            piece.t1 = static_cast<float>(times[b]);
+            piece.reference = reference_on(piece.t0, piece.t1);
+            pieces.push_back(std::move(piece));
+            if (b == i) break;
+        }
+        if (left_out) ++e;
+        begin = i + 1;
+    }
+    return pieces;
+}
+
+// The reduced keys' playback against the reference over every piece (`samples`: the samples of the
+// reduction, whose times inside a piece are the proof's evaluated times there); pieces whose keys
+// are those proved last keep their proof.
+PlaybackBound prove_pieces(const ReducedKeys& keys, const RotationMode& mode, const Motion& whole_reference,
+                           const std::vector<double>& samples, double tolerance, std::vector<Piece>& pieces) {
     PlaybackBound all;
-    std::size_t e = 0;  // the next excluded interval
-    for (std::size_t begin = 0; begin < times.size();) {
-        std::size_t last = begin;  // the span's last sample: where an excluded interval starts, or the end
-        while (last + 1 < times.size() &&
-               !(e < excluded.size() && excluded[e].first == static_cast<float>(times[last])))
-            ++last;
-        if (e < excluded.size() && excluded[e].first == static_cast<float>(times[last])) ++e;
-        const std::vector<double> span(times.begin() + static_cast<std::ptrdiff_t>(begin),
-                                       times.begin() + static_cast<std::ptrdiff_t>(last) + 1);
-        merge_into(all, prove_within(reduced, reference, span, tolerance, kMinStep, cap));
-        begin = last + 1;
+    for (Piece& piece : pieces) {
+        std::vector<FCurveKeys> sliced;
+        for (const ReducedChannel& ch : keys.channels) sliced.push_back(slice_keys(ch, piece.t0, piece.t1));
+        if (!piece.proved || !same_keys(sliced, piece.keys)) {
+            const auto from = std::lower_bound(samples.begin(), samples.end(), piece.t0);
+            const auto to = std::upper_bound(samples.begin(), samples.end(), piece.t1);
+            const std::vector<double> span(from, to);
+            const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * span.size());
+            const PlaybackMotion reduced(sliced, keys.interpolation, mode);
+            const Motion& reference = piece.reference ? *piece.reference : whole_reference;
+            piece.proof = prove_within(reduced, reference, span, tolerance, kMinStep, cap);
+            piece.keys = std::move(sliced);
+            piece.proved = true;
+        }
+        merge_into(all, piece.proof);
     }
     std::sort(all.violations.begin(), all.violations.end());
+    all.violations.erase(std::unique(all.violations.begin(), all.violations.end()), all.violations.end());
     std::sort(all.unproven.begin(), all.unproven.end());
     return all;
 }
@@ -248,8 +344,8 @@ bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double t
     return opened;
 }
 
-ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, const RotationMode& mode,
-                         const std::vector<double>& times, std::vector<double> values,
+ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_on, const ValuesAt& values_at,
+                         const RotationMode& mode, const std::vector<double>& times, std::vector<double> values,
                          std::vector<std::pair<double, double>> excluded, double tolerance, KeyInterpolation ipo,
                          bool synchronized) {
     ProvedKeys out;
@@ -269,13 +365,14 @@ ProvedKeys reduce_proved(const Motion& reference, const ValuesAt& values_at, con
         out.times = std::move(s.times);
         return out;
     }
+    std::vector<Piece> pieces = make_pieces(times, out.excluded, reference_on);
     add_midpoints(values_at, C, out.excluded, s);
     for (int round = 1;; ++round) {
         out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
         if (out.keys.max_error > kReduceShare * tolerance && open_candidates(out.keys, mode, kReduceShare * tolerance, s))
             out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
         out.rounds = round;
-        out.proof = prove_spans(out.keys, mode, reference, s.times, out.excluded, tolerance);
+        out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
         if (out.proof.proven() || round >= kProofRounds) break;
         if (add_samples(out.proof, values_at, C, out.excluded, s) == 0) break;
     }
@@ -323,8 +420,13 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
             before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
             for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
     };
-    return reduce_proved(playback, values_at, mode, times, std::move(rows), std::move(excluded), tolerance,
-                         interpolation, synchronized);
+    const ReferenceOn reference_on = [&](double t0, double t1) -> std::unique_ptr<Motion> {
+        std::vector<FCurveKeys> sliced;
+        for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
+        return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, mode);
+    };
+    return reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), std::move(excluded),
+                         tolerance, interpolation, synchronized);
 }
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
@@ -344,7 +446,9 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
             before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
             for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
     };
-    return reduce_proved(motion, values_at, mode, times, rows, {}, tolerance, interpolation, synchronized);
+    const KeptBreaks kept(motion);
+    const ReferenceOn whole = [](double, double) { return std::unique_ptr<Motion>(); };
+    return reduce_proved(kept, whole, values_at, mode, times, rows, {}, tolerance, interpolation, synchronized);
 }
 
 }  // namespace quatcurve
