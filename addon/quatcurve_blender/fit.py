@@ -524,18 +524,24 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     if not proof.proven:
         notes.append("%s: the bound holds within %.4f° at every instant, ABOVE the tolerance near frame %.3f%s" % (
             keys.name, math.degrees(proof.bound), proof.worst_time,
-            " (a change of Euler branch: convert the target to quaternion for the method's exact path)"
+            (" (a change of Euler branch: convert the target to quaternion for the method's exact path)"
+             if not keys.is_axis_angle else
+             " (a change of the angle's turn: convert the target to quaternion for the method's exact path)")
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
     return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, len(kf.times),
                    ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns)
 
 
 def euler_notes(keys, kf):
-    """Where the Euler channels change branch between keys (beside a key at gimbal lock, or nearest
-    the lock), one note each."""
-    return ["%s: between the keys at frames %g and %g the method's path reaches the second key on another "
-            "Euler branch; the channels change branch at frame %.3f" % (
-                keys.name, keys.frames[segment], keys.frames[segment + 1], frame) for segment, frame in kf.switches]
+    """Where the channels change representation between keys, one note each: Euler channels change
+    branch (beside a key at gimbal lock, or nearest the lock); axis-angle channels change to another
+    turn of the angle where the path passes nearest the rest pose."""
+    change = ("the angle changes turn where the rotation passes nearest the rest pose" if keys.is_axis_angle else
+              "the channels change Euler branch")
+    what = "another turn of its angle" if keys.is_axis_angle else "another Euler branch"
+    return ["%s: between the keys at frames %g and %g the method's path reaches the second key on %s; %s, "
+            "at frame %.3f" % (keys.name, keys.frames[segment], keys.frames[segment + 1], what, change, frame)
+            for segment, frame in kf.switches]
 
 
 def write_plan(plan, target):

@@ -16,6 +16,7 @@ namespace {
 // Blender's float32 arithmetic beside the exact model the bound reasons about (reduce.hpp's margin).
 constexpr double kArithmeticSlack = 2e-6;
 constexpr double kPi = 3.141592653589793238462643383279502884;
+constexpr double kTwoPi = 2.0 * kPi;
 // Blender's binary search takes a frame within this of a key as the key (blender_eval.hpp); the
 // snap is bounded over twice that around each key.
 constexpr double kKeySnap = 1e-4;
@@ -217,6 +218,19 @@ bool PlaybackMotion::combined_rate(std::size_t a, std::size_t c, double sign, do
     return true;
 }
 
+namespace {
+
+// max |sin(x/2)| for x in [lo, hi]: 1 where the interval holds an odd multiple of π (a peak), else
+// the larger end (|sin(x/2)| rises from each multiple of 2π to the next peak).
+double max_abs_half_sine(double lo, double hi) {
+    if (!(hi - lo < kTwoPi)) return 1.0;
+    const double peak = kPi + kTwoPi * std::ceil((lo - kPi) / kTwoPi);  // the first odd multiple ≥ lo
+    if (peak <= hi) return 1.0;
+    return std::fmax(std::fabs(std::sin(0.5 * lo)), std::fabs(std::sin(0.5 * hi)));
+}
+
+}  // namespace
+
 void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) const {
     double r[4] = {0.0, 0.0, 0.0, 0.0}, k[4] = {0.0, 0.0, 0.0, 0.0};
     for (std::size_t c = 0; c < channels_.size(); ++c) channel_bounds(c, t0, t1, r[c], k[c]);
@@ -252,7 +266,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
         }
         case RotationMode::Kind::axis_angle: {
             const double dv = hypot3(r[1], r[2], r[3]), kv = hypot3(k[1], k[2], k[3]);
-            double dn = 0.0, kn = 0.0;  // bounds of |n'| and |n''|, n = v/|v|
+            double dn = 0.0, kn = 0.0, S = 1.0;  // bounds of |n'|, |n''| (n = v/|v|) and |sin(θ/2)|
             if (dv > 0.0 || kv > 0.0) {
                 double v0[4], v1[4];
                 values(t0, v0);
@@ -264,9 +278,14 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
                 }
                 dn = dv / low;
                 kn = 2.0 * kv / low + 5.0 * dv * dv / (low * low);
+                // The axis moves the rotation only by sin(θ/2): near θ = 2πm (the rest pose, where
+                // every axis is the same rotation) a turning axis hardly moves it. |θ'| ≤ r[0] keeps
+                // θ within [min − r[0]·h/2, max + r[0]·h/2] of its ends' values.
+                const double spread = 0.5 * r[0] * (t1 - t0);
+                S = max_abs_half_sine(std::fmin(v0[0], v1[0]) - spread, std::fmax(v0[0], v1[0]) + spread);
             }
-            speed = r[0] + 2.0 * dn;  // |ω| ≤ |θ'| + 2|sin(θ/2)|·|n'|
-            accel = 0.25 * r[0] * r[0] + 0.5 * k[0] + r[0] * dn + kn;
+            speed = r[0] + 2.0 * S * dn;  // |ω| = 2|q̇| ≤ |θ'| + 2|sin(θ/2)|·|n'|
+            accel = 0.25 * r[0] * r[0] + 0.5 * k[0] + r[0] * dn + S * kn;
             return;
         }
     }

@@ -134,8 +134,10 @@ Curve curve_from_channels(const std::vector<double>& times, const std::vector<do
     return Curve(times.data(), values.data(), n, method, options);
 }
 
-std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end) {
+std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end,
+                                             std::size_t* split_out) {
     const std::size_t n = q.size();
+    if (split_out != nullptr) *split_out = n;
     check_reference(start, 1, 4);
     check_reference(end, 1, 4);
     check_nonzero_rows(q, "quats");
@@ -145,18 +147,41 @@ std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const d
     const bool arrives = std::fabs(last[0] - end[0]) < numbers::kPi &&
                          last[1] * end[1] + last[2] * end[2] + last[3] * end[3] > 0.0;
     if (arrives) return fwd;
-    // Lifted backwards from `end`, and the samples from the one nearest the identity on (the
-    // smallest |sin(a/2)|, an interior one when there is any) taken from that lift.
+    // Lifted backwards from `end`, and the samples from `split` on taken from that lift: the split
+    // whose one jump (sample split-1 on the forward lift to split on the backward one, the channels
+    // interpolated between them) leaves the samples' own arc least. Near the identity that is the
+    // pair on either side of the path's closest approach: there the axis keeps its direction and
+    // the angle passes the multiple of 2π, where the two lifts meet; a pair on one side would flip
+    // the axis through zero instead. Among equal costs the interior split nearest the identity.
     std::vector<Quat> rev(q.rbegin(), q.rend());
     const std::vector<double> bwd = axis_angle_channels(rev, end);
+    auto channel_rotation = [](const double* v) {
+        const Vec3 axis(v[1], v[2], v[3]);
+        return glm::dot(axis, axis) > 0.0 ? axis_angle_to_quat(axis, v[0]) : Quat(1.0, 0.0, 0.0, 0.0);
+    };
+    auto jump_cost = [&](std::size_t s) {
+        const double* a = &fwd[4 * (s - 1)];
+        const double* b = &bwd[4 * (n - 1 - s)];
+        double worst = 0.0;
+        for (double u : {0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875}) {
+            double v[4];
+            for (int c = 0; c < 4; ++c) v[c] = a[c] + u * (b[c] - a[c]);
+            // The samples' arc, by nlerp (neighbouring samples: within a hair of slerp).
+            const Quat qa = q[s - 1], qb = glm::dot(q[s - 1], q[s]) < 0.0 ? -q[s] : q[s];
+            const Quat m = (1.0 - u) * qa + u * qb;
+            worst = std::max(worst, angle_between(channel_rotation(v), m / std::sqrt(glm::dot(m, m))));
+        }
+        return worst;
+    };
     std::size_t split = n - 1;
-    double nearest = 2.0;
-    for (std::size_t s = 1; s + 1 < n; ++s) {
-        const double d = std::fabs(std::sin(0.5 * fwd[4 * s]));
-        if (d < nearest) nearest = d, split = s;
+    double best = HUGE_VAL, nearest = 2.0;
+    for (std::size_t s = 1; s < n; ++s) {
+        const double cost = jump_cost(s), d = std::fabs(std::sin(0.5 * fwd[4 * s]));
+        if (cost < best - 1e-12 || (cost <= best + 1e-12 && s + 1 < n && d < nearest)) best = cost, nearest = d, split = s;
     }
     for (std::size_t s = split; s < n; ++s)
         for (int c = 0; c < 4; ++c) fwd[4 * s + c] = bwd[4 * (n - 1 - s) + c];
+    if (split_out != nullptr) *split_out = split;
     return fwd;
 }
 

@@ -191,16 +191,23 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         std::sort(add.begin(), add.end());
         std::vector<double> merged;
         merged.reserve(fit.times.size() + add.size());
+        // A failing time hard by a sample (a Bezier leaving a key bends between that sample and the
+        // next) is moved into the interval, an eighth of it from the near end: the next round then
+        // holds the bend there, and the rounds after close in on the key.
         std::size_t j = 0, added = 0;
+        double below = -HUGE_VAL;  // the sample before the current interval
         for (double t : fit.times) {
             for (; j < add.size() && add[j] < t; ++j) {
                 const double before = merged.empty() ? -HUGE_VAL : merged.back();
-                if (add[j] - before > kAddedSampleGap && t - add[j] > kAddedSampleGap) {
-                    merged.push_back(add[j]);
+                const double g = std::isfinite(below) ? std::fmax(kAddedSampleGap, 0.125 * (t - below)) : kAddedSampleGap;
+                const double at = std::isfinite(below) ? std::clamp(add[j], below + g, t - g) : add[j];
+                if (at - before > kAddedSampleGap && t - at > kAddedSampleGap) {
+                    merged.push_back(at);
                     ++added;
                 }
             }
             merged.push_back(t);
+            below = t;
         }
         if (added == 0) break;
         fit.times.swap(merged);
@@ -286,7 +293,32 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
             for (std::size_t k = 0; k + 1 < K; ++k) {
                 const std::vector<Quat> span(q.begin() + static_cast<std::ptrdiff_t>(forced[k]),
                                              q.begin() + static_cast<std::ptrdiff_t>(forced[k + 1]) + 1);
-                const std::vector<double> v = axis_angle_span_channels(span, kv + C * k, kv + C * (k + 1));
+                std::size_t split = span.size();
+                const std::vector<double> v = axis_angle_span_channels(span, kv + C * k, kv + C * (k + 1), &split);
+                if (split < span.size()) {
+                    // The channels leave one turn of the angle for another (or flip the axis with the
+                    // angle) between samples split-1 and split. That costs nothing only through the
+                    // identity, where every axis is the same rotation, and only across one multiple
+                    // of 2π: the switch sits at the sample nearest the identity; further from it than
+                    // 5°, or with the angle moving by more than π between the two samples (a whole
+                    // turn played between them), no channel path follows the method.
+                    const double from_identity = 2.0 * std::acos(std::min(1.0, std::fabs(span[split].w)));
+                    const double jump = std::fabs(v[4 * split] - v[4 * split - 4]);
+                    if (from_identity > kSwitchRefused || jump > 0.5 * kTwoPiFit) {
+                        char text[480];
+                        std::snprintf(text, sizeof text,
+                                      "keys at frames %g and %g: the method's path reaches the second key's axis-angle "
+                                      "values only on another turn of the angle, which channels can change only "
+                                      "where the rotation passes through the rest pose, and the path passes no "
+                                      "nearer than %.2f° to it (near frame %.2f)%s: convert the target to "
+                                      "quaternion first",
+                                      key_frames[k], key_frames[k + 1], from_identity * 360.0 / kTwoPiFit,
+                                      t[forced[k] + split],
+                                      jump > 0.5 * kTwoPiFit ? " and would have to make a whole turn there" : "");
+                        throw InvalidArgument(text);
+                    }
+                    fit.switches.push_back({k, t[forced[k] + split]});
+                }
                 std::copy(v.begin(), v.end(), values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
                 const double n0 = std::sqrt(kv[C * k + 1] * kv[C * k + 1] + kv[C * k + 2] * kv[C * k + 2] +
                                             kv[C * k + 3] * kv[C * k + 3]);

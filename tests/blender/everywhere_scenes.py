@@ -70,11 +70,11 @@ GIMBAL_SPIN = ((1, (0, 90, 0)), (4, (90, 45, 90)), (12, (30, 10, 200)), (20, (-4
 QUAT_FLIPS = ((1, (1.0, 0.0, 0.0, 0.0)), (5, (-0.7071, -0.7071, 0.0, 0.0)), (6, (0.5, 0.5, 0.5, 0.5)),
               (14, (-0.6, 0.0, -0.8, 0.0)), (30, (-0.2, 0.1, 0.9, -0.38)), (31, (0.1, 0.2, 0.9, -0.37)),
               (36, (-0.1, -0.2, -0.9, 0.37)))
-# (c) Axis-angle (degrees, axis): spins of 400° and 360° about a tilted non-unit axis, an axis change,
-# a turn back through 720° with the axis changing (test_fit's keys).
-AXIS_ANGLE_SPINS = ((1, (0, 0, 0, 2)), (9, (400, 0, 0.3, 1)), (20, (760, 0, 0.3, 1)), (26, (800, 1, 0.2, 0.4)),
-                    (40, (700, 0.5, -0.5, 0.7)))
-BONE_AXIS_ANGLE = ((1, (30, 1, 0, 0)), (8, (-300, 1, 0.1, 0)), (20, (90, 0, 1, 0)), (30, (450, 0, 1, 0.2)))
+# (c) Axis-angle (degrees, axis): from the rest pose a spin of 400° about a tilted non-unit axis, 300°
+# more about it, then the axis changing while the angle turns back (test_fit's keys).
+AXIS_ANGLE_SPINS = ((1, (0, 0, 0, 2)), (9, (400, 0, 0.3, 1)), (20, (700, 0, 0.3, 1)), (26, (680, 1, 0.2, 0.4)),
+                    (40, (600, 0.5, -0.5, 0.7)))
+BONE_AXIS_ANGLE = ((1, (30, 1, 0, 0)), (8, (300, 1, 0.1, 0)), (20, (250, 0, 1, 0)), (30, (100, 0, 1, 0.2)))
 # (d) A rig's controls in Rigify's modes: quaternion, YXZ (shoulders), ZXY (tweaks, a key at the lock).
 RIG_EULER = ((1, (0, 0, 0)), (15, (80, -40, 30)), (35, (-60, 70, 120)), (50, (20, 10, -90)))
 RIG_EULER_LOCK = ((1, (0, 0, 0)), (15, (30, -90, -40)), (35, (-60, 70, 120)), (50, (20, 10, -90)))

@@ -142,7 +142,7 @@ def key_index(keys, frame):
 
 # (scene, owner, frame, channel, change): a key's value changed with Live on (its handles along).
 LIVE_EDITS = (("euler", "XYZ", 12, 0, math.radians(25)), ("euler", "ZXY", 28, 2, math.radians(-30)),
-              ("quaternion", "Flips", 14, 2, 0.3), ("axis_angle", "Axis", 20, 0, math.radians(40)),
+              ("quaternion", "Flips", 14, 2, 0.3), ("axis_angle", "Axis", 20, 0, math.radians(-40)),
               ("rig", "Tweak", 35, 1, math.radians(-30)), ("gltf", "GltfObj", 31, 1, 0.25))
 
 

@@ -88,11 +88,15 @@ bool sample_channel_keys(const Curve& curve, const double* frames, std::size_t n
 // (angle, x, y, z); q[0] is start's rotation and q[n-1] end's): as quats_to_channels with reference
 // `start`, when that arrives at `end` as keyed (angle within π, axis on its side). Otherwise — a path
 // that passes near the identity, where the axis is undefined, comes out on the other representation
-// ((a, v) ≡ (4πk − a, −v)), which no continuous channel path along it avoids — the samples from the
-// one nearest the identity (smallest |sin(a/2)|, an interior one when any) on are lifted backwards
-// from `end`: the one jump sits where every axis gives nearly the same rotation. Throws on
-// zero-length q or non-finite start / end.
-std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end);
+// ((a, v) ≡ (4πk − a, −v)), which no continuous channel path along it avoids — the samples from
+// `split` on are lifted backwards from `end`, the split chosen so that the one jump (channels
+// interpolated from the forward lift at split-1 to the backward one at split) leaves the samples'
+// arc least: astride the path's closest approach to the identity, where every axis gives nearly the
+// same rotation, the axis keeps its direction and the angle passes the multiple of 2π. `split`, when given,
+// receives the index of the first sample taken from the backward lift (q.size() when none is). Throws
+// on zero-length q or non-finite start / end.
+std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const double* start, const double* end,
+                                             std::size_t* split = nullptr);
 
 // ---- sampling policies --------------------------------------------------------------------------------
 // The frames a bake keys: start, start + step, … while within end (1e-9 of a step of slack), and end

@@ -21,7 +21,8 @@ namespace quatcurve {
 // unique). key_frames must increase; subframes ≥ 1.
 std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int subframes);
 
-// A change of Euler branch inside key segment `segment` (see fit_through_keys), at sample `frame`.
+// A change of representation inside key segment `segment` (see fit_through_keys), at sample `frame`:
+// of Euler branch, or of the axis-angle angle's turn.
 struct EulerSwitch {
     std::size_t segment;
     double frame;
@@ -31,7 +32,7 @@ struct KeyFit {
     std::vector<double> times;        // the samples: fit_sample_frames, and the times the proof added
     std::vector<std::size_t> forced;  // the index in `times` of every key
     ReducedKeys keys;                 // the fitted keys (fit_keys*); max_error is at `times` only
-    std::vector<EulerSwitch> switches;   // Euler branch changes between keys
+    std::vector<EulerSwitch> switches;   // Euler branch / axis-angle turn changes between keys
     PlaybackBound proof;              // Blender's playback of `keys` against the curve at every instant
 };
 
@@ -59,7 +60,12 @@ struct KeyFit {
 // change branch once: beside a key at gimbal lock (where the first and last angles move together
 // without moving the rotation; a sample 1.05·min_gap from such a key keeps the change short), else at
 // the sample nearest gimbal lock (fit.switches lists both), and the proof bounds what that costs.
-// A change no nearer than 5° to the lock is refused (InvalidArgument naming the keys' frames). Keys
+// A change no nearer than 5° to the lock is refused (InvalidArgument naming the keys' frames).
+// Axis-angle the same way: where the path reaches the second key's values only on another turn of
+// the angle (or with the axis reversed), the channels change at the jump that leaves the samples'
+// arc least (axis_angle_span_channels: astride the path's closest approach to the rest pose, where
+// every axis is the same rotation); a change at a sample further than 5° from the rest pose, or
+// one that would play a whole turn between two samples, is refused naming the keys' frames. Keys
 // keep their values: the curve is made from them, so a refit sees the same path. Throws
 // InvalidArgument for fewer than two keys, mismatched sizes, a tolerance that is not above 0, and
 // whatever the steps throw.
