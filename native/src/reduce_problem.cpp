@@ -93,7 +93,11 @@ void compute_breaks(Problem& p, bool guard) {
 }
 
 // Slopes for default tangents: central differences inside, one-sided at the ends and next to a
-// discontinuity (which no tangent should see).
+// discontinuity (which no tangent should see). Where the two one-sided slopes differ more than
+// kKinkRatio times (a corner: an Euler branch change in a short interval beside a key at gimbal
+// lock), the gentler side's: the steep side's slope carried past the corner would bend the next
+// segment far off its samples.
+constexpr double kKinkRatio = 8.0;
 void compute_slopes(Problem& p) {
     p.slope.assign(p.n * p.C, 0.0);
     if (p.n < 2) return;
@@ -101,8 +105,16 @@ void compute_slopes(Problem& p) {
         std::size_t a = k > 0 && p.breaks[k] == p.breaks[k - 1] ? k - 1 : k;
         std::size_t b = k + 1 < p.n && p.breaks[k + 1] == p.breaks[k] ? k + 1 : k;
         const double dt = p.t[b] - p.t[a];
-        for (int c = 0; c < p.C; ++c)
-            p.slope[k * p.C + c] = dt > 0.0 ? (p.y[b * p.C + c] - p.y[a * p.C + c]) / dt : 0.0;
+        for (int c = 0; c < p.C; ++c) {
+            double slope = dt > 0.0 ? (p.y[b * p.C + c] - p.y[a * p.C + c]) / dt : 0.0;
+            if (a < k && k < b) {
+                const double left = (p.y[k * p.C + c] - p.y[a * p.C + c]) / (p.t[k] - p.t[a]);
+                const double right = (p.y[b * p.C + c] - p.y[k * p.C + c]) / (p.t[b] - p.t[k]);
+                if (std::fabs(left) > kKinkRatio * std::fabs(right)) slope = right;
+                else if (std::fabs(right) > kKinkRatio * std::fabs(left)) slope = left;
+            }
+            p.slope[k * p.C + c] = slope;
+        }
     }
 }
 

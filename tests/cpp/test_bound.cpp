@@ -233,6 +233,78 @@ TEST(FitProof, EulerBranchChangeFarFromGimbalLockIsRefused) {
     }
 }
 
+// Leaving a key at gimbal lock fast (ZXY, the middle angle X at -90° at frame 15): the channels
+// change branch within 0.0105 frame of the key, and the segment after that change must not take the
+// change's steep slope as its tangent (a corner, not a bend): every method, NLERP and
+// QUAT_COMPONENTS included, proved within the tolerance or, inside the change itself, barely above.
+TEST(FitProof, EulerFastDepartureFromAKeyAtGimbalLock) {
+    std::mt19937 rng(5);
+    const double tol = 0.05 * kDeg;
+    const RotationMode mode = parse_rotation_mode("ZXY");
+    const std::vector<double> t = {1.0, 15.0, 35.0, 50.0};
+    std::vector<double> v = {0.0, 0.0, 0.0,  -90 * kDeg, -40 * kDeg, 30 * kDeg,
+                             70 * kDeg, 120 * kDeg, -60 * kDeg,  10 * kDeg, -90 * kDeg, 20 * kDeg};
+    for (auto& x : v) x = static_cast<float>(x);
+    std::vector<Vec3> angles;
+    for (std::size_t i = 0; i < t.size(); ++i) angles.emplace_back(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    std::vector<Method> methods = kFitMethods;
+    methods.push_back(Method::QUAT_COMPONENTS);
+    for (Method method : methods) {
+        const Curve curve = Curve::from_euler(t, angles, EulerOrder::ZXY, method);
+        const KeyFit fit = fit_through_keys(curve, t, v, mode, 4, tol);
+        if (!fit.proof.proven()) {
+            EXPECT_NEAR(fit.proof.worst_time, 15.0, 0.0105) << method_name(method) << ": " << fit.proof.bound / kDeg;
+            EXPECT_LE(fit.proof.bound, 2 * tol) << method_name(method);
+        }
+        EXPECT_LE(dense_max(curve, fit.keys, mode, 14.0, 16.0, 2 * 1024, rng), std::fmin(fit.proof.bound, tol) + 1e-6)
+            << method_name(method);
+        EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 50.0, 49 * 64, rng), fit.proof.bound + 1e-6) << method_name(method);
+    }
+}
+
+// Axis-angle keys whose channels the method's path reaches on the same turn of the angle: spins of
+// 400° and 300° about a tilted non-unit axis from the rest pose (a = 0, where the axis is free), then
+// axis changes: proved within the tolerance for every method (the axis moves the rotation by
+// sin(θ/2), which leaving the rest pose is small).
+TEST(FitProof, AxisAngleSpinsProvedWithinTheTolerance) {
+    std::mt19937 rng(6);
+    const double tol = 0.05 * kDeg;
+    const RotationMode mode = parse_rotation_mode("AXIS_ANGLE");
+    const std::vector<double> t = {1.0, 9.0, 20.0, 26.0, 40.0};
+    std::vector<double> v = {0.0, 0.0, 0.0, 2.0,  400 * kDeg, 0.0, 0.3, 1.0,  700 * kDeg, 0.0, 0.3, 1.0,
+                             680 * kDeg, 1.0, 0.2, 0.4,  600 * kDeg, 0.5, -0.5, 0.7};
+    for (auto& x : v) x = static_cast<float>(x);
+    for (Method method : kFitMethods) {
+        const Curve curve = Curve::from_axis_angle(t, v, method);
+        const KeyFit fit = fit_through_keys(curve, t, v, mode, 4, tol);
+        EXPECT_TRUE(fit.proof.proven()) << method_name(method) << ": " << fit.proof.bound / kDeg << "° near frame "
+                                        << fit.proof.worst_time;
+        EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 40.0, 39 * 64, rng), fit.proof.bound + 1e-6) << method_name(method);
+    }
+}
+
+// A keyed 400° → 760° spin about one axis then an axis change: the keyed channels pass the rest pose
+// at 720°, a smooth method's path 4–5° from it, and its channels could reach the key at 760° only
+// through the rest pose: refused, naming the keys' frames and how near the path passes.
+TEST(FitProof, AxisAngleTurnAwayFromTheRestPoseIsRefused) {
+    const RotationMode mode = parse_rotation_mode("AXIS_ANGLE");
+    const std::vector<double> t = {1.0, 9.0, 20.0, 26.0};
+    const std::vector<double> v = {0.0, 0.0, 0.0, 2.0,  400 * kDeg, 0.0, 0.3, 1.0,  760 * kDeg, 0.0, 0.3, 1.0,
+                                   800 * kDeg, 1.0, 0.2, 0.4};
+    for (Method method : {Method::SQUAD, Method::TCB, Method::SPLINE_C2}) {
+        const Curve curve = Curve::from_axis_angle(t, v, method);
+        try {
+            fit_through_keys(curve, t, v, mode, 4, 0.05 * kDeg);
+            ADD_FAILURE() << method_name(method) << ": no refusal";
+        } catch (const InvalidArgument& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("frames 9 and 20"), std::string::npos) << what;
+            EXPECT_NE(what.find("rest pose"), std::string::npos) << what;
+            EXPECT_NE(what.find("convert the target to quaternion"), std::string::npos) << what;
+        }
+    }
+}
+
 // Two playbacks are evaluated at the same float32 frame: near frame 10,000 (float32 steps of 2^-10)
 // a fast spin's keys against the same keys turned by 1e-3 rad are proved within 1e-3 + 1e-5 rad, with
 // no jump for float32 rounding (which alone would be ~4e-3 rad there at this speed).
