@@ -532,6 +532,15 @@ void Curve::build() {
 void Curve::close_loop() {
     Impl& m = *impl_;
     const std::size_t K = times_.size(), S = m.kr.size();
+    // The seam makes the first and last spacings neighbours (check_times, kMaxSpacingRatio).
+    const bool tangents = method_ == Method::SQUAD || method_ == Method::TCB || method_ == Method::CATMULL_ROM ||
+                          method_ == Method::SPLINE_C2;
+    const double h_first = times_[1] - times_[0], h_last = times_[K - 1] - times_[K - 2];
+    if (tangents && K >= 3 && (h_first > kMaxSpacingRatio * h_last || h_last > kMaxSpacingRatio * h_first))
+        throw InvalidArgument("cyclic: times[1] is " + num(h_first) + " frames after times[0], across the seam from a "
+                              "spacing of " + num(h_last) + " frames (times[" + std::to_string(K - 1) + "]): " +
+                              method_name(method_) + " needs neighbouring key spacings within a factor of " +
+                              num(kMaxSpacingRatio));
     const double angle = angle_between(quats_.front(), quats_.back());
     if (!(angle <= kLoopTolerance)) {
         const double deg = angle * 180.0 / kPi;
