@@ -16,6 +16,7 @@
 #include "quatcurve/curve.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/quat.hpp"
+#include "quatcurve/slerp_keys.hpp"
 
 using namespace quatcurve;
 
@@ -360,4 +361,30 @@ TEST(CurveCyclic, ProofOverSeveralPeriods) {
     EXPECT_TRUE(r.proven()) << r.bound << " evaluated " << r.max_evaluated << " dense " << worst << " at "
                             << r.worst_time << " violations " << r.violations.size() << " unproven "
                             << r.unproven.size();
+}
+
+TEST(CurveCyclic, ReduceSlerpLoop) {
+    // One period of a SPLINE_C2 loop sampled per frame: the keys keep both ends, the last key is the
+    // first rotation, and a loop that does not close is refused.
+    const Curve c(kTimes, kKeys, Method::SPLINE_C2, loop());
+    std::vector<double> t;
+    for (int f = 0; f <= 20; ++f) t.push_back(f);
+    const std::vector<Quat> q = c.sample(t);
+    const SlerpKeys r = reduce_slerp(t, q, 0.01, true);
+    EXPECT_EQ(r.indices.front(), 0u);
+    EXPECT_EQ(r.indices.back(), 20u);
+    EXPECT_LT(angle_between(r.quats.front(), r.quats.back()), 1e-15);
+    EXPECT_LE(r.max_error, 0.01);
+    std::vector<Quat> open = q;
+    open.back() = rv(0.2, Vec3(0, 1, 0)) * open.back();
+    try {
+        reduce_slerp(t, open, 0.01, true);
+        ADD_FAILURE() << "no error";
+    } catch (const InvalidArgument& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("sample 20, time 20"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("sample 0, time 0"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("11.4592°"), std::string::npos) << msg;
+    }
+    EXPECT_NO_THROW(reduce_slerp(t, open, 0.01));
 }

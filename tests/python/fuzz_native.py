@@ -1068,6 +1068,20 @@ def build_reduce_slerp(fn, d):
     t, v, tol, must_fail = draw_samples(d, euler=False)
     n = len(t)
     args = [t, v, tol]
+    kwargs = {}
+    # a loop: the last sample made the first's rotation (either sign), or left open (refused)
+    if d.chance(0.2, "cyclic"):
+        kwargs["cyclic"] = True
+        if n >= 2 and not must_fail and isinstance(v, np.ndarray) and v.shape == (n, 4):
+            v = v.copy()
+            if d.chance(0.8, "closed"):
+                v[-1] = v[0] * d.pick((1.0, -1.0, 2.5), "close_scale")
+            else:
+                a = v[0] / np.linalg.norm(v[0])
+                b = v[-1] / np.linalg.norm(v[-1])
+                if np_angle(a, b) > 1e-4:
+                    must_fail = "loop not closed"
+            args[1] = v
     if d.chance(0.05, "length_mismatch") and n:
         args[1] = v[:-1]
         must_fail = must_fail or "lengths differ"
@@ -1078,6 +1092,8 @@ def build_reduce_slerp(fn, d):
         check_indices(out.indices, n, "indices")
         k = len(out.indices)
         expect(k >= 1 and out.indices[0] == 0 and out.indices[-1] == n - 1, "first and last samples kept")
+        if kwargs.get("cyclic") and k >= 2:
+            expect(np_angle(out.quats[0], out.quats[-1]) < 1e-15, "loop: the last key is not the first rotation")
         shape_is(out.quats, (k, 4), "quats")
         finite(out.quats, "quats")
         expect(np.allclose(np.linalg.norm(out.quats, axis=1), 1.0, atol=1e-12), "keys not unit")
@@ -1102,7 +1118,7 @@ def build_reduce_slerp(fn, d):
                 expect(err <= max(tol, 0) + 1e-6, f"a sample is {err!r} rad from the keys' slerp (tolerance {tol!r})")
         repr(out)
 
-    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, args + [kwargs])
 
 
 def build_gltf_slerp(fn, d):

@@ -119,3 +119,16 @@ def test_motion_bounds_across_the_seam():
             q = c.sample(t)
             assert (angle(q[1:], q[:-1]) / (t[1] - t[0])).max() <= speed * (1 + 1e-6)
             assert np.linalg.norm(c.angular_velocity(t), axis=1).max() <= speed * (1 + 1e-9)
+
+
+def test_reduce_slerp_loop():
+    c = qc.Curve(T, KEYS, "SPLINE_C2", cyclic=True)
+    t = np.arange(21.0)
+    q = c.sample(t)
+    r = qc.reduce_slerp(t, q, 0.01, cyclic=True)
+    assert r.indices[0] == 0 and r.indices[-1] == 20
+    assert qc.angle_between(r.quats[0], r.quats[-1]) < 1e-15
+    assert r.max_error <= 0.01
+    q[-1] = q[5]
+    with pytest.raises(ValueError, match=r"sample 20, time 20.*sample 0, time 0.*° apart"):
+        qc.reduce_slerp(t, q, 0.01, cyclic=True)
