@@ -81,7 +81,8 @@
 // Output: quaternions (w, x, y, z), sign-continuous along the curve (at a key the sample may be the
 // key's negative, the same rotation); angular velocity in radians per frame in the world frame,
 // computed analytically (q̇ = ½·ω·q). Outside [times.front(), times.back()] the curve is constant
-// (Blender's constant extrapolation) with zero velocity; one key gives a constant curve.
+// (Blender's constant extrapolation) with zero velocity, unless it is a loop, which repeats; one key
+// gives a constant curve.
 #pragma once
 
 #include <cstddef>
