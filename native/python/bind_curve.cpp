@@ -71,6 +71,7 @@ py::dict options_dict(const Curve& c) {
         else if (name == "ease_in") d["ease_in"] = per_key_value(o.ease_in);
         else if (name == "ease_out") d["ease_out"] = per_key_value(o.ease_out);
         else if (name == "turns") d["turns"] = per_key_value(o.turns);
+        else if (name == "cyclic") d["cyclic"] = o.cyclic;
     }
     return d;
 }
@@ -119,7 +120,8 @@ void bind_curve(py::module_& m) {
                       "key: slows into / out of keys, path unchanged); turns (every method but EULER and QUAT_COMPONENTS, whole "
                       "numbers, a number or one per key: extra signed full turns of the segment leaving each key "
                       "about its own axis); tension, continuity, bias in [-1, 1] (TCB; a "
-                      "number or one per key).\nsample(times) -> (..., 4), angular_velocity(times) -> "
+                      "number or one per key); cyclic (every method, bool: a loop whose last key is the first "
+                      "rotation one period later; sampled modulo the period).\nsample(times) -> (..., 4), angular_velocity(times) -> "
                       "(..., 3) in rad/frame, world frame; constant outside the keys.")
         .def(py::init([](py::handle times, py::handle quats, const std::string& method, const py::kwargs& kwargs) {
                  const Method meth = parse_method(method);

@@ -500,22 +500,24 @@ sample the proof adds takes the curve's rotation as channel values continuous wi
 
     m.def(
         "reduce_slerp",
-        [](py::handle times, py::handle quats, double tolerance) {
+        [](py::handle times, py::handle quats, double tolerance, bool cyclic) {
             const std::vector<double> t = read_times(times);
             const Batch q = read_rows(quats, 4, "quats", t.size());
             std::vector<Quat> qs(t.size());
             for (std::size_t k = 0; k < t.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
             py::gil_scoped_release release;
-            return reduce_slerp(t, qs, tolerance);
+            return reduce_slerp(t, qs, tolerance, cyclic);
         },
-        py::arg("times"), py::arg("quats"), py::arg("tolerance"),
+        py::arg("times"), py::arg("quats"), py::arg("tolerance"), py::kw_only(), py::arg("cyclic") = false,
         R"doc(The fewest glTF LINEAR rotation keys (slerp) among dense samples, within `tolerance`.
 
 times: (N,) strictly increasing (any unit); quats: (N, 4) (w, x, y, z), nonzero; tolerance:
 radians (geodesic angle, sign-invariant), >= 0. Greedy key choice; every kept segment is verified
 on every sample inside it: glTF's slerp between consecutive keys (gltf_slerp) at each sample's time
 stays within `tolerance` of the sample. Samples are compared as given: pass them as the file stores
-them (float32) to verify what a reader plays. Returns a SlerpKeys (indices, quats, max_error).)doc");
+them (float32) to verify what a reader plays. Returns a SlerpKeys (indices, quats, max_error).
+cyclic=True: the samples are one period of a loop, the last sample the first rotation (refused
+otherwise, naming both samples and the angle); the last key is then the first key's rotation.)doc");
 
     m.def(
         "gltf_slerp",

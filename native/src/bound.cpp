@@ -36,6 +36,13 @@ void blossom(const double p[3], double u0, double u1, double out[3]) {
 
 }  // namespace
 
+std::vector<double> Motion::breaks_within(double t0, double t1) const {
+    std::vector<double> out;
+    for (double t : breaks())
+        if (t >= t0 && t <= t1) out.push_back(t);
+    return out;
+}
+
 Quat CurveMotion::at(double t) const {
     double q[4];
     curve_.sample(&t, 1, q);
@@ -393,7 +400,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
     for (double t : given) times.push_back(static_cast<float>(t));
     const double first = times.front(), last = times.back();
     for (const Motion* m : {&a, &b})
-        for (double t : m->breaks())
+        for (double t : m->breaks_within(first, last))
             if (t > first && t < last) times.push_back(t);
     std::sort(times.begin(), times.end());
     times.erase(std::unique(times.begin(), times.end()), times.end());

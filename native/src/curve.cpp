@@ -24,6 +24,8 @@ const std::vector<std::string> kMethodNames = {"EULER", "QUAT_COMPONENTS", "NLER
                                                "SQUAD", "CATMULL_ROM",     "TCB",   "SPLINE_C2"};
 const std::vector<std::string> kTcbOptions = {"tension", "continuity", "bias", "ease_in", "ease_out"};
 const std::vector<std::string> kEaseOptions = {"ease_in", "ease_out"};
+// Options of every method, after the method's own.
+const std::vector<std::string> kCommonOptions = {"cyclic"};
 
 std::string join(const std::vector<std::string>& names) {
     std::string s;
@@ -68,7 +70,8 @@ void check_turns(const std::vector<double>& v, std::size_t keys) {
 // The rotation vector each key segment gains from its turns (2π·turns[i] along its axis, curve.hpp
 // "Turns"), from the segments' rotation vectors without turns. Throws naming the key of a turned
 // segment without an axis of its own or a neighbour's.
-std::vector<Vec3> turn_vectors(const std::vector<Vec3>& r, const std::vector<double>& turns) {
+// A loop's first and last segments are neighbours across the seam.
+std::vector<Vec3> turn_vectors(const std::vector<Vec3>& r, const std::vector<double>& turns, bool cyclic) {
     std::vector<Vec3> extra(r.size(), Vec3(0.0));
     auto axis_of = [&](std::size_t i, Vec3& u) {
         const double n = glm::length(r[i]);
@@ -80,7 +83,10 @@ std::vector<Vec3> turn_vectors(const std::vector<Vec3>& r, const std::vector<dou
         const double n = turns.size() == 1 ? turns[0] : turns[i];
         if (n == 0.0) continue;
         Vec3 u;
-        if (!axis_of(i, u) && !(i > 0 && axis_of(i - 1, u)) && !(i + 1 < r.size() && axis_of(i + 1, u)))
+        const std::size_t S = r.size();
+        const bool prev = i > 0 ? axis_of(i - 1, u) : cyclic && S > 1 && axis_of(S - 1, u);
+        if (!axis_of(i, u) && !prev &&
+            !(i + 1 < S ? axis_of(i + 1, u) : cyclic && S > 1 && axis_of(0, u)))
             throw InvalidArgument("turns[" + std::to_string(i) + "]: key " + std::to_string(i) + " and key " +
                                   std::to_string(i + 1) +
                                   " are the same rotation and neither neighbouring segment turns: the segment has no "
@@ -299,6 +305,7 @@ std::vector<std::string> option_names(Method method) {
         std::vector<std::string> names{"clamped"};
         names.insert(names.end(), kTcbOptions.begin(), kTcbOptions.end());
         names.push_back("turns");
+        names.insert(names.end(), kCommonOptions.begin(), kCommonOptions.end());
         return names;
     }
     std::vector<std::string> names;
@@ -306,14 +313,16 @@ std::vector<std::string> option_names(Method method) {
     if (method == Method::SQUAD || method == Method::CATMULL_ROM) names.push_back("clamped");
     names.insert(names.end(), kEaseOptions.begin(), kEaseOptions.end());
     if (takes_turns(method)) names.push_back("turns");
+    names.insert(names.end(), kCommonOptions.begin(), kCommonOptions.end());
     return names;
 }
 
 void set_option(CurveOptions& options, Method method, const std::string& name,
                 const std::vector<double>& values) {
-    const bool known = name == "shortest_path" || name == "clamped" || tcb_field(options, name) != nullptr;
+    const bool flag = name == "shortest_path" || name == "clamped" || name == "cyclic";
+    const bool known = flag || tcb_field(options, name) != nullptr;
     if (!known)
-        throw InvalidArgument(name + ": unknown option (options: ease_in, ease_out for every method; turns for every "
+        throw InvalidArgument(name + ": unknown option (options: ease_in, ease_out, cyclic for every method; turns for every "
                               "method but EULER and QUAT_COMPONENTS; shortest_path for SLERP; clamped for SQUAD, TCB "
                               "and CATMULL_ROM; tension, continuity, bias for TCB)");
     const auto valid = option_names(method);
@@ -324,10 +333,11 @@ void set_option(CurveOptions& options, Method method, const std::string& name,
     for (std::size_t i = 0; i < values.size(); ++i)
         if (!std::isfinite(values[i]))
             throw InvalidArgument(name + "[" + std::to_string(i) + "]: not a finite number");
-    if (name == "shortest_path" || name == "clamped") {
+    if (flag) {
         if (values.size() != 1 || (values[0] != 0.0 && values[0] != 1.0))
             throw InvalidArgument(name + ": expected a bool");
-        (name == "clamped" ? options.clamped : options.shortest_path) = values[0] != 0.0;
+        (name == "clamped" ? options.clamped : name == "cyclic" ? options.cyclic : options.shortest_path) =
+            values[0] != 0.0;
         return;
     }
     *tcb_field(options, name) = values;
@@ -467,9 +477,10 @@ void Curve::build() {
     // neighbour's); the knots are then made again with the turns added.
     build_knots({});
     if (std::any_of(options_.turns.begin(), options_.turns.end(), [](double n) { return n != 0.0; }) && K > 1)
-        build_knots(turn_vectors(rotvecs_, options_.turns));
+        build_knots(turn_vectors(rotvecs_, options_.turns, options_.cyclic));
 
     Impl& m = *impl_;
+    if (options_.cyclic && K > 1) close_loop();
     const bool lifted = has_euler_keys() || !path_rotvecs_.empty();
     m.first_q = m.kq.front();
     m.last_q = m.kq.back();
@@ -504,6 +515,51 @@ void Curve::build() {
         case Method::SPLINE_C2: detail::build_spline(m); break;
     }
     detail::build_speed_bounds(m);
+    if (m.cyclic) {
+        // The sign the curve reaches at the end of a period, as the method samples it there.
+        const double ends[2] = {times_.front(), times_.back()};
+        double q[8];
+        m.cyclic = false;
+        sample(ends, 2, q);
+        m.cyclic = true;
+        m.period_sign = q[0] * q[4] + q[1] * q[5] + q[2] * q[6] + q[3] * q[7] < 0.0 ? -1.0 : 1.0;
+    }
+}
+
+// Loops (curve.hpp "Loops"): refuses a last key that is not the first rotation, snaps the last knot
+// onto the first (the same sign as it had; the last knot segment's rotation vector follows, by at
+// most kLoopTolerance), and marks the prepared curve as periodic.
+void Curve::close_loop() {
+    Impl& m = *impl_;
+    const std::size_t K = times_.size(), S = m.kr.size();
+    // The seam makes the first and last spacings neighbours (check_times, kMaxSpacingRatio).
+    const bool tangents = method_ == Method::SQUAD || method_ == Method::TCB || method_ == Method::CATMULL_ROM ||
+                          method_ == Method::SPLINE_C2;
+    const double h_first = times_[1] - times_[0], h_last = times_[K - 1] - times_[K - 2];
+    if (tangents && K >= 3 && (h_first > kMaxSpacingRatio * h_last || h_last > kMaxSpacingRatio * h_first))
+        throw InvalidArgument("cyclic: times[1] is " + num(h_first) + " frames after times[0], across the seam from a "
+                              "spacing of " + num(h_last) + " frames (times[" + std::to_string(K - 1) + "]): " +
+                              method_name(method_) + " needs neighbouring key spacings within a factor of " +
+                              num(kMaxSpacingRatio));
+    const double angle = angle_between(quats_.front(), quats_.back());
+    if (!(angle <= kLoopTolerance)) {
+        const double deg = angle * 180.0 / kPi;
+        throw InvalidArgument("cyclic: the last key (key " + std::to_string(K - 1) + ", frame " + num(times_.back()) +
+                              ") is not the first key's rotation (key 0, frame " + num(times_.front()) +
+                              "): they are " + num(std::round(deg * 1e4) / 1e4) +
+                              "° apart; key the first pose again at frame " + num(times_.back()));
+    }
+    const double sign = detail::qdot(m.kq[S], m.kq[0]) < 0.0 ? -1.0 : 1.0;
+    const Quat end = sign * m.kq[0];
+    const Vec3 before = m.kr[S - 1];
+    m.kr[S - 1] = detail::rotvec_near(detail::qmul(detail::qconj(m.kq[S - 1]), end), before);
+    rotvecs_.back() += m.kr[S - 1] - before;
+    m.kq[S] = end;
+    quats_.back() = detail::qdot(quats_.back(), end) < 0.0 ? -end : end;
+    const double raw_norm = std::sqrt(glm::dot(raw_.back(), raw_.back()));
+    raw_.back() = (detail::qdot(raw_.back(), end) < 0.0 ? -raw_norm : raw_norm) * end;
+    m.cyclic = true;
+    m.period = times_.back() - times_.front();
 }
 
 // The knots (keys and sub-keys) and every segment's rotation vector; extra (empty, or one per
@@ -655,7 +711,16 @@ void Curve::sample(const double* times, std::size_t n, double* out) const {
         }
         return;
     }
-    std::vector<double> warped;
+    std::vector<double> wrapped, periods, warped;
+    if (m.cyclic) {  // a loop: every time in the first period, the sign of its own period after
+        wrapped.resize(n);
+        periods.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!std::isfinite(times[i])) detail::bad_time(i);
+            wrapped[i] = detail::wrap_time(m, times[i], periods[i]);
+        }
+        times = wrapped.data();
+    }
     if (m.eased) {  // ease: the method's path at warped times (curve_ease.cpp)
         warped.resize(n);
         detail::ease_times(m, times_, times, n, warped.data(), nullptr);
@@ -671,6 +736,10 @@ void Curve::sample(const double* times, std::size_t n, double* out) const {
         case Method::CATMULL_ROM: detail::sample_bezier(m, times, n, out); break;
         case Method::SPLINE_C2: detail::sample_spline(m, times, n, out); break;
     }
+    if (m.period_sign < 0.0)
+        for (std::size_t i = 0; i < periods.size(); ++i)
+            if (std::fmod(periods[i], 2.0) != 0.0)
+                for (int c = 0; c < 4; ++c) out[4 * i + c] = -out[4 * i + c];
 }
 
 void Curve::angular_velocity(const double* times, std::size_t n, double* out) const {
@@ -682,7 +751,16 @@ void Curve::angular_velocity(const double* times, std::size_t n, double* out) co
         }
         return;
     }
-    std::vector<double> warped, rate;
+    std::vector<double> wrapped, warped, rate;
+    if (m.cyclic) {
+        wrapped.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!std::isfinite(times[i])) detail::bad_time(i);
+            double periods;
+            wrapped[i] = detail::wrap_time(m, times[i], periods);
+        }
+        times = wrapped.data();
+    }
     if (m.eased) {
         warped.resize(n);
         rate.resize(n);

@@ -26,6 +26,10 @@
 //                |α| ≤ |ρ''| + ½V² ≤ 2|c2| + 6|c3| + ½V².
 // Ease warps time inside each key segment (curve_ease.cpp): q(t) = q_m(w(t)), so |ω| ≤ |ω_m|·w' and
 // |q̈| ≤ |q̈_m|·w'² + ½|ω_m|·|w''|, with w' ≤ 2k and |w''| ≤ 2k/(min(a, b)·h), k = 1/(2 − a − b).
+// A loop repeats its period: an interval is wrapped into it (the part beyond the last key continues
+// from the first), and one at least a period long takes every segment. Its corner times repeat
+// every period; where a loop is smooth (SQUAD, TCB, CATMULL_ROM, SPLINE_C2) the seam is a key as
+// any other, listed as the keys are, and its bounds hold on both sides.
 #include <algorithm>
 #include <cmath>
 
@@ -152,6 +156,33 @@ void Curve::motion_bounds(double t0, double t1, double& speed, double& accel) co
     speed = accel = 0.0;
     const std::size_t K = times_.size();
     if (K < 2) return;
+    const Impl& m = *impl_;
+    if (m.cyclic) {
+        const double first = times_.front(), last = times_.back();
+        if (!(t1 - t0 < m.period)) {
+            bounds_within(first, last, speed, accel);
+            return;
+        }
+        double periods;
+        const double w0 = detail::wrap_time(m, t0, periods), w1 = w0 + (t1 - t0);
+        if (w1 <= last) {
+            bounds_within(w0, w1, speed, accel);
+            return;
+        }
+        double v, a;
+        bounds_within(w0, last, speed, accel);
+        bounds_within(first, std::fmin(last, first + (w1 - last)), v, a);
+        speed = std::fmax(speed, v);
+        accel = std::fmax(accel, a);
+        return;
+    }
+    bounds_within(t0, t1, speed, accel);
+}
+
+// motion_bounds on the keys' range as it stands (constant outside it).
+void Curve::bounds_within(double t0, double t1, double& speed, double& accel) const {
+    speed = accel = 0.0;
+    const std::size_t K = times_.size();
     const double lo = std::fmax(t0, times_.front()), hi = std::fmin(t1, times_.back());
     if (lo > hi) return;  // outside the keys the curve is constant
     const Impl& m = *impl_;
@@ -207,6 +238,30 @@ std::vector<double> Curve::corner_times() const {
         out.push_back(lo);
         out.push_back(hi);
     }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+std::vector<double> Curve::corner_times(double t0, double t1) const {
+    if (!(t0 <= t1)) throw InvalidArgument("corner_times: t0 must not be after t1");
+    const std::vector<double> period = corner_times();
+    std::vector<double> out;
+    if (!impl_ || !impl_->cyclic) {
+        for (double t : period)
+            if (t >= t0 && t <= t1) out.push_back(t);
+        return out;
+    }
+    // Every period k meeting [t0, t1]: its corner times shifted by k·P (the last is the next's first).
+    const Impl& m = *impl_;
+    const double first = times_.front(), P = m.period;
+    const double k0 = std::floor((t0 - first) / P) - 1.0, k1 = std::floor((t1 - first) / P) + 1.0;
+    if (!(k1 - k0 <= 1e7)) throw InvalidArgument("corner_times: [t0, t1] spans more than 1e7 periods of the loop");
+    for (double k = k0; k <= k1; k += 1.0)
+        for (std::size_t i = 0; i + 1 < period.size(); ++i) {
+            const double t = period[i] + k * P;
+            if (t >= t0 && t <= t1) out.push_back(t);
+        }
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;

@@ -182,6 +182,12 @@ struct Curve::Impl {
 
     Quat first_q, last_q;  // constant extrapolation
 
+    // Loops (curve.hpp "Loops"): times wrap into [kt.front(), kt.back()) with period P; the curve
+    // at the end of a period is period_sign × the curve at its start (either sign is the same
+    // rotation), so a time k periods on is sampled with period_sign^k.
+    bool cyclic = false;
+    double period = 0.0, period_sign = 1.0;
+
     // Set by the builders whose construction already measured every key segment against the path
     // rule (the clamped tangent methods, curve_tangents.cpp) or whose path is its keyed arc (SLERP,
     // NLERP): Curve::path_rule_breaks then has nothing left to sample.
@@ -194,6 +200,24 @@ struct Curve::Impl {
 };
 
 namespace detail {
+// A loop's time t wrapped into [first, first + period) (the last key's time maps to the first's),
+// and the count of whole periods taken off, as a double.
+inline double wrap_time(const Curve::Impl& m, double t, double& periods) {
+    const double first = m.kt.front(), last = m.kt.back(), P = m.period;
+    double k = std::floor((t - first) / P);
+    double w = t - k * P;
+    if (w < first) {  // the division rounded up
+        w += P;
+        k -= 1.0;
+    }
+    if (w >= last) {  // the division rounded down, or t is at a period's end
+        w -= P;
+        k += 1.0;
+    }
+    periods = k;
+    return std::clamp(w, first, last);
+}
+
 // Builders and evaluators, one family per file.
 void build_lerp(Curve::Impl& m, const std::vector<double>& kt, const std::vector<Quat>& p);  // curve.cpp
 void build_slerp(Curve::Impl& m);                                                            // curve.cpp

@@ -9,6 +9,14 @@
 // D-term, solved by Newton's method. End velocities: the end segments' slerp velocities r/h (as
 // scipy's RotationSpline), so two keys give SLERP.
 //
+// A loop (curve.hpp "Loops") has no ends: its knot 0 and knot S are one knot (the same rotation, so
+// the same body frame: w_S = w_0), the condition holds there too, and the S unknowns w_0 … w_{S−1}
+// form a cyclic block-tridiagonal system (row j couples w_{j−1}, w_j, w_{j+1}, indices mod S). It is
+// solved by bordering, as Blender's BLI_tridiagonal_solve_cyclic reduces its cyclic system to
+// ordinary ones: w_0 … w_{S−2} = p + P·w_{S−1} from the ordinary block-tridiagonal rows 0 … S−2
+// (their coupling to w_{S−1} moved to the right-hand side as three more columns), then row S−1
+// gives w_{S−1} from one 3×3 block.
+//
 // The solve is checked: Newton stops when its step is below 1e-12 of the largest knot velocity, and
 // must get there within 50 iterations with every residual below 1e-9 of its terms' size; a pivot
 // block that is singular or not finite, or a solve that does not converge, throws InvalidArgument
@@ -69,6 +77,110 @@ Mat3 checked_inverse(const Mat3& a, const Curve::Impl& m, std::size_t knot) {
     return glm::inverse(a);
 }
 
+// The segments from the knot velocities w (S + 1 of them).
+void make_spline_segments(Curve::Impl& m, const std::vector<double>& h, const std::vector<Mat3>& E,
+                          const std::vector<Vec3>& w) {
+    const std::size_t S = m.kr.size();
+    m.spline.resize(S);
+    for (std::size_t i = 0; i < S; ++i) {
+        const Vec3& r = m.kr[i];
+        const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[i + 1]);
+        const Vec3 c2 = 3.0 * r - 2.0 * a - b, c3 = a + b - 2.0 * r;
+        const double bound = glm::length(a) + glm::length(c2) + glm::length(c3);
+        m.spline[i] = {m.kt[i], 1.0 / h[i], q4(m.kq[i]), a, c2, c3, bound * bound};
+    }
+}
+
+// A loop's spline (see the top): Newton on the S rows of the cyclic system, each step solved by
+// bordering.
+void build_periodic_spline(Curve::Impl& m, const std::vector<double>& h, const std::vector<Mat3>& E,
+                           const std::vector<Mat3>& Jr, const std::vector<JacCoeffs>& jc) {
+    const std::size_t S = m.kr.size();
+    auto prev = [&](std::size_t j) { return j == 0 ? S - 1 : j - 1; };
+    std::vector<Vec3> w(S + 1);
+    for (std::size_t j = 0; j < S; ++j) w[j] = (m.kr[prev(j)] + m.kr[j]) / (h[prev(j)] + h[j]);
+    w[S] = w[0];
+    std::vector<Mat3> L(S), D(S), U(S);
+    std::vector<Vec3> F(S);
+    bool converged = false;
+    double residual = 0.0;
+    std::size_t worst = 0;
+    for (int iter = 0; iter < 50 && !converged; ++iter) {
+        double wmax = 0.0;
+        for (const Vec3& v : w) wmax = std::fmax(wmax, glm::length(v));
+        residual = 0.0;
+        for (std::size_t j = 0; j < S; ++j) {
+            const std::size_t i = prev(j);  // the segment arriving at knot j (across the seam at 0)
+            const Vec3& r = m.kr[i];
+            const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[j]);
+            const NTerm nt = n_term(r, b, jc[i]);
+            const Vec3 G = (nt.value + Jr[i] * (-6.0 * r + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
+            const Vec3& r1 = m.kr[j];
+            const Vec3 a1 = h[j] * w[j], b1 = h[j] * (E[j] * w[j + 1]);
+            const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
+            F[j] = G - Sj;
+            const double size = glm::length(G) + glm::length(Sj);
+            const double rel = size > 0.0 ? glm::length(F[j]) / size : 0.0;
+            if (!(rel <= residual)) {
+                residual = rel;
+                worst = j;
+            }
+            L[j] = (2.0 / h[i]) * Jr[i];
+            D[j] = (1.0 / h[i]) * (nt.jac * E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
+            U[j] = (2.0 / h[j]) * E[j];
+        }
+        // J·Δ = −F, J cyclic: L[j] multiplies Δ_{j−1}, U[j] Δ_{j+1} (mod S).
+        std::vector<Vec3> x(S);
+        if (S == 1) {
+            x[0] = checked_inverse(L[0] + D[0] + U[0], m, 0) * -F[0];
+        } else {
+            const std::size_t n = S - 1;  // rows 0 … S−2, unknowns Δ_0 … Δ_{S−2}; Δ_{S−1} = z
+            // Row k's coefficient of z: L[0] in row 0, U[n−1] in row n−1 (both when n = 1).
+            std::vector<Mat3> C(n, Mat3(0.0));
+            C[0] += L[0];
+            C[n - 1] += U[n - 1];
+            // Thomas on [−F | −C]: Δ_k = p_k + P_k·z.
+            std::vector<Mat3> Dinv(n), Y(n);
+            std::vector<Vec3> y(n);
+            Dinv[0] = checked_inverse(D[0], m, 0);
+            y[0] = -F[0];
+            Y[0] = -C[0];
+            for (std::size_t k = 1; k < n; ++k) {
+                const Mat3 f = L[k] * Dinv[k - 1];
+                Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k);
+                y[k] = -F[k] - f * y[k - 1];
+                Y[k] = -C[k] - f * Y[k - 1];
+            }
+            std::vector<Vec3> p(n);
+            std::vector<Mat3> P(n);
+            p[n - 1] = Dinv[n - 1] * y[n - 1];
+            P[n - 1] = Dinv[n - 1] * Y[n - 1];
+            for (std::size_t k = n - 1; k-- > 0;) {
+                p[k] = Dinv[k] * (y[k] - U[k] * p[k + 1]);
+                P[k] = Dinv[k] * (Y[k] - U[k] * P[k + 1]);
+            }
+            // Row S−1: L·Δ_{S−2} + D·z + U·Δ_0 = −F.
+            const Mat3 A = D[n] + L[n] * P[n - 1] + U[n] * P[0];
+            const Vec3 z = checked_inverse(A, m, n) * (-F[n] - L[n] * p[n - 1] - U[n] * p[0]);
+            for (std::size_t k = 0; k < n; ++k) x[k] = p[k] + P[k] * z;
+            x[n] = z;
+        }
+        double step = 0.0;
+        for (std::size_t j = 0; j < S; ++j) {
+            w[j] += x[j];
+            step = std::fmax(step, glm::length(x[j]));
+        }
+        w[S] = w[0];
+        if (!std::isfinite(step)) throw InvalidArgument("SPLINE_C2: the C2 solve diverged near " + knot_name(m, worst));
+        converged = step <= 1e-12 * wmax;
+    }
+    if (!converged && !(residual <= 1e-9))
+        throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 50 Newton steps; the angular "
+                              "acceleration at " + knot_name(m, worst) + " still jumps by " +
+                              std::to_string(residual) + " of its size");
+    make_spline_segments(m, h, E, w);
+}
+
 }  // namespace
 
 void build_spline(Curve::Impl& m) {
@@ -84,6 +196,10 @@ void build_spline(Curve::Impl& m) {
         E[i] = jr_inv_matrix(m.kr[i]);
         Jr[i] = jr_matrix(m.kr[i]);
         jc[i] = jac_coeffs(glm::dot(m.kr[i], m.kr[i]), false);
+    }
+    if (m.cyclic) {
+        build_periodic_spline(m, h, E, Jr, jc);
+        return;
     }
     // knot velocities: ends fixed, interior from the chord average, then Newton
     std::vector<Vec3> w(S + 1);
@@ -149,14 +265,7 @@ void build_spline(Curve::Impl& m) {
                                   "acceleration at " + knot_name(m, worst) + " still jumps by " +
                                   std::to_string(residual) + " of its size");
     }
-    m.spline.resize(S);
-    for (std::size_t i = 0; i < S; ++i) {
-        const Vec3& r = m.kr[i];
-        const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[i + 1]);
-        const Vec3 c2 = 3.0 * r - 2.0 * a - b, c3 = a + b - 2.0 * r;
-        const double bound = glm::length(a) + glm::length(c2) + glm::length(c3);
-        m.spline[i] = {m.kt[i], 1.0 / h[i], q4(m.kq[i]), a, c2, c3, bound * bound};
-    }
+    make_spline_segments(m, h, E, w);
 }
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): ρ(s) by Horner, then

@@ -12,7 +12,10 @@
 //      in_j  = [(1−t)(1−c)(1+b)/2·g1 + (1−t)(1+c)(1−b)/2·g2] · 2h0/(h0+h1)
 //    With c = 0 both are the knot velocity V_j = (g1 + g2)/(h0 + h1)·(1−t)(…) per frame — time
 //    scaled: the mean angular velocity over the two segments, however unequal they are — so the
-//    curve is C1. End knots take (1−t)·(their segment's rotation).
+//    curve is C1. End knots take (1−t)·(their segment's rotation); a loop's end knots are one knot,
+//    the seam, whose neighbours are the last knot segment (g1, h0) and the first (g2, h1), so the
+//    seam is a knot as any other (the two ends' frames are one rotation: the rotation vectors
+//    combine there too), its out tangent leaving knot 0 and its in tangent arriving at the last knot.
 //    Unclamped CATMULL_ROM (the textbook non-uniform Catmull–Rom, Barry–Goldman) instead takes the
 //    derivative of the parabola through the neighbours, V_j = (h1/h0·g1 + h0/h1·g2)/(h0 + h1), whose
 //    weights carry a short segment's speed over a long one (keys at 1, 2, 102: the first frame's
@@ -35,7 +38,8 @@
 //    checked again, up to 20 rounds, then any segment still beyond gets λ = 0 at its knots. With
 //    zero tangents SQUAD and CATMULL_ROM run along the segment's own arc (smoothstep in angle), so
 //    the rule always holds in the end. With even spacing and arcs within a factor 5 of their
-//    neighbours' going the same way, no clamp acts and the curve is the textbook one.
+//    neighbours' going the same way, no clamp acts and the curve is the textbook one. A loop's two
+//    end knots share one λ (the seam), limited by the segments on both sides and scaled with either.
 #include <cmath>
 #include <type_traits>
 
@@ -52,19 +56,25 @@ KnotTangents base_tangents(const Curve::Impl& m, Method method, const CurveOptio
     const bool tcb = method == Method::TCB;
     for (std::size_t j = 0; j <= S; ++j) {
         double t = 0.0, c = 0.0, b = 0.0;
-        if (tcb && m.kkey[j] >= 0) {
-            t = per_key(o.tension, m.kkey[j]);
-            c = per_key(o.continuity, m.kkey[j]);
-            b = per_key(o.bias, m.kkey[j]);
+        const int key = m.cyclic && j == S ? 0 : m.kkey[j];  // the seam takes the first key's
+        if (tcb && key >= 0) {
+            t = per_key(o.tension, key);
+            c = per_key(o.continuity, key);
+            b = per_key(o.bias, key);
         }
-        if (j == 0 || j == S) {
+        if (m.cyclic && j == S) {  // the seam: the same tangents as knot 0
+            T.in[S] = T.in[0];
+            continue;
+        }
+        if (!m.cyclic && (j == 0 || j == S)) {
             if (j == 0) T.out[0] = (1.0 - t) * m.kr[0];
             if (j == S) T.in[S] = (1.0 - t) * m.kr[S - 1];
             continue;
         }
-        const Vec3& g1 = m.kr[j - 1];
+        const std::size_t before = j == 0 ? S - 1 : j - 1;  // across the seam for a loop's knot 0
+        const Vec3& g1 = m.kr[before];
         const Vec3& g2 = m.kr[j];
-        const double h0 = m.kt[j] - m.kt[j - 1], h1 = m.kt[j + 1] - m.kt[j];
+        const double h0 = m.kt[before + 1] - m.kt[before], h1 = m.kt[j + 1] - m.kt[j];
         if (method == Method::CATMULL_ROM && !o.clamped) {
             const Vec3 V = (h1 / h0 * g1 + h0 / h1 * g2) / (h0 + h1);
             T.out[j] = h1 * V;
@@ -91,7 +101,13 @@ double fc_factor(const Curve::Impl& m, const KnotTangents& T, std::size_t j) {
         const double n = glm::length(tangent), cap = 3.0 * glm::length(r);
         if (n > cap) lambda = std::fmin(lambda, cap / n);
     };
-    if (j < m.kr.size()) limit(T.out[j], m.kr[j]);
+    const std::size_t S = m.kr.size();
+    if (m.cyclic && (j == 0 || j == S)) {  // the seam: both sides
+        limit(T.out[0], m.kr[0]);
+        limit(T.in[S], m.kr[S - 1]);
+        return lambda;
+    }
+    if (j < S) limit(T.out[j], m.kr[j]);
     if (j > 0) limit(T.in[j], m.kr[j - 1]);
     return lambda;
 }
@@ -234,11 +250,27 @@ void clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vecto
     // its own knot segments, and with `neighbours` the two next to it (the bisection's steps look at
     // k's own only, so its neighbours are measured once, at the λ it settles on).
     std::vector<double> saved;
+    // A loop's seam: knots 0 and S are one knot with one λ; the knot segments on the other side of
+    // the seam are touched by k's end knots too (seam_neighbours).
+    const bool loop = m.cyclic;
+    auto link_seam = [&](std::size_t k) {
+        if (!loop) return;
+        if (first[k] == 0) lambda[S] = lambda[0];
+        if (first[k + 1] == S) lambda[0] = lambda[S];
+    };
+    auto seam_neighbours = [&](std::size_t k, auto&& touch) {
+        if (!loop) return;
+        if (first[k] == 0 && first[k + 1] != S) touch(S - 1);
+        if (first[k + 1] == S && first[k] != 0) touch(0);
+    };
     auto scale = [&](std::size_t k, double mu, bool neighbours) {
         for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = saved[j - first[k]] * mu;
+        link_seam(k);
         const std::size_t i0 = neighbours && first[k] > 0 ? first[k] - 1 : first[k];
         const std::size_t i1 = neighbours ? std::min(S, first[k + 1] + 1) : first[k + 1];
         for (std::size_t i = i0; i < i1; ++i) measure(i);
+        if (neighbours) seam_neighbours(k, measure);
+        else if (loop && (first[k] == 0 || first[k + 1] == S)) seam_neighbours(k, remake);
     };
 
     for (int round = 0; round < 20; ++round) {
@@ -273,7 +305,9 @@ void clamp_factors(const Curve::Impl& m, const KnotTangents& T, const std::vecto
     for (std::size_t k = 0; k < K; ++k) {
         if (passes(k)) continue;
         for (std::size_t j = first[k]; j <= first[k + 1]; ++j) lambda[j] = 0.0;
+        link_seam(k);
         for (std::size_t i = first[k] > 0 ? first[k] - 1 : 0; i < std::min(S, first[k + 1] + 1); ++i) remake(i);
+        seam_neighbours(k, remake);
     }
 }
 

@@ -2,8 +2,10 @@
 #include "quatcurve/slerp_keys.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
+#include "quatcurve/curve.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/quat.hpp"
 
@@ -59,7 +61,8 @@ Quat gltf_slerp(const Quat& a, const Quat& b, double t) {
     return slerp_unit(normalized_rotation(a, "a"), normalized_rotation(b, "b"), t);
 }
 
-SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance) {
+SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance,
+                       bool cyclic) {
     const std::size_t n = times.size();
     if (quats.size() != n)
         throw InvalidArgument("quats: " + std::to_string(quats.size()) + " rows for " + std::to_string(n) + " times");
@@ -72,6 +75,19 @@ SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>
         if (k && !(times[k] > times[k - 1]))
             throw InvalidArgument("times[" + std::to_string(k) + "]: not increasing");
         q[k] = normalized_rotation(quats[k], "quats", k);
+    }
+    if (cyclic && n >= 2) {  // a loop: the last sample is the first rotation, snapped onto it
+        const double angle = angle_unit(q[0], q[n - 1]);
+        if (!(angle <= kLoopTolerance)) {
+            char deg[32], t0[32], t1[32];
+            std::snprintf(deg, sizeof deg, "%.4f", angle * 57.29577951308232);
+            std::snprintf(t0, sizeof t0, "%.9g", times[0]);
+            std::snprintf(t1, sizeof t1, "%.9g", times[n - 1]);
+            throw InvalidArgument("cyclic: the last sample (sample " + std::to_string(n - 1) + ", time " + t1 +
+                                  ") is not the first sample's rotation (sample 0, time " + t0 + "): they are " +
+                                  deg + "° apart; key the first pose again at time " + t1);
+        }
+        q[n - 1] = glm::dot(q[n - 1], q[0]) < 0.0 ? -q[0] : q[0];
     }
 
     SlerpKeys out;

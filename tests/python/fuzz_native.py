@@ -1068,6 +1068,20 @@ def build_reduce_slerp(fn, d):
     t, v, tol, must_fail = draw_samples(d, euler=False)
     n = len(t)
     args = [t, v, tol]
+    kwargs = {}
+    # a loop: the last sample made the first's rotation (either sign), or left open (refused)
+    if d.chance(0.2, "cyclic"):
+        kwargs["cyclic"] = True
+        if n >= 2 and not must_fail and isinstance(v, np.ndarray) and v.shape == (n, 4):
+            v = v.copy()
+            if d.chance(0.8, "closed"):
+                v[-1] = v[0] * d.pick((1.0, -1.0, 2.5), "close_scale")
+            else:
+                a = v[0] / np.linalg.norm(v[0])
+                b = v[-1] / np.linalg.norm(v[-1])
+                if np_angle(a, b) > 1e-4:
+                    must_fail = "loop not closed"
+            args[1] = v
     if d.chance(0.05, "length_mismatch") and n:
         args[1] = v[:-1]
         must_fail = must_fail or "lengths differ"
@@ -1078,6 +1092,8 @@ def build_reduce_slerp(fn, d):
         check_indices(out.indices, n, "indices")
         k = len(out.indices)
         expect(k >= 1 and out.indices[0] == 0 and out.indices[-1] == n - 1, "first and last samples kept")
+        if kwargs.get("cyclic") and k >= 2:
+            expect(np_angle(out.quats[0], out.quats[-1]) < 1e-15, "loop: the last key is not the first rotation")
         shape_is(out.quats, (k, 4), "quats")
         finite(out.quats, "quats")
         expect(np.allclose(np.linalg.norm(out.quats, axis=1), 1.0, atol=1e-12), "keys not unit")
@@ -1102,7 +1118,7 @@ def build_reduce_slerp(fn, d):
                 expect(err <= max(tol, 0) + 1e-6, f"a sample is {err!r} rad from the keys' slerp (tolerance {tol!r})")
         repr(out)
 
-    return Case(lambda: fn(*args), max(n, 1), check, must_fail, 0, args)
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, args + [kwargs])
 
 
 def build_gltf_slerp(fn, d):
@@ -1463,10 +1479,33 @@ def build_curve(method, d: Draw) -> Case:
     turnable = kmode in ("random", "spin") and level not in ("wild", "poison")
     kwargs, opt_fail = draw_options(d, method, k, turnable)
     must_fail = must_fail or opt_fail
+    # a loop (curve.hpp "Loops"): the last key made the first's rotation (either sign, Euler angles
+    # whole turns on, an axis-angle turned once more), or left open (refused)
+    # (not on wild, poisoned or extreme keys, whose refusals the closing would change)
+    cyclic = level not in ("wild", "poison") and kmode != "extreme" and d.chance(0.2, "cyclic")
+    order = d.pick(ORDERS, "order")
+    if cyclic:
+        kwargs["cyclic"] = d.pick((True, np.bool_(True), 1.0), "cyclic_value")
+        close = d.pick(("closed", "turned", "open"), "loop_form")
+        if k >= 2 and not must_fail:
+            keys = np.array(keys, dtype=float)
+            if close == "open":
+                mode = order if from_euler else ("AXIS_ANGLE" if from_axis_angle else "QUATERNION")
+                first_q = qc.Curve.from_channels([0.0], keys[:1], mode).quats[0]
+                last_q = qc.Curve.from_channels([0.0], keys[-1:], mode).quats[0]
+                if qc.angle_between(first_q, last_q) > 1e-4:
+                    must_fail = "loop not closed"
+            elif from_euler:
+                keys[-1] = keys[0] + (2 * np.pi * rng.integers(-1, 2, 3) if close == "turned" else 0.0)
+            elif from_axis_angle:
+                keys[-1] = keys[0]
+                if close == "turned":
+                    keys[-1, 0] += 2 * np.pi * rng.choice([-1, 1])
+            else:
+                keys[-1] = keys[0] * (rng.choice([-1.0, 1.0]) if close == "turned" else 1.0)
     if d.chance(0.05, "mismatch") and k:
         keys = keys[:-1]
         must_fail = must_fail or "lengths differ"
-    order = d.pick(ORDERS, "order")
     meth = method
     if d.chance(0.04, "junk_method"):
         meth, bad = d.pick(junk_strings() + [("slerp", True)], "junk_method")
@@ -1497,7 +1536,7 @@ def build_curve(method, d: Draw) -> Case:
     sample_arg: Any = ts
     if d.chance(0.05, "junk_times"):
         sample_arg, bad = d.pick(junk_values(()), "junk_times")
-        sample_fail = sample_fail or ("junk sample times" if bad else "")
+        sample_fail = "junk sample times" if bad else ""  # replaces the drawn times, poisoned or not
     cls = qc.Curve
     keys_mode = d.pick(("QUATERNION",) + ORDERS + ("AXIS_ANGLE",), "keys_mode")
     # The same keys through Curve.from_channels, the add-on's one way to build a curve: the same curve
@@ -1523,6 +1562,14 @@ def build_curve(method, d: Draw) -> Case:
             except (ValueError, TypeError) as e:
                 results[name + "_error"] = e
         results["at_keys"] = c.sample(c.times)
+        if cyclic:  # the same curve one to three periods away, both ways
+            kt = c.times
+            period = kt[-1] - kt[0]
+            if kt.size >= 2 and np.isfinite(period) and period > 0:
+                base = np.linspace(kt[0], kt[-1], 41)
+                shift = float(rng.integers(1, 4)) * d.pick((-1.0, 1.0), "loop_shift")
+                results["periodic"] = (base, c.sample(base), c.sample(base + shift * period), shift * period,
+                                       c.motion_bounds(float(kt[0]), float(kt[-1]))[0])
         # the bake's dense keys at the key times: the channels of the samples, as float32 pairs
         results["keys_of_mode"] = c.sample_keys(c.times, keys_mode)
         results["paths"] = c.segment_paths()
@@ -1536,13 +1583,29 @@ def build_curve(method, d: Draw) -> Case:
             span = rng.uniform(0.05, 1.0) * (hi - lo)
             a = lo + rng.uniform(0, 1) * (hi - lo - span)
             st = np.linspace(a, a + span, 33)
-            results["bounded"] = (st, c.sample(st), c.motion_bounds(float(st[0]), float(st[-1])))
+            across = False
+            if cyclic and corners.size >= 2:  # a stretch some periods away, or across the seam
+                period = corners[-1] - corners[0]
+                across = d.chance(0.5, "across_seam")
+                if across:
+                    st = np.linspace(corners[-1] - 0.3 * span, corners[-1] + 0.3 * span, 33)
+                else:
+                    st = st + float(rng.integers(-3, 4)) * period
+            results["bounded"] = (st, c.sample(st), c.motion_bounds(float(st[0]), float(st[-1])), across)
         return results
 
     def check(r):
         kt = r["keys_times"]
         given_times = np.asarray(args[0], dtype=float).reshape(-1)
         expect(np.array_equal(kt, given_times), "Curve.times differs from the key times")
+        expect(r["options"].get("cyclic") is bool(cyclic), f"Curve.options['cyclic'] is {r['options'].get('cyclic')!r}")
+        if "periodic" in r:
+            base, q0, q1, shift, speed = r["periodic"]
+            # the wrapped time is off by rounding of |t| + |shift|: the angle by the speed times that
+            slack = 1e-9 + (speed if np.isfinite(speed) else 0.0) * 4e-16 * (np.abs(base).max() + abs(shift)) * 8
+            err = np_angle(q0, q1)
+            expect(not np.isfinite(speed) or err.max() <= slack,
+                   f"loop: sample(t + {shift!r}) is {err.max()!r} rad off sample(t)")
         unit(r["keys_quats"], "Curve.quats")
         expect(r["method"] == method, f"Curve.method {r['method']!r}")
         expect(isinstance(r["options"], dict), "Curve.options not a dict")
@@ -1582,7 +1645,8 @@ def build_curve(method, d: Draw) -> Case:
         expect(bool(np.all(np.diff(corners) >= 0)) and bool(np.all(np.isin(kt, corners))),
                "corner_times: not sorted, or a key missing")
         if "bounded" in r:
-            st, q, (speed, accel) = r["bounded"]
+            # (across a loop's seam, a corner: the speed bound only)
+            st, q, (speed, accel), across = r["bounded"]
             expect(speed >= 0 and accel >= 0, f"motion_bounds negative: {speed}, {accel}")
             for i in range(1, len(q)):  # the same sign along the samples (the curve's may flip at a key)
                 if np.dot(q[i], q[i - 1]) < 0:
@@ -1592,7 +1656,7 @@ def build_curve(method, d: Draw) -> Case:
                 moved = np_angle(q[1:], q[:-1]) / dt
                 expect(moved.max() <= speed * (1 + 1e-6) + 1e-6 / dt * 1e-3,
                        f"speed {moved.max()!r} rad/frame above motion_bounds' {speed!r} in [{st[0]!r}, {st[-1]!r}]")
-            if dt > 1e-3 and np.isfinite(accel):
+            if dt > 1e-3 and np.isfinite(accel) and not across:
                 second = np.linalg.norm(q[2:] - 2 * q[1:-1] + q[:-2], axis=1) / dt ** 2
                 expect(second.max() <= accel * (1 + 1e-6) + 1e-9 / dt ** 2,
                        f"|q''| {second.max()!r} above motion_bounds' {accel!r} in [{st[0]!r}, {st[-1]!r}]")

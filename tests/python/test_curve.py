@@ -63,14 +63,15 @@ def test_methods_constant_and_properties():
     np.testing.assert_allclose(c.quats, q / np.linalg.norm(q, axis=1, keepdims=True), atol=1e-15)
     assert c.options["tension"] == 0.25 and c.options["continuity"] == 0.0
     np.testing.assert_array_equal(c.options["bias"], [0.0, 0.1, -0.1, 0.2, 0.0])
-    assert set(c.options) == {"clamped", "tension", "continuity", "bias", "ease_in", "ease_out", "turns"}
+    assert set(c.options) == {"clamped", "tension", "continuity", "bias", "ease_in", "ease_out", "turns", "cyclic"}
     assert c.options["clamped"] is True
-    ease = {"ease_in": 0.0, "ease_out": 0.0, "turns": 0.0}
+    ease = {"ease_in": 0.0, "ease_out": 0.0, "turns": 0.0, "cyclic": False}
     assert qc.Curve(t, q).options == {"shortest_path": True, **ease}
     assert qc.Curve(t, q, "SLERP", shortest_path=False).options == {"shortest_path": False, **ease}
     assert qc.Curve(t, q, "SQUAD").options == {"clamped": True, **ease}
     assert qc.Curve(t, q, "CATMULL_ROM", clamped=False).options == {"clamped": False, **ease}
-    assert qc.Curve(t, q, "SPLINE_C2", ease_in=0.5).options == {"ease_in": 0.5, "ease_out": 0.0, "turns": 0.0}
+    assert qc.Curve(t, q, "SPLINE_C2", ease_in=0.5).options == {"ease_in": 0.5, "ease_out": 0.0, "turns": 0.0,
+                                                                         "cyclic": False}
     assert "TCB" in repr(c) and "keys=5" in repr(c)
     assert "euler_order='ZYX'" in repr(qc.Curve.from_euler(t, a, "ZYX"))
     with pytest.raises(ValueError):

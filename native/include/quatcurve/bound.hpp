@@ -57,6 +57,9 @@ public:
     virtual double jump_bound(double /*t0*/, double /*t1*/, double /*speed*/) const { return 0.0; }
     // The times where the motion may turn a corner, sorted.
     virtual std::vector<double> breaks() const { return {}; }
+    // The breaks within [t0, t1], sorted: those of breaks() there, unless the motion has breaks
+    // beyond any finite list (a loop, Curve "Loops", repeats its corners every period).
+    virtual std::vector<double> breaks_within(double t0, double t1) const;
     // Whether the motion is evaluated at float32 frames (Blender's playback): at(t) is at(float(t)).
     // Two such motions show the same float32 frame at any time, so between neighbouring float32
     // frames their angle is the angle at one of them.
@@ -72,6 +75,7 @@ public:
         curve_.motion_bounds(t0, t1, speed, accel);
     }
     std::vector<double> breaks() const override { return curve_.corner_times(); }
+    std::vector<double> breaks_within(double t0, double t1) const override { return curve_.corner_times(t0, t1); }
 
 private:
     const Curve& curve_;

@@ -63,10 +63,26 @@
 // times (their tangents carry one segment's velocity over the other). Euler angles beyond ±1e6 turns,
 // or changing by more than 1e4 turns within one segment (the path is followed step by step).
 //
+// Loops (cyclic = true, every method): the keys span one period P = times.back() − times.front(),
+// and the last key is the first one period later — the same rotation, either sign, within
+// kLoopTolerance (1e-4 rad, float32 keys of angles up to ~1000 rad; the last key is then snapped
+// onto the first, so the seam is exact); its segment may turn whole turns more (turns, or an Euler /
+// axis-angle path that turns 0 → 360°). Anything else throws InvalidArgument naming both keys,
+// their frames and the angle between them. The curve repeats: sample(t) is sample(t mod P) at every
+// t, before, inside and after the keys (with the sign the curve has reached after whole periods, so
+// the output stays sign-continuous across the seam; the rotation is the same), and the seam is a key
+// like any other: SQUAD, TCB and CATMULL_ROM take the tangents of the first (= last) key from its
+// neighbours across the seam (the key before the last, one period earlier; the second key, one
+// period later; clamped as any key, one factor for both sides), SPLINE_C2 is solved as a periodic
+// spline (C2 at the seam too, a cyclic block-tridiagonal solve), ease_out of the first key and
+// ease_in of the last key act on the segments beside the seam. TCB's tension, continuity and bias
+// at the seam are the first key's (the last key's are unused). A one-key loop is constant.
+//
 // Output: quaternions (w, x, y, z), sign-continuous along the curve (at a key the sample may be the
 // key's negative, the same rotation); angular velocity in radians per frame in the world frame,
 // computed analytically (q̇ = ½·ω·q). Outside [times.front(), times.back()] the curve is constant
-// (Blender's constant extrapolation) with zero velocity; one key gives a constant curve.
+// (Blender's constant extrapolation) with zero velocity, unless it is a loop, which repeats; one key
+// gives a constant curve.
 #pragma once
 
 #include <cstddef>
@@ -98,9 +114,13 @@ struct CurveOptions {
     std::vector<double> ease_in{0.0};          // every method, each in [0, 1] (3ds Max "Ease To" / 50)
     std::vector<double> ease_out{0.0};         // every method, each in [0, 1] (3ds Max "Ease From" / 50)
     std::vector<double> turns{0.0};            // all but EULER, QUAT_COMPONENTS: whole numbers (see "Turns")
+    bool cyclic = false;                       // every method: a closed curve (see "Loops")
 };
 
-// Names of the options `method` takes: "ease_in", "ease_out" for every method; "turns" for every
+// Loops: the largest angle (radians) between the first and the last key of a cyclic curve.
+constexpr double kLoopTolerance = 1e-4;
+
+// Names of the options `method` takes: "ease_in", "ease_out", "cyclic" for every method; "turns" for every
 // method but EULER and QUAT_COMPONENTS; "shortest_path" for SLERP; "clamped" for SQUAD, TCB and
 // CATMULL_ROM; "tension", "continuity", "bias" for TCB.
 std::vector<std::string> option_names(Method method);
@@ -164,7 +184,7 @@ public:
     void angular_velocity(const double* times, std::size_t n, double* out_xyz) const;
     std::vector<Vec3> angular_velocity(const std::vector<double>& times) const;
     // An upper bound of the angular speed |ω| (radians per frame) at every time in [t0, t1]
-    // (t0 ≤ t1; 0 outside the keys, where the curve is constant), from each knot segment's own data
+    // (t0 ≤ t1; 0 outside the keys, where the curve is constant; a loop's wrap to its period), from each knot segment's own data
     // (native/src/curve_bounds.cpp has the bound of every method); +∞ where none is known (a
     // QUAT_COMPONENTS segment through a zero quaternion). What lets a check at finitely many times
     // prove a bound between them (bound.hpp).
@@ -177,6 +197,9 @@ public:
     // split because they turn more than π (a Euler or axis-angle path is followed through them, so
     // SLERP and NLERP change direction there), mapped through the ease warp.
     std::vector<double> corner_times() const;
+    // The corner times within [t0, t1] (t0 ≤ t1): corner_times() inside it, and for a loop those of
+    // every period that meets it (the seam's keys included, where every period starts).
+    std::vector<double> corner_times(double t0, double t1) const;
 
     // Per key segment (keys − 1 of them): keyed arc and path length, the path measured as the sum
     // of the angles between `samples_per_segment` + 1 equally spaced samples of every knot segment
@@ -213,6 +236,8 @@ private:
     Curve(Method method, CurveOptions options);
     void build();
     void build_knots(const std::vector<Vec3>& extra);
+    void close_loop();
+    void bounds_within(double t0, double t1, double& speed, double& accel) const;
 
     Method method_;
     CurveOptions options_;

@@ -46,6 +46,14 @@ struct SlerpKeys {
 // file will store them, e.g. float32, to verify what a reader evaluates). Throws InvalidArgument
 // naming the argument and element ("times[3]: not increasing", "quats[2]: zero-length quaternion",
 // "tolerance: must be finite and >= 0", "quats: 3 rows for 4 times").
-SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance);
+//
+// cyclic: the samples are one period of a loop (curve.hpp "Loops"): the last sample is the first
+// rotation one period later (within kLoopTolerance, either sign; otherwise InvalidArgument names both
+// samples, their times and the angle). The first and last samples stay keys and the last key is the
+// first key's rotation exactly (in the hemisphere of the key before it), so a player that loops the
+// keys (glTF: the animation repeated) joins the seam without a step; slerp segments are independent,
+// so the error across the seam is that of the segments on either side.
+SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance,
+                       bool cyclic = false);
 
 }  // namespace quatcurve
