@@ -35,7 +35,8 @@ constexpr double kTarget = 0.95;          // the allocation aims at this share o
 constexpr double kTightenMargin = 0.97;   // a violating chain's bones scaled by this · distance / error
 constexpr int kAllocationSteps = 40;      // multiplier updates of the allocation
 constexpr double kMultiplierPower = 6.0;  // λ ← λ·(E / target)^this
-constexpr int kTightenRounds = 8;         // verifications with tightening per measurement round
+constexpr int kBracketSteps = 10;         // verifications to bracket the largest passing scale
+constexpr int kBisectSteps = 4;           // then bisections of the bracket
 constexpr int kMeasureRounds = 2;         // measurement + allocation rounds (stages 2–4)
 constexpr double kMinScale = 1.0 / 16.0, kMaxScale = 64.0;  // α_j per allocation
 
@@ -114,9 +115,10 @@ private:
 };
 
 // The virtual vertices of the pose with every bone's rotation from `reduced`.
-VertexError verify(const Problem& pr, const std::vector<const Reduced*>& reduced, std::vector<Vec3>& verts) {
+VertexError verify(const Problem& pr, const std::vector<const Reduced*>& reduced, std::vector<Vec3>& verts,
+                   std::vector<Mat4>& pose) {
     const std::size_t n = pr.n;
-    std::vector<Mat4> pose(pr.bones * n);
+    pose.resize(pr.bones * n);
     verts.resize(pr.bones * n * kVirtualVertices);
     for (std::size_t b = 0; b < pr.bones; ++b) {
         const int p = pr.skeleton.parents[b];
@@ -295,6 +297,7 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
     std::vector<double> budgets = dominant_shell_budgets(skeleton, pr.pose0, n, distance, shell);
     std::vector<const Reduced*> reduced(bones);
     std::vector<Vec3> verts;
+    std::vector<Mat4> poses;
     int rounds = 0;
 
     auto reduce_all = [&] {
@@ -311,53 +314,111 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
         best.error = error;
         have_best = true;
     };
-    // Stage 4: verify; tighten the chains of the vertices above the distance; again.
-    auto verify_and_tighten = [&] {
-        VertexError error;
-        for (int t = 0; t < kTightenRounds; ++t) {
-            reduce_all();
-            error = verify(pr, reduced, verts);
-            if (error.distance <= distance) break;
-            std::vector<double> factor(bones, 1.0);
-            for (std::size_t b = 0; b < bones; ++b)
-                for (std::size_t s = 0; s < n; ++s)
-                    for (int q = 0; q < kVirtualVertices; ++q) {
-                        const std::size_t k = (b * n + s) * kVirtualVertices + q;
-                        const double e = glm::length(verts[k] - pr.verts0[k]);
-                        if (e <= distance) continue;
-                        const double f = kTightenMargin * distance / e;
-                        for (int a = static_cast<int>(b); a >= 0; a = skeleton.parents[a])
-                            factor[a] = std::min(factor[a], f);
-                    }
-            for (std::size_t b = 0; b < bones; ++b) budgets[b] *= factor[b];
+    auto verify_at = [&](const std::vector<double>& shape, double g) {
+        for (std::size_t b = 0; b < bones; ++b) budgets[b] = std::min(kPi, shape[b] * g);
+        reduce_all();
+        const VertexError e = verify(pr, reduced, verts, poses);
+        keep_if_best(e);
+        return e;
+    };
+    // Stage 4: the budgets g·shape with the largest g that passes the verification: grown (or
+    // shrunk by the measured ratio) until the pass/fail boundary is bracketed, then bisected.
+    auto fit_scale = [&](const std::vector<double>& shape) {
+        double pass = 0.0, fail = 0.0, g = 1.0;
+        for (int t = 0; t < kBracketSteps && (pass == 0.0 || fail == 0.0); ++t) {
+            const VertexError e = verify_at(shape, g);
+            if (e.distance <= distance) {
+                pass = g;
+                g = fail > 0.0 ? 0.5 * (g + fail) : g * std::clamp(distance / std::max(e.distance, 1e-300), 1.05, 2.0);
+            } else {
+                fail = g;
+                g = pass > 0.0 ? 0.5 * (g + pass) : g * std::min(0.95, kTightenMargin * distance / e.distance);
+            }
         }
-        return error;
+        for (int t = 0; t < kBisectSteps && pass > 0.0 && fail > 0.0; ++t) {
+            g = std::sqrt(pass * fail);
+            (verify_at(shape, g).distance <= distance ? pass : fail) = g;
+        }
     };
 
-    // Stage 1.
-    VertexError error = verify_and_tighten();
-    keep_if_best(error);
-    // Stages 2–4, twice.
-    for (int round = 0; round < kMeasureRounds; ++round) {
-        std::vector<std::size_t> keys(bones);
-        for (std::size_t b = 0; b < bones; ++b) keys[b] = reduced[b]->keys.key_count();
-        const std::vector<double> alpha = allocate(pr, shares(pr, reduced), keys);
-        for (std::size_t b = 0; b < bones; ++b) budgets[b] = std::min(kPi, budgets[b] * alpha[b]);
-        error = verify_and_tighten();
-        keep_if_best(error);
-    }
-    // Nothing passed (a distance below the float32 floor of the keys): everything tightened by half
-    // until it passes or stops changing; the last try is returned.
-    for (int t = 0; !have_best && t < 24; ++t) {
-        for (double& b : budgets) b *= 0.5;
+    // Stage 5: from the best passing budgets, each bone loosened on its own (most keys first) by a
+    // factor of 2, then √2, then 2^¼, kept where the whole skeleton still passes: only the bone's
+    // subtree is posed again, the other bones keep their measured error.
+    auto loosen = [&] {
+        budgets = best.budgets;
         reduce_all();
-        error = verify(pr, reduced, verts);
-        keep_if_best(error);
-        if (t == 23 && !have_best) {
-            for (const Reduced* r : reduced) best.keys.push_back(r->keys);
-            best.budgets = budgets;
-            best.error = error;
+        VertexError e = verify(pr, reduced, verts, poses);
+        std::vector<double> per_bone = e.per_bone;
+        std::vector<Mat4> work(bones);
+        std::vector<double> trial_error(bones);
+        Vec3 v[kVirtualVertices];
+        for (const double factor : {2.0, std::sqrt(2.0), std::sqrt(std::sqrt(2.0))}) {
+            std::vector<std::size_t> order(bones);
+            for (std::size_t b = 0; b < bones; ++b) order[b] = b;
+            std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+                return reduced[a]->keys.key_count() > reduced[b]->keys.key_count();
+            });
+            for (const std::size_t j : order) {
+                if (reduced[j]->keys.key_count() <= pr.min_keys[j] || budgets[j] >= kPi) continue;
+                const double budget = std::min(kPi, budgets[j] * factor);
+                const Reduced& r = reducer.at(j, budget);
+                if (r.keys.key_count() >= reduced[j]->keys.key_count()) continue;
+                double worst = 0.0;
+                std::vector<char> inside(bones, 0);
+                for (const std::size_t i : pr.subtree[j]) inside[i] = 1, trial_error[i] = 0.0;
+                for (std::size_t b = 0; b < bones; ++b)
+                    if (!inside[b]) worst = std::max(worst, per_bone[b]);
+                for (std::size_t s = 0; s < n && worst <= distance; ++s)
+                    for (const std::size_t i : pr.subtree[j]) {
+                        const std::size_t k = i * n + s;
+                        const int p = skeleton.parents[i];
+                        const Mat4* parent = p < 0 ? nullptr : (i == j ? &poses[p * n + s] : &work[p]);
+                        work[i] = detail::pose_bone(skeleton, pr.offsets, i, parent, pr.original.location[k],
+                                                    i == j ? r.rotation[s] : reduced[i]->rotation[s], pr.original.scale[k]);
+                        detail::bone_vertices(work[i], skeleton.lengths[i], shell, v);
+                        for (int q = 0; q < kVirtualVertices; ++q)
+                            trial_error[i] = std::max(trial_error[i], glm::length(v[q] - pr.verts0[k * kVirtualVertices + q]));
+                        worst = std::max(worst, trial_error[i]);
+                    }
+                if (worst > distance) continue;
+                budgets[j] = budget;
+                reduced[j] = &r;
+                for (const std::size_t i : pr.subtree[j]) per_bone[i] = trial_error[i];
+                // The accepted subtree's poses, for the next trials.
+                for (std::size_t s = 0; s < n; ++s)
+                    for (const std::size_t i : pr.subtree[j]) {
+                        const std::size_t k = i * n + s;
+                        const int p = skeleton.parents[i];
+                        poses[k] = detail::pose_bone(skeleton, pr.offsets, i, p < 0 ? nullptr : &poses[p * n + s],
+                                                     pr.original.location[k], reduced[i]->rotation[s], pr.original.scale[k]);
+                    }
+            }
         }
+        keep_if_best(verify(pr, reduced, verts, poses));
+    };
+
+    // Stage 1: the dominant-shell budgets, and one angle for every bone, each at its best scale.
+    const std::vector<double> shell_budgets = budgets;
+    fit_scale(shell_budgets);
+    fit_scale(std::vector<double>(bones, *std::min_element(shell_budgets.begin(), shell_budgets.end())));
+    // Stages 2–4 from the best passing budgets.
+    for (int round = 0; round < kMeasureRounds && have_best; ++round) {
+        std::vector<std::size_t> keys(bones);
+        for (std::size_t b = 0; b < bones; ++b) {
+            reduced[b] = &reducer.at(b, best.budgets[b]);
+            keys[b] = reduced[b]->keys.key_count();
+        }
+        const std::vector<double> alpha = allocate(pr, shares(pr, reduced), keys);
+        std::vector<double> shape(bones);
+        for (std::size_t b = 0; b < bones; ++b) shape[b] = best.budgets[b] * alpha[b];
+        fit_scale(shape);
+    }
+    if (have_best) loosen();
+    // Nothing passed (a distance below the float32 floor of the keys): the last try is returned.
+    if (!have_best) {
+        for (const Reduced* r : reduced) best.keys.push_back(r->keys);
+        best.budgets = budgets;
+        best.error = verify(pr, reduced, verts, poses);
     }
     best.rounds = rounds;
     return best;
