@@ -190,6 +190,8 @@ std::vector<Mat4> pose_matrices(const Skeleton& skeleton, const SkeletonPose& po
             const std::size_t k = b * n + s;
             out[k] = detail::pose_bone(skeleton, offs, b, p < 0 ? nullptr : &out[p * n + s], pose.location[k],
                                        pose.rotation[k], pose.scale[k]);
+            if (!finite_problem(out[k]).empty())
+                throw InvalidArgument(at("pose", "matrix", b, s) + ": overflows double precision (the input is too large)");
         }
     }
     return out;
@@ -205,9 +207,15 @@ std::vector<Vec3> virtual_vertices(const Skeleton& skeleton, const std::vector<M
         throw InvalidArgument("lengths: " + std::to_string(skeleton.lengths.size()) + " entries for " +
                               std::to_string(skeleton.size()) + " bones");
     std::vector<Vec3> out(pose.size() * kVirtualVertices);
-    for (std::size_t k = 0; k < pose.size(); ++k)
+    for (std::size_t k = 0; k < pose.size(); ++k) {
         detail::bone_vertices(pose[k], skeleton.lengths[k / std::max<std::size_t>(samples, 1)], shell,
                               &out[k * kVirtualVertices]);
+        for (int v = 0; v < kVirtualVertices; ++v)
+            if (!finite_problem(out[k * kVirtualVertices + v]).empty())
+                throw InvalidArgument(at("pose", "vertex", k / std::max<std::size_t>(samples, 1),
+                                         k % std::max<std::size_t>(samples, 1)) +
+                                      ": overflows double precision (the input is too large)");
+    }
     return out;
 }
 
@@ -241,7 +249,10 @@ VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a
     check_pose(skeleton, b, "b");
     const std::vector<Vec3> va = virtual_vertices(skeleton, pose_matrices(skeleton, a), a.samples, shell);
     const std::vector<Vec3> vb = virtual_vertices(skeleton, pose_matrices(skeleton, b), b.samples, shell);
-    return detail::vertex_error(va, vb, skeleton.size(), a.samples);
+    const VertexError e = detail::vertex_error(va, vb, skeleton.size(), a.samples);
+    if (!std::isfinite(e.distance))
+        throw InvalidArgument("b: its distance from a overflows double precision (the input is too large)");
+    return e;
 }
 
 }  // namespace quatcurve

@@ -10,10 +10,11 @@
 //      rotation needs), minimized subject to E ≤ distance at every (v, s) — a Lagrangian with one
 //      multiplier per (v, s), updated multiplicatively, the budgets normalized each step so the
 //      largest predicted E is the target;
-//   4. reduced at those budgets and verified (the whole skeleton posed from Blender's evaluation of
-//      every bone's keys); each bone on the chain of a vertex above the distance is tightened by the
-//      measured ratio and reduced again, until every vertex passes;
-//   5. stages 2–4 once more from the verified budgets; the passing result with fewer keys is kept.
+//   4. each budget set scaled by the largest factor whose reduction passes the verification (the
+//      whole skeleton posed from Blender's evaluation of every bone's keys): bracketed, then bisected;
+//   5. each bone loosened on its own where the whole skeleton still passes (only its subtree posed
+//      again). Stage 4 runs for the dominant-shell budgets, for one angle for all, and after each of
+//      two rounds of stages 2–3; the passing result with fewest keys is kept.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,7 +33,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kKeysExponent = 0.5;     // keys ∝ tolerance^(−p): the allocation's cost model
 constexpr double kTarget = 0.95;          // the allocation aims at this share of the distance
-constexpr double kTightenMargin = 0.97;   // a violating chain's bones scaled by this · distance / error
+constexpr double kTightenMargin = 0.97;   // a failing scale shrinks by at least this · distance / error
 constexpr int kAllocationSteps = 40;      // multiplier updates of the allocation
 constexpr double kMultiplierPower = 6.0;  // λ ← λ·(E / target)^this
 constexpr int kBracketSteps = 10;         // verifications to bracket the largest passing scale
@@ -291,6 +292,7 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
     for (std::size_t b = 0; b < bones; ++b)
         for (int a = static_cast<int>(b); a >= 0; a = skeleton.parents[a]) pr.subtree[a].push_back(b);
 
+    if (bones == 0) return SkeletonReduction{};
     Reducer reducer(pr);
     SkeletonReduction best;
     bool have_best = false;

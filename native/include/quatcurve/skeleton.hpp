@@ -130,14 +130,13 @@ struct SkeletonReduction {
 // into rotations, posed and measured against the original: `error` is that verification, ≤ distance
 // unless even every bone at its float32 floor cannot reach it (then the last, tightest, try).
 //
-// How the budgets are chosen: dominant-shell budgets (above) are reduced first; then each bone's own
-// share of the error is measured — the virtual vertices of its subtree with only that bone reduced —
-// and the budgets are rescaled, under a model linear in each bone's budget, until every sample of
-// every vertex is predicted within the distance, loosening most the bones whose reduction saves many
-// keys for little error; the skeleton is reduced at those budgets and verified, and the bones on the
-// chains of the vertices that still exceed the distance are tightened (by the measured ratio) and
-// reduced again, until the verification passes. A second measurement round refines the budgets; the
-// result with fewer keys that passes is returned.
+// How the budgets are chosen (every candidate verified as above, the passing one with fewest keys
+// kept): the dominant-shell budgets, and one angle for every bone, each scaled by the largest factor
+// that passes; then, twice, each bone's own share of the error is measured — the virtual vertices of
+// its subtree with only that bone reduced — and the budgets are rescaled under a model linear in
+// each budget, loosening most the bones whose reduction saves many keys for little error, and
+// scaled to pass again; last, each bone is loosened on its own (×2, ×√2, ×2^¼, most keys first)
+// where the whole skeleton still passes.
 // Throws InvalidArgument as check_skeleton, for channel or row counts that do not match, for times
 // as reduce_keys, and for distance or shell not finite and ≥ 0 (distance > 0).
 SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<double>& times,
