@@ -11,4 +11,5 @@ void bind_reduce(pybind11::module_& m);   // bind_reduce.cpp: key reduction
 void bind_metrics(pybind11::module_& m);  // bind_metrics.cpp: comparison metrics
 void bind_blender_eval(pybind11::module_& m);  // bind_blender_eval.cpp: Blender's F-curve evaluation
 void bind_channels(pybind11::module_& m); // bind_channels.cpp: rotation channels, sampling policies
+void bind_skeleton(pybind11::module_& m); // bind_skeleton.cpp: skeletons, the distance bound
 }  // namespace quatcurve::bindings

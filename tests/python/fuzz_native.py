@@ -43,7 +43,7 @@ LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
                  "fit_through_keys": 0.5,
-                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5}  # slower targets: fewer examples
+                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "Skeleton": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -2123,6 +2123,73 @@ def _elementwise(name):
     return lambda fn, d: spec.build(fn, d)
 
 
+def build_skeleton(fn, d):
+    """Skeleton: a random armature (now and then a bad parent, a non-rigid or non-finite rest matrix, a
+    negative length) and one of its methods on random channels of any level; the pose, vertices,
+    errors and budgets must be finite, a reduction within its distance (or refused)."""
+    rng, level = d.rng, d.level()
+    bones = d.count(small=6, huge=40, label="bones")
+    n = d.count(small=12, huge=200, label="samples")
+    parents = np.array([-1] + [int(rng.integers(0, b)) for b in range(1, bones)]) if bones else np.zeros(0, int)
+    rest = np.tile(np.eye(4), (bones, 1, 1))
+    if bones:
+        q = fill(rng, (bones, 4), "calm")
+        rest[:, :3, :3] = quat_to_matrix_np(q / np.linalg.norm(q, axis=1, keepdims=True))
+        rest[:, :3, 3] = fill(rng, (bones, 3), "calm")
+    lengths = np.abs(fill(rng, (bones,), "calm"))
+    must_fail = ""
+    if bones and d.chance(0.1, "bad_skeleton"):
+        what = d.pick(("parent", "rest", "length"), "bad_part")
+        if what == "parent":
+            parents[-1] = bones
+        elif what == "rest":
+            rest[-1, 0, 0] = d.pick((2.0, NAN, INF), "bad_rest")
+        else:
+            lengths[-1] = d.pick((-1.0, NAN), "bad_length")
+        must_fail = "bad skeleton " + what
+    flags = dict(inherit_rotation=rng.random(bones) < 0.7, connected=rng.random(bones) < 0.3,
+                 inherit_scale=[d.pick(("FULL", "NONE"), "scale_mode") for _ in range(bones)] if bones else None)
+    loc = fill(rng, (bones, n, 3), level)
+    rot = fill(rng, (bones, n, 4), level)
+    scale = fill(rng, (bones, n, 3), level)
+    shell = float(d.pick((0.1, 0.0, 1.0, -1.0, NAN), "shell"))
+    method = d.pick(("pose", "virtual_vertices", "vertex_error", "dominant_shell_budgets", "reduce"), "method")
+    finite_in = all(np.all(np.isfinite(a)) for a in (loc, rot, scale))
+    if method in ("pose", "vertex_error") and not finite_in:
+        must_fail = must_fail or "non-finite channels"
+    if method != "pose" and not (shell >= 0):
+        must_fail = must_fail or "bad shell"
+    distance = float(d.pick((0.001, 0.1, 0.0, NAN), "distance"))
+
+    def call():
+        sk = fn(parents, rest, lengths, **flags)
+        if method == "pose":
+            return sk.pose(loc, rot, scale)
+        if method == "virtual_vertices":
+            return sk.virtual_vertices(sk.pose(loc, rot, scale), shell)
+        if method == "vertex_error":
+            return sk.vertex_error((loc, rot, scale), (loc, rot[:, ::-1], scale), shell)
+        if method == "dominant_shell_budgets":
+            return sk.dominant_shell_budgets(sk.pose(loc, rot, scale), distance, shell)
+        m = min(n, 20)
+        angles = np.clip(np.cumsum(fill(rng, (bones, m, 3), "calm") * 0.05, axis=1), -10, 10)
+        return sk.reduce(np.arange(m, dtype=float), [("XYZ", a) for a in angles], np.clip(loc[:, :m], -1e3, 1e3),
+                         np.ones((bones, m, 3)), distance, shell)  # unit scales: the float32 floor stays below the distance
+
+    def check(out):
+        if method == "reduce":
+            finite(out.budgets, "budgets")
+            expect(out.error.distance <= distance or out.error.distance < 1e-5,  # or the float32 floor
+                   f"error {out.error.distance!r} above distance {distance!r}")
+        elif method == "vertex_error":
+            finite(out.distance, "distance")
+            finite(out.per_bone, "per_bone")
+        else:
+            finite(out, method)
+
+    return Case(call, max(bones * n, 1), check, must_fail, 200 * bones * n, (parents, rest, lengths, method))
+
+
 def _not_constructible(fn, d):
     """Result classes (ReducedKeys, ReducedChannel) are not built from Python: any call is refused."""
     args = d.pick(((), (1,), (None,), ("x", 2), (np.zeros(4),)), "args")
@@ -2171,6 +2238,9 @@ REGISTRY.update({
     "ProvedKeys": _not_constructible,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,
+    "Skeleton": build_skeleton,
+    "VertexError": _not_constructible,
+    "SkeletonReduction": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
     "Curve": None,
 })

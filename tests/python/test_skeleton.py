@@ -1,0 +1,139 @@
+"""quatcurve.Skeleton: the pose against a numpy reference of Blender's pose formulas, the virtual
+vertices, and the distance bound of Skeleton.reduce checked by an independent evaluation of the keys."""
+import numpy as np
+import pytest
+
+import quatcurve as qc
+
+
+def quat_matrix(q):
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def random_skeleton(rng, bones):
+    """Bone-relative specs (BKE_bone_offset_matrix_get: bone_mat, head, parent length) and their rest."""
+    parents = [-1] + [int(rng.integers(0, b)) for b in range(1, bones)]
+    lengths = rng.uniform(0.05, 0.5, bones)
+    connected = np.array([b > 0 and rng.random() < 0.4 for b in range(bones)])
+    inherit = np.array([b == 0 or rng.random() < 0.7 for b in range(bones)])
+    offs = np.zeros((bones, 4, 4))
+    rest = np.zeros((bones, 4, 4))
+    for b in range(bones):
+        offs[b] = np.eye(4)
+        offs[b, :3, :3] = quat_matrix(rng.normal(size=4))
+        head = np.zeros(3) if connected[b] else rng.uniform(-0.2, 0.2, 3)
+        if parents[b] >= 0:
+            head[1] += lengths[parents[b]]
+        offs[b, :3, 3] = head
+        rest[b] = offs[b] if parents[b] < 0 else rest[parents[b]] @ offs[b]
+    return parents, lengths, connected, inherit, offs, rest
+
+
+def reference_pose(parents, lengths, connected, inherit, offs, rest, loc, rot, scale):
+    """Blender's pose (BKE_pchan_to_mat4, BKE_bone_parent_transform_calc_from_matrices and _apply), inherit
+    scale FULL, in numpy."""
+    B, N = rot.shape[:2]
+    out = np.zeros((B, N, 4, 4))
+    for b in range(B):
+        for s in range(N):
+            chan = np.eye(4)
+            chan[:3, :3] = quat_matrix(rot[b, s]) @ np.diag(scale[b, s])
+            if not connected[b]:
+                chan[:3, 3] = loc[b, s]
+            p = parents[b]
+            if p < 0:
+                out[b, s] = rest[b] @ chan
+                continue
+            parent = out[p, s]
+            if inherit[b]:
+                rotscale = parent @ offs[b]
+            else:
+                t = rest[p].copy()
+                t[:3, :3] = t[:3, :3] * np.linalg.norm(parent[:3, :3], axis=0)  # the parent's axis lengths
+                rotscale = t @ offs[b]
+            m = rotscale @ chan
+            m[:3, 3] = (parent @ offs[b] @ np.append(chan[:3, 3], 1.0))[:3]
+            out[b, s] = m
+    return out
+
+
+def test_pose_matches_numpy_reference():
+    rng = np.random.default_rng(29)
+    for bones in (1, 3, 12):
+        parents, lengths, connected, inherit, offs, rest = random_skeleton(rng, bones)
+        sk = qc.Skeleton(parents, rest, lengths, inherit_rotation=inherit, connected=connected)
+        N = 4
+        loc = rng.uniform(-0.3, 0.3, (bones, N, 3))
+        rot = rng.normal(size=(bones, N, 4))
+        scale = rng.uniform(0.5, 1.5, (bones, N, 3))
+        got = sk.pose(loc, rot, scale)
+        np.testing.assert_allclose(got, reference_pose(parents, lengths, connected, inherit, offs, rest, loc, rot, scale),
+                                   atol=1e-10)
+        verts = sk.virtual_vertices(got, 0.1)
+        assert verts.shape == (bones, N, 4, 3)
+        tail = got[..., :3, 3] + got[..., :3, 1] * lengths[:, None, None]
+        np.testing.assert_allclose(verts[:, :, 0], tail, atol=1e-12)
+        np.testing.assert_allclose(verts[:, :, 3], got[..., :3, 3] + 0.1 * got[..., :3, 2], atol=1e-12)
+
+
+def test_vertex_error_and_budgets():
+    rest = np.tile(np.eye(4), (2, 1, 1))
+    rest[1, 1, 3] = 1.0
+    sk = qc.Skeleton([-1, 0], rest, [1.0, 0.5], connected=[0, 1])
+    loc, scale = np.zeros((2, 3, 3)), np.ones((2, 3, 3))
+    a = np.tile([1.0, 0, 0, 0], (2, 3, 1))
+    b = a.copy()
+    b[0, 1] = [np.cos(0.005), np.sin(0.005), 0, 0]  # the root turns 0.01 rad about X at sample 1
+    e = sk.vertex_error((loc, a, scale), (loc, b, scale), 0.1)
+    assert (e.bone, e.vertex, e.sample) == (1, 0, 1)
+    assert e.distance == pytest.approx(2 * 1.5 * np.sin(0.005), abs=1e-12)
+    budgets = sk.dominant_shell_budgets(sk.pose(loc, a, scale), 0.001, 0.1)
+    np.testing.assert_allclose(budgets, [0.001 / 1.5, 0.001 / 0.5])
+
+
+def test_reduce_keeps_the_distance():
+    rng = np.random.default_rng(7)
+    parents, lengths, connected, inherit, offs, rest = random_skeleton(rng, 6)
+    sk = qc.Skeleton(parents, rest, lengths, inherit_rotation=inherit, connected=connected)
+    N = 50
+    times = np.arange(1.0, N + 1.0)
+    t = times[:, None]
+    rotations = []
+    for b in range(6):
+        angles = 0.6 * np.sin(rng.uniform(0.02, 0.1, 3) * t + rng.uniform(-3, 3, 3))
+        mode = ("XYZ", "QUATERNION", "ZXY")[b % 3]
+        values = angles if mode != "QUATERNION" else qc.quats_to_channels(qc.channels_to_quats(angles, "XYZ"), mode)
+        rotations.append((mode, values))
+    loc, scale = np.zeros((6, N, 3)), np.ones((6, N, 3))
+    result = sk.reduce(times, rotations, loc, scale, 0.001, 0.1)
+    assert result.error.distance <= 0.001
+    original = np.stack([qc.channels_to_quats(v, m) for m, v in rotations])
+    reduced = []
+    for keys, (mode, _) in zip(result.keys, rotations):
+        values = np.stack([qc.blender_evaluate(ch.frames, ch.values, times, keys.interpolation, ch.handle_left,
+                                               ch.handle_right) for ch in keys.channels], axis=-1)
+        reduced.append(qc.channels_to_quats(values, mode))
+    e = sk.vertex_error((loc, original, scale), (loc, np.stack(reduced), scale), 0.1)
+    assert e.distance == pytest.approx(result.error.distance, abs=1e-12)
+    assert result.key_count < sum(v.size for _, v in rotations) / 2
+    assert result.budgets.shape == (6,)
+
+
+def test_refuses_bad_input():
+    rest = np.tile(np.eye(4), (2, 1, 1))
+    with pytest.raises(ValueError, match="parents"):
+        qc.Skeleton([1, -1], rest, [1.0, 1.0])
+    with pytest.raises(ValueError, match="rest"):
+        qc.Skeleton([-1, 0], rest * 2, [1.0, 1.0])
+    with pytest.raises(ValueError, match="inherit_scale"):
+        qc.Skeleton([-1, 0], rest, [1.0, 1.0], inherit_scale=["FULL", "ALIGNED"])
+    sk = qc.Skeleton([-1, 0], rest, [1.0, 1.0])
+    with pytest.raises(ValueError, match="rotation"):
+        sk.pose(np.zeros((2, 3, 3)), np.zeros((2, 3, 4)), np.ones((2, 3, 3)))
+    with pytest.raises(ValueError, match="locations"):
+        sk.pose(np.zeros((2, 2, 3)), np.ones((2, 3, 4)), np.ones((2, 3, 3)))
+    with pytest.raises(ValueError, match="distance"):
+        sk.reduce([1.0, 2.0], [("XYZ", np.zeros((2, 3)))] * 2, np.zeros((2, 2, 3)), np.ones((2, 2, 3)), 0.0, 0.1)
