@@ -519,6 +519,66 @@ them (float32) to verify what a reader plays. Returns a SlerpKeys (indices, quat
 cyclic=True: the samples are one period of a loop, the last sample the first rotation (refused
 otherwise, naming both samples and the angle); the last key is then the first key's rotation.)doc");
 
+    py::class_<ProvedSlerpKeys>(m, "ProvedSlerpKeys",
+                                "Result of reduce_slerp_proved: slerp keys and the proof of their slerp against the "
+                                "reference at every instant (slerp_keys.hpp)")
+        .def_property_readonly("times", [](const ProvedSlerpKeys& r) { return vector_array(r.times); },
+                               "the samples of the last round: the given ones and those the proof added")
+        .def_readonly("keys", &ProvedSlerpKeys::keys, "SlerpKeys; indices into `times`")
+        .def_property_readonly("key_times",
+                               [](const ProvedSlerpKeys& r) {
+                                   std::vector<double> t;
+                                   for (std::size_t i : r.keys.indices) t.push_back(r.times[i]);
+                                   return vector_array(t);
+                               },
+                               "the keys' times (the samples at keys.indices)")
+        .def_readonly("proof", &ProvedSlerpKeys::proof,
+                      "PlaybackBound of the keys' slerp against the reference over [times[0], times[-1]]")
+        .def_readonly("rounds", &ProvedSlerpKeys::rounds, "reductions made (1: the first was proved)")
+        .def("__repr__", [](const ProvedSlerpKeys& r) {
+            return "<ProvedSlerpKeys " + std::to_string(r.keys.indices.size()) + " keys, " +
+                   (r.proof.proven() ? "proven" : "NOT proven") + ", bound " + std::to_string(r.proof.bound) +
+                   " rad, " + std::to_string(r.rounds) + " rounds>";
+        });
+
+    m.def(
+        "reduce_slerp_proved",
+        [](const Curve& curve, py::handle times, double tolerance, bool cyclic) {
+            const std::vector<double> t = read_times(times);
+            py::gil_scoped_release release;
+            return reduce_slerp_proved(CurveMotion(curve), t, tolerance, cyclic);
+        },
+        py::arg("curve"), py::arg("times"), py::arg("tolerance"), py::kw_only(), py::arg("cyclic") = false);
+    m.def(
+        "reduce_slerp_proved",
+        [](py::sequence channels, const std::string& channel_interpolation, const std::string& mode_name,
+           py::handle times, double tolerance, bool cyclic) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const KeyInterpolation ipo = parse_key_interpolation(channel_interpolation);
+            std::vector<FCurveKeys> original;
+            for (std::size_t c = 0; c < channels.size(); ++c) original.push_back(read_fcurve_keys(channels[c], c));
+            const std::vector<double> t = read_times(times);
+            py::gil_scoped_release release;
+            const PlaybackMotion playback(std::move(original), ipo, mode);
+            return reduce_slerp_proved(playback, t, tolerance, cyclic);
+        },
+        py::arg("channels"), py::arg("channel_interpolation"), py::arg("mode"), py::arg("times"), py::arg("tolerance"),
+        py::kw_only(), py::arg("cyclic") = false,
+        R"doc(glTF LINEAR (slerp) keys proved within `tolerance` radians of a reference at EVERY time from
+times[0] to times[-1], not only at the samples: a ProvedSlerpKeys.
+
+reduce_slerp_proved(curve, times, tolerance): the reference is a Curve (a method through keys).
+reduce_slerp_proved(channels, channel_interpolation, mode, times, tolerance): the reference is
+Blender's playback of a rotation's F-curves (as reduce_keys_proved takes them: one (frames, values[,
+handle_left, handle_right]) per channel of `mode`, every segment 'LINEAR' or 'BEZIER').
+
+times: (N >= 2,) increasing frames, the samples to start from. The reference there is reduced by
+reduce_slerp at 90% of the tolerance; the keys' slerp is proved against the reference between the
+samples (prove_within, bound.hpp); the times that fail become samples and the reduction runs again
+(at most 8 rounds). The keys sit on samples (ProvedSlerpKeys.key_times); the proof's bound holds at
+every instant whatever its verdict. Slerp is bi-invariant: keys A·q·B (an exporter's axis and
+parent maps) play the same motion turned, within the same bound. cyclic: as reduce_slerp.)doc");
+
     m.def(
         "gltf_slerp",
         [](py::handle a, py::handle b, double t) {

@@ -43,7 +43,7 @@ LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
                  "fit_through_keys": 0.5,
-                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "Skeleton": 0.5}  # slower targets: fewer examples
+                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -1902,6 +1902,81 @@ def build_reduce_curve_proved(fn, d):
     return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
 
 
+def build_reduce_slerp_proved(fn, d):
+    """reduce_slerp_proved: glTF slerp keys against a method's curve or against random original
+    F-curves' playback (either form), proved at every instant; checked by dense evaluation of the
+    keys' slerp (numpy, glTF's formula) against the reference, nowhere above the proved bound; the
+    keys sit on the returned samples, first and last kept."""
+    rng = d.rng
+    form = d.pick(("curve", "playback"), "reference")
+    if form == "curve":
+        k = int(rng.integers(2, 7))
+        frames = np.cumsum(rng.uniform(0.5, 12.0, k)) + rng.uniform(-20, 20)
+        method = d.pick(tuple(m for m in qc.METHODS if m not in ("EULER", "QUAT_COMPONENTS")), "method")
+        curve = qc.Curve(frames, rng.normal(size=(k, 4)), method=method)
+        times = np.arange(frames[0], frames[-1], float(d.pick((1.0, 0.25, 0.05), "step")))
+        times = np.append(times, frames[-1]) if times[-1] < frames[-1] - 1e-9 else times
+        head, reference = [curve], curve.sample
+        excluded = ()
+    else:
+        mode = d.pick(("QUATERNION", "AXIS_ANGLE") + ORDERS, "mode")
+        channels, channel_ipo, times, values = draw_original(d, mode)
+        head = [channels, channel_ipo, mode]
+
+        def reference(ts):
+            return playback_quats(channels, channel_ipo, mode, ts)
+        # Blender's own quaternion sign flips play a fast turn inside one interval: slerp keys take
+        # the short way there (as the reduction does); those intervals are not checked.
+        excluded = ()
+        if mode == "QUATERNION":
+            flip = np.flatnonzero(np.sum(values[1:] * values[:-1], axis=1) < 0)
+            excluded = tuple(zip(times[flip], times[flip + 1]))
+    tol = float(d.pick((1e-4, 1e-3, 0.01, 0.05), "tolerance"))
+    bad = d.pick(("ok",) * 6 + ("unsorted", "tolerance", "one"), "form")
+    args, must_fail = head + [times, tol], ""
+    if bad == "unsorted" and len(times) > 2:
+        args[-2] = times[::-1].copy()
+        must_fail = "unsorted times"
+    elif bad == "tolerance":
+        args[-1] = d.pick((-1.0, NAN, INF), "bad_tolerance")
+        must_fail = f"tolerance {args[-1]!r}"
+    elif bad == "one":
+        args[-2] = times[:1]
+        must_fail = "one sample"
+
+    def check(out):
+        expect(type(out).__name__ == "ProvedSlerpKeys", f"result {type(out).__name__}")
+        expect(out.times.ndim == 1 and np.all(np.diff(out.times) > 0), "times not increasing")
+        expect(1 <= out.rounds <= 8, f"{out.rounds} rounds")
+        idx = out.keys.indices
+        expect(idx[0] == 0 and idx[-1] == len(out.times) - 1, "first and last samples not kept")
+        expect(np.array_equal(out.key_times, out.times[idx]), "key_times are not the kept samples")
+        proof = out.proof
+        expect(proof.proven == (len(proof.violations) == 0 and len(proof.unproven) == 0), "proven disagrees")
+        finite(proof.bound, "bound")
+        repr(out)
+        kt, kq = out.key_times, out.keys.quats
+        ts = np.sort(np.concatenate([np.linspace(kt[0], kt[-1], 2001), rng.uniform(kt[0], kt[-1], 1000)]))
+        for a, b in excluded:
+            ts = ts[~((ts > a) & (ts < b))]
+        seg = np.clip(np.searchsorted(kt, ts, side="right") - 1, 0, len(kt) - 2)
+        a, b = kq[seg], kq[seg + 1]
+        u = (ts - kt[seg]) / (kt[seg + 1] - kt[seg])
+        b = np.where(np.sum(a * b, axis=1)[:, None] < 0, -b, b)
+        ang = np.arccos(np.clip(np.sum(a * b, axis=1), -1.0, 1.0))
+        small = ang < 1e-7
+        sa = np.where(small, 1.0, np.sin(ang))
+        w0 = np.where(small, 1 - u, np.sin((1 - u) * ang) / sa)
+        w1 = np.where(small, u, np.sin(u * ang) / sa)
+        got = w0[:, None] * a + w1[:, None] * b
+        got /= np.linalg.norm(got, axis=1, keepdims=True)
+        dense = np_angle(got, reference(ts))
+        expect(dense.max() <= proof.bound + 1e-6,
+               f"dense evaluation {dense.max()!r} rad at frame {ts[dense.argmax()]!r} above the proved {proof.bound!r}")
+
+    return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
+
+
 # ==== the bake queue (bake.hpp) ==================================================================
 
 def draw_bake_job(d: Draw):
@@ -2235,6 +2310,8 @@ REGISTRY.update({
     "prove_playback": build_prove_playback,
     "reduce_keys_proved": build_reduce_keys_proved,
     "reduce_curve_proved": build_reduce_curve_proved,
+    "reduce_slerp_proved": build_reduce_slerp_proved,
+    "ProvedSlerpKeys": _not_constructible,
     "ProvedKeys": _not_constructible,
     "ReducedKeys": _not_constructible,
     "ReducedChannel": _not_constructible,

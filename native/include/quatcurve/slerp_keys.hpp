@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "quatcurve/bound.hpp"
 #include "quatcurve/types.hpp"
 
 namespace quatcurve {
@@ -55,5 +56,32 @@ struct SlerpKeys {
 // so the error across the seam is that of the segments on either side.
 SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance,
                        bool cyclic = false);
+
+// ---- slerp keys proved at every instant --------------------------------------------------------------
+// reduce_slerp holds its keys to the samples. reduce_slerp_proved holds them to a REFERENCE motion
+// (bound.hpp: a method's curve, or Blender's playback of a rotation's keys) at EVERY time from
+// times[0] to times[-1]:
+//   1. the reference at `times` (its sign-continuous rotations) reduced by reduce_slerp at 90% of the
+//      tolerance (the rest is room for the proof between samples);
+//   2. the keys' slerp (a SLERP Curve through them: glTF's formula, bi-invariant, so a player's
+//      A·q·B of them is the same motion turned) proved against the reference by prove_within;
+//   3. where that fails — the times above the tolerance and the middle of each interval left
+//      unproven — the reference there becomes a sample (an eighth of the interval in from a sample it
+//      lies by; no closer than 1/1024 frame to another), and the reduction runs again; at most 8
+//      rounds.
+// Keys sit on samples (the given ones and those added). The proof of the last round is returned
+// whatever its verdict: its bound holds at every instant of the range. `cyclic`: as reduce_slerp
+// (the reference's first and last rotations one loop's seam). Times in the reference's unit (frames);
+// the caller scales them for the file. Throws InvalidArgument as reduce_slerp, and for fewer than two
+// times.
+struct ProvedSlerpKeys {
+    std::vector<double> times;  // the samples of the last round: the given ones and those added
+    SlerpKeys keys;             // indices into `times`
+    PlaybackBound proof;        // the keys' slerp against the reference over [times[0], times[-1]]
+    int rounds = 0;             // reductions made (1: the first was proved)
+};
+
+ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<double>& times, double tolerance,
+                                    bool cyclic = false);
 
 }  // namespace quatcurve

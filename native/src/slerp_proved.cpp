@@ -1,0 +1,81 @@
+// reduce_slerp_proved (slerp_keys.hpp): glTF LINEAR keys proved against a reference at every instant.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "quatcurve/bound.hpp"
+#include "quatcurve/curve.hpp"
+#include "quatcurve/errors.hpp"
+#include "quatcurve/slerp_keys.hpp"
+
+namespace quatcurve {
+
+namespace {
+
+constexpr int kRounds = 8;
+constexpr double kShare = 0.9;                 // of the tolerance, for the reduction at the samples
+constexpr double kAddedGap = 1.0 / 1024.0;     // an added sample keeps this far from its neighbours
+
+// The reference's rotations at `t`, each in the hemisphere of the one before.
+std::vector<Quat> rotations(const Motion& reference, const std::vector<double>& t) {
+    std::vector<Quat> q(t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) {
+        q[i] = reference.at(t[i]);
+        if (i > 0 && glm::dot(q[i], q[i - 1]) < 0.0) q[i] = -q[i];
+    }
+    return q;
+}
+
+// `times` with the failing times of `proof` added: each moved an eighth of its sample interval in
+// from a sample it lies by, none nearer than kAddedGap to another. Returns how many were added.
+std::size_t add_failures(const PlaybackBound& proof, std::vector<double>& times) {
+    std::vector<double> add = proof.violations;
+    for (const auto& span : proof.unproven) add.push_back(0.5 * (span.first + span.second));
+    std::sort(add.begin(), add.end());
+    std::vector<double> merged;
+    merged.reserve(times.size() + add.size());
+    std::size_t j = 0, added = 0;
+    double below = -HUGE_VAL;
+    for (double t : times) {
+        for (; j < add.size() && add[j] < t; ++j) {
+            if (!std::isfinite(below)) continue;
+            const double g = std::fmax(kAddedGap, 0.125 * (t - below));
+            const double at = std::clamp(add[j], below + g, t - g);
+            if (at - merged.back() > kAddedGap && t - at > kAddedGap) {
+                merged.push_back(at);
+                ++added;
+            }
+        }
+        merged.push_back(t);
+        below = t;
+    }
+    times.swap(merged);
+    return added;
+}
+
+}  // namespace
+
+ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<double>& times, double tolerance,
+                                    bool cyclic) {
+    if (times.size() < 2) throw InvalidArgument("times: at least two samples");
+    if (!std::isfinite(tolerance) || tolerance < 0.0) throw InvalidArgument("tolerance: must be finite and >= 0");
+    ProvedSlerpKeys out;
+    out.times = times;
+    for (int round = 0;; ++round) {
+        const std::vector<Quat> q = rotations(reference, out.times);
+        out.keys = reduce_slerp(out.times, q, kShare * tolerance, cyclic);
+        out.rounds = round + 1;
+        std::vector<double> key_times;
+        key_times.reserve(out.keys.indices.size());
+        for (std::size_t i : out.keys.indices) key_times.push_back(out.times[i]);
+        // glTF's slerp between the keys: the shortest way between neighbours (the keys are in one
+        // hemisphere chain), which a SLERP Curve through them plays.
+        const Curve played(key_times, out.keys.quats, Method::SLERP);
+        out.proof = prove_within(CurveMotion(played), reference, out.times, tolerance);
+        if (out.proof.proven() || round + 1 >= kRounds) break;
+        if (add_failures(out.proof, out.times) == 0) break;
+    }
+    return out;
+}
+
+}  // namespace quatcurve
