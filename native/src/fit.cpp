@@ -50,6 +50,9 @@ namespace {
 constexpr double kFitShare = 0.9;
 // Rounds of "prove, add the times that failed as samples, fit again".
 constexpr int kProofRounds = 8;
+// The proof halves intervals down to this (frames): a change of Euler branch beside a key at gimbal
+// lock spans 0.0105 frame, and its fast channels need steps far below 1/1024 frame to be bounded.
+constexpr double kProofMinStep = 1.0 / 65536.0;
 // An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap, and
 // distinct in float32 up to frame ~3e4).
 constexpr double kAddedSampleGap = 1.0 / 1024.0;
@@ -183,7 +186,7 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         fit_round(curve, key_frames, key_values, mode, tolerance * kFitShare, min_gap, fit);
         std::vector<FCurveKeys> channels(fit.keys.channels.begin(), fit.keys.channels.end());
         const PlaybackMotion playback(std::move(channels), fit.keys.interpolation, mode);
-        fit.proof = prove_within(playback, method, fit.times, tolerance);
+        fit.proof = prove_within(playback, method, fit.times, tolerance, kProofMinStep);
         if (fit.proof.proven() || round + 1 >= kProofRounds) break;
         // The times that failed (and the middle of each interval left unproven) become samples.
         std::vector<double> add = fit.proof.violations;

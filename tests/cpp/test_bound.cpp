@@ -233,6 +233,35 @@ TEST(FitProof, EulerBranchChangeFarFromGimbalLockIsRefused) {
     }
 }
 
+// The keys — (0°, 90°, 0°) at frame 1, (90°, 45°, 90°) at frame 4 — then spins past 180°
+// and 360° and a second key at the lock (middle angle -90°) at frame 20, in three Euler orders (the
+// same angles by position): every method proved within the tolerance at every instant, the changes of
+// branch beside the keys at the lock included (the proof halves down to 1/65536 frame there).
+TEST(FitProof, EulerGimbalSpinsProvedForEveryMethodAndOrder) {
+    std::mt19937 rng(7);
+    const double tol = 0.05 * kDeg;
+    const std::vector<double> t = {1, 4, 12, 20, 28, 40, 44};
+    const double deg[7][3] = {{0, 90, 0}, {90, 45, 90}, {30, 10, 200}, {-40, -90, 250},
+                              {0, 40, 500}, {10, 0, 405}, {0, 20, 380}};
+    for (const char* order : {"XYZ", "YXZ", "ZXY"}) {
+        const RotationMode mode = parse_rotation_mode(order);
+        std::vector<double> v(3 * t.size());
+        std::vector<Vec3> angles;
+        for (std::size_t k = 0; k < t.size(); ++k) {
+            for (int p = 0; p < 3; ++p) v[3 * k + static_cast<std::size_t>(order[p] - 'X')] = static_cast<float>(deg[k][p] * kDeg);
+            angles.emplace_back(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
+        }
+        for (Method method : kFitMethods) {
+            const Curve curve = Curve::from_euler(t, angles, mode.order, method);
+            const KeyFit fit = fit_through_keys(curve, t, v, mode, 4, tol);
+            EXPECT_TRUE(fit.proof.proven()) << order << " " << method_name(method) << ": " << fit.proof.bound / kDeg
+                                            << "° near frame " << fit.proof.worst_time;
+            EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 44.0, 43 * 64, rng), fit.proof.bound + 1e-6)
+                << order << " " << method_name(method);
+        }
+    }
+}
+
 // Leaving a key at gimbal lock fast (ZXY, the middle angle X at -90° at frame 15): the channels
 // change branch within 0.0105 frame of the key, and the segment after that change must not take the
 // change's steep slope as its tangent (a corner, not a bend): every method, NLERP and
