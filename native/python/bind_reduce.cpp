@@ -543,16 +543,17 @@ otherwise, naming both samples and the angle); the last key is then the first ke
 
     m.def(
         "reduce_slerp_proved",
-        [](const Curve& curve, py::handle times, double tolerance, bool cyclic) {
+        [](const Curve& curve, py::handle times, double tolerance, bool cyclic, double file_unit) {
             const std::vector<double> t = read_times(times);
             py::gil_scoped_release release;
-            return reduce_slerp_proved(CurveMotion(curve), t, tolerance, cyclic);
+            return reduce_slerp_proved(CurveMotion(curve), t, tolerance, cyclic, file_unit);
         },
-        py::arg("curve"), py::arg("times"), py::arg("tolerance"), py::kw_only(), py::arg("cyclic") = false);
+        py::arg("curve"), py::arg("times"), py::arg("tolerance"), py::kw_only(), py::arg("cyclic") = false,
+        py::arg("file_unit") = 0.0);
     m.def(
         "reduce_slerp_proved",
         [](py::sequence channels, const std::string& channel_interpolation, const std::string& mode_name,
-           py::handle times, double tolerance, bool cyclic) {
+           py::handle times, double tolerance, bool cyclic, double file_unit) {
             const RotationMode mode = parse_rotation_mode(mode_name);
             const KeyInterpolation ipo = parse_key_interpolation(channel_interpolation);
             std::vector<FCurveKeys> original;
@@ -560,10 +561,10 @@ otherwise, naming both samples and the angle); the last key is then the first ke
             const std::vector<double> t = read_times(times);
             py::gil_scoped_release release;
             const PlaybackMotion playback(std::move(original), ipo, mode);
-            return reduce_slerp_proved(playback, t, tolerance, cyclic);
+            return reduce_slerp_proved(playback, t, tolerance, cyclic, file_unit);
         },
         py::arg("channels"), py::arg("channel_interpolation"), py::arg("mode"), py::arg("times"), py::arg("tolerance"),
-        py::kw_only(), py::arg("cyclic") = false,
+        py::kw_only(), py::arg("cyclic") = false, py::arg("file_unit") = 0.0,
         R"doc(glTF LINEAR (slerp) keys proved within `tolerance` radians of a reference at EVERY time from
 times[0] to times[-1], not only at the samples: a ProvedSlerpKeys.
 
@@ -577,7 +578,9 @@ reduce_slerp at 90% of the tolerance; the keys' slerp is proved against the refe
 samples (prove_within, bound.hpp); the times that fail become samples and the reduction runs again
 (at most 8 rounds). The keys sit on samples (ProvedSlerpKeys.key_times); the proof's bound holds at
 every instant whatever its verdict. Slerp is bi-invariant: keys A·q·B (an exporter's axis and
-parent maps) play the same motion turned, within the same bound. cyclic: as reduce_slerp.)doc");
+parent maps) play the same motion turned, within the same bound. cyclic: as reduce_slerp. file_unit
+> 0 (seconds per frame): every sample the proof adds is a time a file of float32 seconds stores exactly
+(float32(t·file_unit)/file_unit), as the given times should be.)doc");
 
     m.def(
         "gltf_slerp",

@@ -28,7 +28,7 @@ std::vector<Quat> rotations(const Motion& reference, const std::vector<double>& 
 
 // `times` with the failing times of `proof` added: each moved an eighth of its sample interval in
 // from a sample it lies by, none nearer than kAddedGap to another. Returns how many were added.
-std::size_t add_failures(const PlaybackBound& proof, std::vector<double>& times) {
+std::size_t add_failures(const PlaybackBound& proof, std::vector<double>& times, double file_unit) {
     std::vector<double> add = proof.violations;
     for (const auto& span : proof.unproven) add.push_back(0.5 * (span.first + span.second));
     std::sort(add.begin(), add.end());
@@ -40,7 +40,8 @@ std::size_t add_failures(const PlaybackBound& proof, std::vector<double>& times)
         for (; j < add.size() && add[j] < t; ++j) {
             if (!std::isfinite(below)) continue;
             const double g = std::fmax(kAddedGap, 0.125 * (t - below));
-            const double at = std::clamp(add[j], below + g, t - g);
+            double at = std::clamp(add[j], below + g, t - g);
+            if (file_unit > 0.0) at = static_cast<double>(static_cast<float>(at * file_unit)) / file_unit;
             if (at - merged.back() > kAddedGap && t - at > kAddedGap) {
                 merged.push_back(at);
                 ++added;
@@ -56,8 +57,9 @@ std::size_t add_failures(const PlaybackBound& proof, std::vector<double>& times)
 }  // namespace
 
 ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<double>& times, double tolerance,
-                                    bool cyclic) {
+                                    bool cyclic, double file_unit) {
     if (times.size() < 2) throw InvalidArgument("times: at least two samples");
+    if (!(file_unit >= 0.0) || !std::isfinite(file_unit)) throw InvalidArgument("file_unit: must be finite and >= 0");
     if (!std::isfinite(tolerance) || tolerance < 0.0) throw InvalidArgument("tolerance: must be finite and >= 0");
     ProvedSlerpKeys out;
     out.times = times;
@@ -73,7 +75,7 @@ ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<d
         const Curve played(key_times, out.keys.quats, Method::SLERP);
         out.proof = prove_within(CurveMotion(played), reference, out.times, tolerance);
         if (out.proof.proven() || round + 1 >= kRounds) break;
-        if (add_failures(out.proof, out.times) == 0) break;
+        if (add_failures(out.proof, out.times, file_unit) == 0) break;
     }
     return out;
 }

@@ -72,8 +72,10 @@ SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>
 // Keys sit on samples (the given ones and those added). The proof of the last round is returned
 // whatever its verdict: its bound holds at every instant of the range. `cyclic`: as reduce_slerp
 // (the reference's first and last rotations one loop's seam). Times in the reference's unit (frames);
-// the caller scales them for the file. Throws InvalidArgument as reduce_slerp, and for fewer than two
-// times.
+// `file_unit` > 0 (seconds per frame, for a file that stores float32 seconds) makes every added sample
+// a time the file stores exactly, float32(t·file_unit)/file_unit, as the given ones should be: the
+// keys then play at the times proved. Throws InvalidArgument as reduce_slerp, and for fewer than two
+// times or a file_unit that is negative or not finite.
 struct ProvedSlerpKeys {
     std::vector<double> times;  // the samples of the last round: the given ones and those added
     SlerpKeys keys;             // indices into `times`
@@ -82,6 +84,6 @@ struct ProvedSlerpKeys {
 };
 
 ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<double>& times, double tolerance,
-                                    bool cyclic = false);
+                                    bool cyclic = false, double file_unit = 0.0);
 
 }  // namespace quatcurve
