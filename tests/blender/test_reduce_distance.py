@@ -96,6 +96,22 @@ def test_chain_rig_keeps_every_virtual_vertex_within_the_distance(scene, tmp_pat
     assert lines.startswith("Chain: 10 bones") and "frame" in lines
 
 
+def test_unselected_bones_keep_their_keys_and_the_bound_holds(scene, tmp_path):
+    rig = rigs.build_chain_rig()
+    for name in ("chest", "hand.L"):
+        if bpy.app.version >= (5, 0, 0):
+            rig.pose.bones[name].select = False
+        else:
+            rig.data.bones[name].select = False
+    kept = digests(rig, props=("rotation_quaternion",))
+    kept = {k: v for k, v in kept.items() if '"chest"' in k[0] or '"hand.L"' in k[0]}
+    assert len(kept) == 8
+    reduce_and_check(rig, tmp_path, distance=0.002, shell=0.1)
+    after = digests(rig, props=("rotation_quaternion",))
+    assert {k: after[k] for k in kept} == kept
+    assert bpy.context.scene.quatcurve_reduce.last_lines.startswith("Chain: 8 bones")
+
+
 def test_mocap_clip_keeps_every_virtual_vertex_within_the_default(scene, tmp_path):
     if not os.path.exists(MOCAP):
         pytest.skip("motion-capture clip %s not found (../shared/data/mocap/)" % MOCAP)
