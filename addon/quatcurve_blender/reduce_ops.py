@@ -37,12 +37,12 @@ def reduce_properties():
             description="What the bound is on: each rotation's angle, or how far the armature's bones move"),
         "distance": P.FloatProperty(
             name="Distance", default=0.0, min=0.0, soft_max=0.1, precision=4, subtype="DISTANCE", unit="LENGTH",
-            description="How far any bone's tail or shell point may move from the original, in the armature's "
+            description="How far, in scene units, any bone's tail or shell point may move from the original, in the armature's "
                         "object space, on every frame and original key; 0: 1 mm in real size (the unit scale "
                         "taken into account)"),
         "shell": P.FloatProperty(
             name="Shell", default=0.0, min=0.0, soft_max=1.0, precision=3, subtype="DISTANCE", unit="LENGTH",
-            description="Distance from each bone's head of the three points along its axes that are measured "
+            description="Distance, in scene units, from each bone's head of the three points along its axes measured "
                         "with its tail (a skinned vertex's typical distance); 0: 10 cm in real size"),
         "interpolation": P.EnumProperty(name="Interpolation", items=INTERPOLATION_ITEMS, default="BEZIER",
                                         description="The kind of keys written"),
