@@ -45,7 +45,8 @@ from .workers import parallel_imap
 from .targets import TargetError, num
 
 INTERPOLATIONS = ("LINEAR", "BEZIER")
-
+ERRORS = ("ANGLE", "DISTANCE")
+DEFAULT_DISTANCE, DEFAULT_SHELL = 0.001, 0.1  # metres in real size: 1 mm at a 10 cm shell (ozz's default)
 
 
 class ReduceError(TargetError, ValueError):
@@ -59,11 +60,19 @@ class ReduceSettings:
     interpolation written ('BEZIER' keeps far fewer keys; its handles are FREE and broken at keys).
     synchronized: the same key frames on every channel of a target (for glTF export and hand
     editing); off lets each channel keep its own keys where that saves keys. new_action: write into
-    a copy of each action (the original is kept with a fake user); off: replace in place."""
+    a copy of each action (the original is kept with a fake user); off: replace in place.
+
+    error: 'ANGLE' (the default: every target's rotation within `tolerance`, target by target) or
+    'DISTANCE' (per armature, every virtual vertex within `distance` in object space: reduce.py's
+    reduce_distance). distance, shell: scene units (Blender units, before the unit scale); 0 takes
+    1 mm and 10 cm in real size (scene.unit_settings.scale_length taken into account)."""
     tolerance: float = 0.1
     interpolation: str = "BEZIER"
     synchronized: bool = False
     new_action: bool = True
+    error: str = "ANGLE"
+    distance: float = 0.0
+    shell: float = 0.0
 
 
 def check_settings(settings):
@@ -71,6 +80,12 @@ def check_settings(settings):
         raise ReduceError("tolerance %r°: must be a finite angle of 0 or more" % (settings.tolerance,))
     if settings.interpolation not in INTERPOLATIONS:
         raise ReduceError("interpolation %r: unknown (expected LINEAR or BEZIER)" % (settings.interpolation,))
+    if settings.error not in ERRORS:
+        raise ReduceError("error %r: unknown (expected ANGLE or DISTANCE)" % (settings.error,))
+    for name in ("distance", "shell"):
+        value = getattr(settings, name)
+        if not (value >= 0) or not math.isfinite(value):
+            raise ReduceError("%s %r: must be a finite length of 0 or more (0: the default)" % (name, value))
 
 
 # ---- the native call ------------------------------------------------------------------------------
@@ -260,6 +275,23 @@ class TargetResult:
 
 
 @dataclass
+class SkeletonResult:
+    """One armature (or object) reduced under the distance bound: the worst virtual-vertex distance
+    in its object space (scene units), where it is (bone, frame, vertex), the rotation keys before and
+    after over its reduced bones, and the action written."""
+    name: str
+    bones: int                  # bones reduced
+    keys_before: int
+    keys_after: int
+    worst: float                # scene units, verified: Blender's float32 evaluation of the keys, posed
+    bone: str
+    frame: float
+    vertex: str                 # 'tail', 'shell X', 'shell Y', 'shell Z'
+    action: str
+    worst_text: str = ""        # worst, with the scene's units
+
+
+@dataclass
 class ReduceResult:
     tolerance: float
     interpolation: str
@@ -268,8 +300,20 @@ class ReduceResult:
     keys_after: int = 0
     max_error_deg: float = 0.0
     seconds: float = 0.0
+    error: str = "ANGLE"
+    distance: float = None      # DISTANCE: the bound and the shell (scene units), the worst distance
+    shell: float = None
+    worst_distance: float = 0.0
+    units: tuple = None         # (system, scale_length) for length_text
 
     def summary(self):
+        if self.error == "DISTANCE":
+            share = 100.0 * self.keys_after / self.keys_before if self.keys_before else 0.0
+            return ("%d armature%s/object%s, rotation keys %s → %s (%.1f %%), worst distance %s (bound %s, shell %s) "
+                    "at every frame and original key, %.2f s"
+                    % (len(self.targets), "" if len(self.targets) == 1 else "s", "" if len(self.targets) == 1 else "s",
+                       f"{self.keys_before:,}", f"{self.keys_after:,}", share, self.length(self.worst_distance),
+                       self.length(self.distance), self.length(self.shell), self.seconds))
         share = 100.0 * self.keys_after / self.keys_before if self.keys_before else 0.0
         proved = [t.bound_deg for t in self.targets if t.proven]
         if proved and len(proved) == len(self.targets):
@@ -280,7 +324,14 @@ class ReduceResult:
                 % (len(self.targets), "" if len(self.targets) == 1 else "s", f"{self.keys_before:,}",
                    f"{self.keys_after:,}", share, self.max_error_deg, self.tolerance, between, self.seconds))
 
+    def length(self, value):
+        return length_text(value, *(self.units or ("METRIC", 1.0)))
+
     def lines(self):
+        if self.error == "DISTANCE":
+            return ["%s: %d bone%s, %d → %d rotation keys, worst %s at %s, frame %s (%s) in '%s'"
+                    % (t.name, t.bones, "" if t.bones == 1 else "s", t.keys_before, t.keys_after,
+                       self.length(t.worst), t.bone, num(t.frame), t.vertex, t.action) for t in self.targets]
         return ["%s (%s): %d → %d keys, %s in '%s'"
                 % (t.name, t.mode, t.keys_before, t.keys_after, t.error_text, t.action)
                 for t in self.targets]
@@ -320,6 +371,8 @@ def reduce(found, settings):
             targets.check_editable(target, settings.new_action)
         except TargetError as error:
             raise ReduceError(str(error)) from error
+    if settings.error == "DISTANCE":
+        return reduce_distance(found, settings, begin)
     tol = math.radians(settings.tolerance)
 
     def read_all():
@@ -366,5 +419,124 @@ def reduce(found, settings):
         result.keys_before += item.keys_before
         result.keys_after += after
         result.max_error_deg = max(result.max_error_deg, error_deg)
+    result.seconds = time.perf_counter() - begin
+    return result
+
+
+# ---- the distance bound (error='DISTANCE') ------------------------------------------------------------
+
+VERTEX_NAMES = ("tail", "shell X", "shell Y", "shell Z")
+FLOAT32_EPS = 2.0 ** -24
+
+
+def length_text(value, system="METRIC", scale_length=1.0):
+    """A length in scene units as Blender's unit display shows it ('1 mm', '0.98 mm')."""
+    import bpy
+    try:
+        return bpy.utils.units.to_string(system, "LENGTH", value * scale_length, precision=4)
+    except (ValueError, TypeError):
+        return "%g" % value
+
+
+def scene_lengths(settings, scene):
+    """(distance, shell) in scene units: the settings', 0 taking 1 mm / 10 cm in real size."""
+    scale = scene.unit_settings.scale_length or 1.0
+    return (settings.distance or DEFAULT_DISTANCE / scale, settings.shell or DEFAULT_SHELL / scale)
+
+
+@dataclass(eq=False)
+class SkeletonReduce:
+    read: object                # skeleton.ReadSkeleton
+    distance: float             # the native target: the bound less Blender's float32 posing slack
+    shell: float
+    result: object = None       # quatcurve.SkeletonReduction
+
+
+def float32_slack(read, shell):
+    """What Blender's float32 posing of both motions may add to a distance: a few float32 steps of
+    the farthest virtual vertex per level of the deepest chain."""
+    qc = native.require()
+    quats = np.array([qc.channels_to_quats(v, mode) for mode, v in read.rotations])
+    sk = read.skeleton()
+    verts = sk.virtual_vertices(sk.pose(read.locations, quats, read.scales), shell)
+    extent = float(np.abs(verts).max()) if verts.size else 0.0
+    depth = np.zeros(len(read.parents), dtype=int)
+    for b, p in enumerate(read.parents):
+        depth[b] = 0 if p < 0 else depth[p] + 1
+    return 16.0 * (int(depth.max()) + 1) * FLOAT32_EPS * extent
+
+
+def reduce_distance(found, settings, begin):
+    """The reduction under the distance bound: per armature, the selected bones' rotation keys
+    reduced by quatcurve.Skeleton.reduce with every bone posed (unselected bones as they are); per
+    object, its own three shell points. Returns a ReduceResult with one SkeletonResult per armature
+    or object. Raises ReduceError (nothing written) as skeleton.py refuses."""
+    import bpy
+    from . import skeleton
+    scene = bpy.context.scene
+    distance, shell = scene_lengths(settings, scene)
+    groups = {}
+    for target in found:
+        groups.setdefault(target.object.name_full, (target.object, []))[1].append(target)
+    items = []
+    try:
+        for obj, group in groups.values():
+            bones = [t.bone for t in group if t.bone is not None]
+            if bones:
+                read = skeleton.read_armature(obj, bones)
+                items.append(SkeletonReduce(read, 0.0, shell))
+            if any(t.bone is None for t in group):
+                items.append(SkeletonReduce(skeleton.read_object(obj), 0.0, shell))
+        for item in items:
+            slack = float32_slack(item.read, shell)
+            if slack >= 0.5 * distance:
+                raise ReduceError("%s: a distance of %s is below what Blender's float32 posing keeps at this size "
+                                  "(%s)" % (item.read.object.name, length_text(distance), length_text(2 * slack)))
+            item.distance = distance - slack
+    except TargetError as error:
+        raise ReduceError(str(error)) from error
+
+    def reduce_item(item):
+        read = item.read
+        try:
+            item.result = read.skeleton().reduce(read.frames, read.rotations, read.locations, read.scales,
+                                                 item.distance, item.shell, settings.interpolation,
+                                                 settings.synchronized, reduced=read.reduced)
+        except ValueError as error:
+            raise ReduceError("%s: %s" % (read.object.name, error)) from error
+        if item.result.error.distance > item.distance:
+            raise ReduceError("%s: no reduction keeps every virtual vertex within %s (the float32 floor of the keys "
+                              "reaches %s)" % (read.object.name, length_text(distance),
+                                               length_text(item.result.error.distance)))
+        return item
+
+    done = list(parallel_imap(reduce_item, iter(items)))  # everything computed before the first write
+    writes, owners = [], []
+    for item in done:
+        bezier = settings.interpolation == "BEZIER"
+        for b in np.flatnonzero(item.read.reduced):
+            keys = [(ch.frames, ch.values, ch.handle_left if bezier else None, ch.handle_right if bezier else None)
+                    for ch in item.result.keys[b].channels]
+            writes.append(write.RotationWrite(item.read.targets[b], item.read.rotations[b][0], keys,
+                                              settings.interpolation, replace=(item.read.props[b],)))
+            owners.append(item)
+    actions = write.write_rotations(writes, settings.new_action, "reduced")
+    units = scene.unit_settings
+    result = ReduceResult(settings.tolerance, settings.interpolation, error="DISTANCE", distance=distance,
+                          shell=shell, units=(units.system, units.scale_length or 1.0))
+    action_of = {id(item): action.name for item, action in zip(owners, actions)}
+    for item in done:
+        read, error = item.read, item.result.error
+        chosen = np.flatnonzero(read.reduced)
+        before = int(read.keys_before[chosen].sum())
+        after = int(sum(item.result.keys[b].key_count for b in chosen))
+        bone = read.names[error.bone] if error.bone >= 0 else "-"
+        frame = float(read.frames[error.sample]) if error.bone >= 0 else float(read.frames[0])
+        vertex = VERTEX_NAMES[error.vertex] if error.vertex >= 0 else "-"
+        result.targets.append(SkeletonResult(read.object.name, len(chosen), before, after, error.distance, bone, frame,
+                                             vertex, action_of.get(id(item), ""), result.length(error.distance)))
+        result.keys_before += before
+        result.keys_after += after
+        result.worst_distance = max(result.worst_distance, error.distance)
     result.seconds = time.perf_counter() - begin
     return result

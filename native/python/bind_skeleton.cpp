@@ -247,7 +247,8 @@ Quaternions (w, x, y, z); lengths in scene units; docs/reduce.md, "Distance boun
         .def(
             "reduce",
             [](const Skeleton& sk, py::handle times, py::sequence rotations, py::handle locations, py::handle scales,
-               double distance, double shell, const std::string& interpolation, bool synchronized) {
+               double distance, double shell, const std::string& interpolation, bool synchronized,
+               py::object reduced) {
                 const KeyInterpolation ipo = parse_key_interpolation(interpolation);
                 const Batch tb = as_batch(times, {}, "times");
                 if (tb.batch_shape.size() != 1)
@@ -271,6 +272,13 @@ Quaternions (w, x, y, z); lengths in scene units; docs/reduce.md, "Distance boun
                                               std::to_string(c) + "), got " + shape_string(v.array));
                     rot[b].values.assign(v.data(), v.data() + v.count * static_cast<std::size_t>(c));
                 }
+                if (!reduced.is_none()) {
+                    const py::sequence flags = reduced.cast<py::sequence>();
+                    if (static_cast<std::size_t>(py::len(flags)) != sk.size())
+                        throw py::value_error("reduced: " + std::to_string(py::len(flags)) + " flags for " +
+                                              std::to_string(sk.size()) + " bones");
+                    for (std::size_t b = 0; b < sk.size(); ++b) rot[b].reduce = py::bool_(flags[b]);
+                }
                 std::size_t n = t.size();
                 const std::vector<Vec3> loc = vec3s(read_bone_rows(locations, 3, "locations", sk.size(), n, true));
                 const std::vector<Vec3> scl = vec3s(read_bone_rows(scales, 3, "scales", sk.size(), n, true));
@@ -279,12 +287,15 @@ Quaternions (w, x, y, z); lengths in scene units; docs/reduce.md, "Distance boun
             },
             py::arg("times"), py::arg("rotations"), py::arg("locations"), py::arg("scales"), py::arg("distance"),
             py::arg("shell"), py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+            py::arg("reduced") = py::none(),
             R"doc(Reduce every bone's rotation keys so that no virtual vertex (tail, and the points at `shell`
 along the posed bone's axes) moves more than `distance` from the original pose at any sample.
 
 times: (N,) the frames every bone was sampled at (every whole frame and every original key);
 rotations: per bone (mode, values): mode 'QUATERNION', an Euler order or 'AXIS_ANGLE', values (N, 4)
-or (N, 3) Blender's evaluation of its rotation channels; locations, scales: (B, N, 3), read, kept.
+or (N, 3) Blender's evaluation of its rotation channels; locations, scales: (B, N, 3), read, kept;
+reduced: (B,) booleans, the bones whose keys are reduced (default all): the others keep their
+sampled rotation and get empty ReducedKeys.
 Returns a SkeletonReduction: per-bone ReducedKeys (as reduce_keys* returns them), the budgets, and the
 error verified by posing Blender's float32 evaluation of the keys.)doc");
 }

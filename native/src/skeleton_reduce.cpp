@@ -102,9 +102,16 @@ class Reducer {
 public:
     explicit Reducer(const Problem& pr) : pr_(pr), cache_(pr.bones) {}
     const Reduced& at(std::size_t b, double budget) {
+        if (!pr_.rotations[b].reduce) budget = 0.0;  // a kept bone: one entry whatever the budget
         auto it = cache_[b].find(budget);
         if (it != cache_[b].end()) return it->second;
         Reduced r;
+        if (!pr_.rotations[b].reduce) {  // kept as sampled: no keys, the original rotations
+            r.keys.interpolation = pr_.interpolation;
+            r.rotation.assign(pr_.original.rotation.begin() + static_cast<std::ptrdiff_t>(b * pr_.n),
+                              pr_.original.rotation.begin() + static_cast<std::ptrdiff_t>((b + 1) * pr_.n));
+            return cache_[b].emplace(budget, std::move(r)).first->second;
+        }
         r.keys = reduce_bone(pr_, b, budget);
         r.rotation = evaluate_bone(pr_, b, r.keys);
         return cache_[b].emplace(budget, std::move(r)).first->second;
@@ -276,7 +283,7 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
                                   " values for " + std::to_string(n) + " samples of " + std::to_string(c) + " channels");
         for (std::size_t s = 0; s < n; ++s)
             pr.original.rotation[b * n + s] = channels_to_quat(rotations[b].values.data() + s * c, rotations[b].mode, s);
-        pr.min_keys[b] = 2 * c;
+        pr.min_keys[b] = rotations[b].reduce ? 2 * c : 0;
         if (rotations[b].mode.kind == RotationMode::Kind::quaternion) {
             // reduce_keys keeps the stored scale of each value: the given values, made continuous.
             pr.quats[b].resize(n);

@@ -10,7 +10,10 @@ centimetres and posed in metres. Per clip, BEZIER per-channel keys:
 - distance: Skeleton.reduce at 1 mm with a 10 cm shell: keys, the verified worst error, seconds;
 - angular: reduce_keys_euler on every bone at one angle — the largest angle whose worst virtual-
   vertex error stays within the same 1 mm (bisection) — keys and seconds at that angle;
-- the worst virtual-vertex error of the angular reduction at 0.1° (the add-on's default).
+- the worst virtual-vertex error of the angular reduction at 0.1° (the add-on's default);
+- the time of the angular reduction the add-on runs (reduce_keys_proved: reduced at the samples and
+  proved against the original LINEAR keys' playback at every instant) at that same angle, and the
+  distance reduction's time as a multiple of it.
 
 Run: PYTHONPATH=<build>/python .venv/bin/python tests/bench/bench_skeleton.py [--smoke]
 `--smoke` (tests/bench/smoke.py): the clips' first 40 frames, 3 bisection steps.
@@ -137,6 +140,18 @@ def angular(skeleton, times, rotations, locations, scales, angle):
     return sum(r.key_count for r in results), error.distance, seconds
 
 
+def proved_seconds(times, rotations, angle):
+    """Seconds of the add-on's angular reduction (reduce_keys_proved against the dense keys, LINEAR)."""
+    t0 = time.perf_counter()
+    for mode, values in rotations:
+        channels = []
+        for c in range(values.shape[1]):
+            points = np.column_stack([times, values[:, c]])
+            channels.append((times, values[:, c], points, points))
+        quatcurve.reduce_keys_proved(channels, "LINEAR", mode, times, values, angle, "BEZIER", False)
+    return time.perf_counter() - t0
+
+
 def clip_row(name):
     path = bvh.mocap_path(name)
     skeleton, times, rotations, locations, scales = clip_armature(path)
@@ -155,10 +170,12 @@ def clip_row(name):
         else:
             hi = mid
     default = angular(skeleton, times, rotations, locations, scales, 0.1 * DEG)
+    proved = proved_seconds(times, rotations, lo)
     saving = 100.0 * (1.0 - result.key_count / best[0])
     print(f"  {name:<15} {skeleton.bone_count:5d} {len(times):6d} {dense:7d} | {result.key_count:6d} "
           f"{1000 * result.error.distance:7.4f} {seconds:7.2f} | {lo / DEG:8.5f} {best[0]:6d} "
-          f"{1000 * best[1]:7.4f} {best[2]:7.2f} | {saving:6.1f}% | {1000 * default[1]:8.3f}")
+          f"{1000 * best[1]:7.4f} {best[2]:7.2f} | {saving:6.1f}% | {1000 * default[1]:8.3f} | "
+          f"{proved:7.2f} {seconds / proved:6.2f}x")
     assert result.error.distance <= DISTANCE
 
 
@@ -169,7 +186,8 @@ def main():
     print(f"distance {1000 * DISTANCE:g} mm, shell {100 * SHELL:g} cm, BEZIER per channel; "
           f"angular: the largest uniform angle within the same distance")
     print(f"  {'clip':<15} {'bones':>5} {'frames':>6} {'dense':>7} | {'keys':>6} {'mm':>7} {'s':>7} | "
-          f"{'angle°':>8} {'keys':>6} {'mm':>7} {'s':>7} | {'fewer':>7} | {'mm @0.1°':>8}")
+          f"{'angle°':>8} {'keys':>6} {'mm':>7} {'s':>7} | {'fewer':>7} | {'mm @0.1°':>8} | "
+          f"{'proved s':>7} {'ratio':>7}")
     for name in CLIPS:
         clip_row(name)
     return 0

@@ -22,10 +22,12 @@ METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
 TOL = 0.05  # degrees
 
 
-def fresh_blender_quats(blend, targets, times, tmp_path):
-    """Blender's evaluation of the targets' rotations at `times`, in a fresh process from `blend`."""
+def fresh_blender_quats(blend, targets, times, tmp_path, matrices=False):
+    """Blender's evaluation of the targets' rotations at `times`, in a fresh process from `blend`.
+    matrices: return ({name: quats}, {name: (N, 4, 4)}), the pose bones' pose_bone.matrix and the
+    objects' matrix_basis too."""
     request, out = tmp_path / "request.json", tmp_path / "out.json"
-    request.write_text(json.dumps({"targets": targets, "times": [float(t) for t in times]}))
+    request.write_text(json.dumps({"targets": targets, "times": [float(t) for t in times], "matrices": matrices}))
     if IS_BINARY:
         cmd = [bpy.app.binary_path, "--background", "--factory-startup", str(blend), "--python", EVALUATE,
                "--", str(request), str(out)]
@@ -34,7 +36,11 @@ def fresh_blender_quats(blend, targets, times, tmp_path):
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300,
                           env=dict(os.environ, PYTHONNOUSERSITE="1"))
     assert proc.returncode == 0 and out.exists(), proc.stdout[-2000:] + proc.stderr[-2000:]
-    return {name: np.array(q) for name, q in json.loads(out.read_text())["quats"].items()}
+    data = json.loads(out.read_text())
+    quats = {name: np.array(q) for name, q in data["quats"].items()}
+    if matrices:
+        return quats, {name: np.array(m).reshape(-1, 4, 4) for name, m in data["matrices"].items()}
+    return quats
 
 
 def check_times(first, last, subframes=4):

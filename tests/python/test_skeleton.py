@@ -122,6 +122,35 @@ def test_reduce_keeps_the_distance():
     assert result.budgets.shape == (6,)
 
 
+def test_reduce_keeps_the_bones_not_reduced():
+    """reduced=False bones get no keys and are posed as sampled; the bound holds with them."""
+    rng = np.random.default_rng(8)
+    parents, lengths, connected, inherit, offs, rest = random_skeleton(rng, 5)
+    sk = qc.Skeleton(parents, rest, lengths, inherit_rotation=inherit, connected=connected)
+    N = 40
+    times = np.arange(1.0, N + 1.0)
+    rotations = [("XYZ", 0.5 * np.sin(rng.uniform(0.02, 0.1, 3) * times[:, None] + rng.uniform(-3, 3, 3)))
+                 for _ in range(5)]
+    loc, scale = np.zeros((5, N, 3)), np.ones((5, N, 3))
+    flags = np.array([True, False, True, True, False])
+    result = sk.reduce(times, rotations, loc, scale, 0.001, 0.1, reduced=flags)
+    assert result.error.distance <= 0.001
+    original = np.stack([qc.channels_to_quats(v, m) for m, v in rotations])
+    posed = []
+    for b, (keys, (mode, values)) in enumerate(zip(result.keys, rotations)):
+        if not flags[b]:
+            assert keys.key_count == 0 and len(keys.channels) == 0
+            posed.append(original[b])
+            continue
+        values = np.stack([qc.blender_evaluate(ch.frames, ch.values, times, keys.interpolation, ch.handle_left,
+                                               ch.handle_right) for ch in keys.channels], axis=-1)
+        posed.append(qc.channels_to_quats(values, mode))
+    e = sk.vertex_error((loc, original, scale), (loc, np.stack(posed), scale), 0.1)
+    assert e.distance == pytest.approx(result.error.distance, abs=1e-12)
+    with pytest.raises(ValueError, match="reduced: 2 flags for 5 bones"):
+        sk.reduce(times, rotations, loc, scale, 0.001, 0.1, reduced=[True, False])
+
+
 def test_refuses_bad_input():
     rest = np.tile(np.eye(4), (2, 1, 1))
     with pytest.raises(ValueError, match="parents"):

@@ -108,10 +108,12 @@ std::vector<double> dominant_shell_budgets(const Skeleton& skeleton, const std::
 
 // One bone's rotation channels sampled at the skeleton's times: n rows of channel_count(mode) values
 // (Blender's evaluation of its keys, as reduce.py reads them; a bone without rotation keys holds its
-// constant value in every row).
+// constant value in every row). reduce false: the bone's rotation is kept as sampled (a bone the
+// caller does not reduce, or without rotation keys) and its ReducedKeys are empty (no channels).
 struct BoneChannels {
     RotationMode mode;
     std::vector<double> values;
+    bool reduce = true;
 };
 
 struct SkeletonReduction {

@@ -5,7 +5,10 @@
 
 REQUEST: {"targets": [[object, bone or null], ...], "times": [frame, ...]}. OUT: {"quats": {name:
 [[w, x, y, z], ...]}} — the owner's rotation as Blender builds it from its rotation mode, at each
-time (scene.frame_set with the subframe), normalized (axis-angle: from the owner's matrix_basis). Nothing of quatcurve is imported."""
+time (scene.frame_set with the subframe), normalized (axis-angle: from the owner's matrix_basis).
+With "matrices": true in the request, OUT also has {"matrices": {name: [[16 floats, row-major], ...]}}:
+a pose bone's pose_bone.matrix (armature space), an object's matrix_basis. Nothing of quatcurve is
+imported."""
 import json
 import math
 import sys
@@ -22,11 +25,18 @@ with open(request_path) as f:
     request = json.load(f)
 assert "quatcurve_blender" not in sys.modules, "the add-on must not be loaded"
 scene = bpy.context.scene
+
+
+def bone_of(owner):
+    return isinstance(owner, bpy.types.PoseBone)
+
+
 owners = {}
 for obj_name, bone in request["targets"]:
     obj = bpy.data.objects[obj_name]
     owners["%s/%s" % (obj_name, bone) if bone else obj_name] = obj.pose.bones[bone] if bone else obj
 out = {name: [] for name in owners}
+matrices = {name: [] for name in owners} if request.get("matrices") else None
 for t in request["times"]:
     whole = math.floor(t)
     scene.frame_set(int(whole), subframe=float(t - whole))
@@ -41,5 +51,8 @@ for t in request["times"]:
         else:
             q = Euler(owner.rotation_euler, mode).to_quaternion()
         out[name].append(list(q))
+        if matrices is not None:
+            m = owner.matrix if bone_of(owner) else owner.matrix_basis
+            matrices[name].append([v for row in m for v in row])
 with open(out_path, "w") as f:
-    json.dump({"quats": out, "blender": bpy.app.version_string}, f)
+    json.dump({"quats": out, "matrices": matrices, "blender": bpy.app.version_string}, f)

@@ -1,0 +1,151 @@
+"""The distance bound of the key reduction (issue 29), in every Blender the suite runs: after
+`quatcurve.reduce(error='DISTANCE')` the armature Blender itself poses — read as pose_bone.matrix in
+a fresh Blender without the add-on, from the saved .blend — keeps every virtual vertex (each bone's
+tail and the points at `shell` along its axes) within `distance` of the original pose's at every
+frame and original key; location and scale channels are untouched; what the bound does not model
+is refused, naming armature, bone and constraint or channel, and nothing is written.
+
+Motions: the shared motion-capture clip (Blender's BVH importer, build_scripts/demo_scene.py; skipped
+when ../shared is absent), at a unit scale of 0.01 (the clip is in centimetres, so the default 1 mm
+is 0.1 scene units), and the Rigify-like chain of rigs.py (quaternion, YXZ, ZXY, XYZ and axis-angle
+bones, Inherit Rotation off, inherit scale None, connected bones with location keys, scale keys).
+"""
+
+import os
+import sys
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import ROOT, SHARED
+from quatcurve_blender import fcurves, native, reduce
+from test_fit import fresh_blender_quats
+import rigs
+
+MOCAP = os.path.join(SHARED, "data", "mocap", "mocapbank.bvh")
+
+
+def key_frames(rig):
+    """Every whole frame and every key frame of the rig's action."""
+    channels = fcurves.Channels.of(rig)
+    frames = np.unique(np.concatenate([fcurves.read_keys(f)[0] for f in channels.fcurves]))
+    return native.require().whole_frame_samples(frames)
+
+
+def digests(rig, props=("location", "scale")):
+    """{(data path, index): digest} of the rig's location and scale F-curves."""
+    return {(f.data_path, f.array_index): fcurves.fcurve_digest(f).hexdigest()
+            for f in fcurves.Channels.of(rig).fcurves if f.data_path.rsplit(".", 1)[-1] in props}
+
+
+def posed(rig, frames, tmp_path, name):
+    """{bone: (N, 4, 4)} pose_bone.matrix at `frames`, in a fresh Blender from the saved file."""
+    blend = tmp_path / ("%s.blend" % name)
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    _, matrices = fresh_blender_quats(blend, [[rig.name, b.name] for b in rig.data.bones], frames, tmp_path,
+                                      matrices=True)
+    return {key.split("/", 1)[1]: m for key, m in matrices.items()}
+
+
+def vertices(matrix, length, shell):
+    """(N, 4, 3): tail and the shell points along X, Y, Z of a bone posed by (N, 4, 4) matrices."""
+    local = np.array([[0, length, 0, 1], [shell, 0, 0, 1], [0, shell, 0, 1], [0, 0, shell, 1]], dtype=np.float64)
+    return np.einsum("nij,kj->nki", matrix, local)[..., :3]
+
+
+def worst_distance(rig, before, after, shell):
+    """(distance, bone, sample) of the largest virtual-vertex displacement."""
+    worst = (0.0, None, 0)
+    for bone in rig.data.bones:
+        d = np.linalg.norm(vertices(after[bone.name], bone.length, shell)
+                           - vertices(before[bone.name], bone.length, shell), axis=2).max(axis=1)
+        k = int(d.argmax())
+        if d[k] > worst[0]:
+            worst = (float(d[k]), bone.name, k)
+    return worst
+
+
+def reduce_and_check(rig, tmp_path, **options):
+    """Runs the operator on the selected bones; asserts Blender's posed armature keeps the bound and
+    the location/scale channels are untouched. Returns (result summary, worst, distance)."""
+    frames = key_frames(rig)
+    untouched = digests(rig)
+    before = posed(rig, frames, tmp_path, "before")
+    keys_before = sum(fcurves.key_count(f) for f in fcurves.Channels.of(rig).fcurves)
+    assert bpy.ops.quatcurve.reduce(error="DISTANCE", **options) == {"FINISHED"}
+    settings = bpy.context.scene.quatcurve_reduce
+    distance, shell = reduce.scene_lengths(reduce.ReduceSettings(**options), bpy.context.scene)
+    assert digests(rig) == untouched
+    keys_after = sum(fcurves.key_count(f) for f in fcurves.Channels.of(rig).fcurves)
+    assert keys_after < keys_before
+    after = posed(rig, frames, tmp_path, "after")
+    worst = worst_distance(rig, before, after, shell)
+    print("%s: keys %d -> %d, Blender's worst %.6g (bound %.6g) at %s frame %s; %s"
+          % (rig.name, keys_before, keys_after, worst[0], distance, worst[1], frames[worst[2]],
+             settings.last_summary))
+    assert worst[0] <= distance, "%s frame %s: %.6g above %.6g" % (worst[1], frames[worst[2]], worst[0], distance)
+    return settings.last_summary, worst, distance
+
+
+def test_chain_rig_keeps_every_virtual_vertex_within_the_distance(scene, tmp_path):
+    rig = rigs.build_chain_rig()
+    summary, worst, distance = reduce_and_check(rig, tmp_path, distance=0.002, shell=0.1)
+    assert "worst distance" in summary and "2 mm" in summary
+    lines = bpy.context.scene.quatcurve_reduce.last_lines
+    assert lines.startswith("Chain: 10 bones") and "frame" in lines
+
+
+def test_unselected_bones_keep_their_keys_and_the_bound_holds(scene, tmp_path):
+    rig = rigs.build_chain_rig()
+    for name in ("chest", "hand.L"):
+        if bpy.app.version >= (5, 0, 0):
+            rig.pose.bones[name].select = False
+        else:
+            rig.data.bones[name].select = False
+    kept = digests(rig, props=("rotation_quaternion",))
+    kept = {k: v for k, v in kept.items() if '"chest"' in k[0] or '"hand.L"' in k[0]}
+    assert len(kept) == 8
+    reduce_and_check(rig, tmp_path, distance=0.002, shell=0.1)
+    after = digests(rig, props=("rotation_quaternion",))
+    assert {k: after[k] for k in kept} == kept
+    assert bpy.context.scene.quatcurve_reduce.last_lines.startswith("Chain: 8 bones")
+
+
+def test_mocap_clip_keeps_every_virtual_vertex_within_the_default(scene, tmp_path):
+    if not os.path.exists(MOCAP):
+        pytest.skip("motion-capture clip %s not found (../shared/data/mocap/)" % MOCAP)
+    sys.path.insert(0, os.path.join(ROOT, "build_scripts"))
+    import demo_scene
+    scene.unit_settings.scale_length = 0.01  # the clip is in centimetres: 1 mm real is 0.1 units
+    rig = demo_scene.import_bvh(MOCAP)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="POSE")
+    for pb in rig.pose.bones:
+        if bpy.app.version >= (5, 0, 0):
+            pb.select = True
+        else:
+            pb.bone.select = True
+    summary, worst, distance = reduce_and_check(rig, tmp_path)
+    assert distance == pytest.approx(0.1)
+    assert "1 mm" in summary
+
+
+def test_refusals_name_the_bone_and_write_nothing(scene):
+    rig = rigs.build_chain_rig()
+    action = fcurves.active_action(rig)
+    constraint = rig.pose.bones["forearm.L"].constraints.new("COPY_ROTATION")
+    constraint.name = "Follow"
+    with pytest.raises(RuntimeError, match=r"Chain/forearm.L: constraint 'Follow'"):
+        bpy.ops.quatcurve.reduce(error="DISTANCE")
+    constraint.mute = True
+    rig.data.bones["hand.L"].inherit_scale = "AVERAGE"
+    with pytest.raises(RuntimeError, match=r"Chain/hand.L: inherit scale AVERAGE"):
+        bpy.ops.quatcurve.reduce(error="DISTANCE")
+    rig.data.bones["hand.L"].inherit_scale = "FULL"
+    curve = fcurves.Channels.of(rig).find(rig.pose.bones["root"].path_from_id("location"), 0)
+    curve.modifiers.new("NOISE")
+    with pytest.raises(RuntimeError, match=r"Chain/root: location\[0\] has F-curve modifiers"):
+        bpy.ops.quatcurve.reduce(error="DISTANCE")
+    assert fcurves.active_action(rig) == action
+    assert sorted(a.name for a in bpy.data.actions) == [action.name]
