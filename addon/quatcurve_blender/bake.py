@@ -393,7 +393,7 @@ def prepare(found, settings):
             targets.check_editable(target, settings.new_action)
         with fcurves.read_cache():
             sources = [fit.source_keys(t) for t in found]
-        loops = [None if s.nla else cycles.loop_of(t) for t, s in zip(found, sources)]
+        loops = [cycles.loop_of_keys(t, s) for t, s in zip(found, sources)]
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))

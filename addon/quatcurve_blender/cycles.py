@@ -142,6 +142,20 @@ def loop_of(target, action=None):
     return target_loop(target.name, prop, channels.find_all(target.data_path(prop), count), mode, action)
 
 
+def loop_of_keys(target, keys, action=None):
+    """loop_of for a target whose targets.RotationKeys `keys` are read: None for NLA-evaluated keys,
+    and None (not a CycleError) when no rotation channel has a Cycles modifier at all — other
+    modifiers are then the reading task's to take or refuse, as for any open keys."""
+    if keys.nla:
+        return None
+    try:
+        return loop_of(target, action)
+    except CycleError:
+        if any("CYCLES" in kinds for kinds in keys.modifiers):
+            raise
+        return None
+
+
 def channel_modes(target, action=None):
     """Per rotation channel of a loop's target (current mode), (mode_before, mode_after) of its Cycles
     modifier: what a rewrite of the loop's keys puts back. An unkeyed channel, which the rewrite keys,

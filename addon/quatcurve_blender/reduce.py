@@ -301,7 +301,7 @@ def read_target(target):
         raise ReduceError("%s: rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
                           "rotations" % (target.name, source.mode))
     try:
-        loop = None if source.nla else cycles.loop_of(target)
+        loop = cycles.loop_of_keys(target, source)
     except TargetError as error:
         raise ReduceError(str(error)) from error
     for index, modifiers in enumerate(source.modifiers):
