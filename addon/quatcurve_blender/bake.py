@@ -9,6 +9,12 @@ them (optionally reduced first by reduce.reduce_values).
     result = bake.bake(found, bake.BakeSettings(method="SQUAD", rotation_mode="QUATERNION"))
     print(result.summary())
 
+A loop (cycles.py: every rotation channel a plain Cycles modifier over one period) bakes one period:
+the method's closed curve (`cyclic=True`: tangents across the seam) sampled from the first key to
+the last, written with a Cycles modifier on the new channels — Repeat, or Repeat with Offset where
+the source repeats with offset and the baked Euler angles end whole turns from where they start (a
+wheel keeps turning in the graph too). The frame range setting does not apply to a loop.
+
 Everything is read before anything is written (`prepare`), then `BakePlan.write` computes and
 writes: into new actions it writes each target while worker threads compute the next ones, and a
 BakeError on the way removes the new actions again; in place it computes everything first. Either
@@ -22,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fcurves, fit, methods, native, path_rule, targets, write
+from . import cycles, fcurves, fit, methods, native, path_rule, targets, write
 from .workers import parallel_imap, parallel_map, thread_count
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
@@ -114,6 +120,7 @@ class TargetBake:
     own_action: bool = False     # in place was asked for, but others play the action: copy it
     reduced: object = None       # reduce_keys' result when tolerance > 0
     notes: list = field(default_factory=list)
+    loop: cycles.Loop = None     # the source's loop: one period baked, a Cycles modifier written
 
 
 @dataclass
@@ -160,11 +167,18 @@ class BakePlan:
     curves target by target without touching Blender data; `write()` computes what is left and writes
     everything. Drop the plan to cancel: nothing has changed until write()."""
 
-    def __init__(self, found, settings, sources, frames, seconds):
+    def __init__(self, found, settings, sources, frames, seconds, loops=None):
         self.settings = settings
         self.frames = frames
-        self.items = [TargetBake(t, s, s.mode if settings.rotation_mode == "KEEP" else settings.rotation_mode)
-                      for t, s in zip(found, sources)]
+        self.items = [TargetBake(t, s, s.mode if settings.rotation_mode == "KEEP" else settings.rotation_mode,
+                                 loop=loop)
+                      for t, s, loop in zip(found, sources, loops or [None] * len(found))]
+        for item in self.items:
+            if item.loop is not None:
+                item.frames = bake_frames(item.loop.start, item.loop.end, settings.step)
+                item.notes.append("%s: a loop (Cycles modifier): one period baked, frames %s–%s, and a Cycles "
+                                  "modifier on the baked channels" % (item.target.name, num(item.loop.start),
+                                                                     num(item.loop.end)))
         self.seconds = seconds   # working time so far (a modal bake's idle time is not counted)
         self.increasing = bool(len(frames) < 2 or (frames[1:] > frames[:-1]).all())
         self.computed = 0
@@ -202,17 +216,28 @@ class BakePlan:
         else:
             self._reduced(item, self._reference(item))
 
+    def _frames_of(self, item):
+        """The frames `item` is baked at: its loop's period, or the plan's frames."""
+        return item.frames if item.loop is not None else self.frames
+
+    def _options(self, item):
+        """The curve's options for `item`: the settings', and cyclic for a loop."""
+        options = self.settings.curve_options()
+        if item.loop is not None:
+            options["cyclic"] = True
+        return options
+
     def _reference(self, item):
         """What output_values needs from Blender for `item` (read on the main thread), or None."""
-        source = item.source
+        source, frames = item.source, self._frames_of(item)
         if source.mode == item.output_mode and source.is_euler:
             # The keyed angles, linear between keys: a cheap guide to the branch, not output math.
-            return np.column_stack([np.interp(self.frames, source.frames, source.values[:, i])
+            return np.column_stack([np.interp(frames, source.frames, source.values[:, i])
                                     for i in range(3)])
         if source.mode == item.output_mode:
-            if len(source.frames) and self.frames[0] == source.frames[0]:
+            if len(source.frames) and frames[0] == source.frames[0]:
                 return source.values[0].copy()  # read there already (the same evaluation)
-            return targets.playback(item.target).evaluate(self.frames[:1])[0]
+            return targets.playback(item.target).evaluate(frames[:1])[0]
         return None
 
     def _dense(self, todo, threads):
@@ -227,18 +252,23 @@ class BakePlan:
         for item in todo:
             try:
                 jobs.append(item.source.bake_job(settings.method, item.output_mode, self._reference(item),
-                                                 **settings.curve_options()))
+                                                 **self._options(item)))
             except ValueError as error:
                 raise BakeError("%s: %s" % (item.target.name, error)) from error
-        queue = native.require().BakeQueue(self.frames, jobs, threads=threads)
-        for item in todo:
+        qc = native.require()
+        # Open targets share the plan's frames (one queue); a loop is sampled over its own period.
+        queue = qc.BakeQueue(self.frames, [j for i, j in zip(todo, jobs) if i.loop is None], threads=threads)
+        for item, job in zip(todo, jobs):
             try:
-                keys, broken = next(queue)
+                if item.loop is None:
+                    keys, broken = next(queue)
+                else:
+                    keys, broken = next(qc.BakeQueue(item.frames, [job], threads=0))
             except ValueError as error:
                 raise BakeError("%s: %s" % (item.target.name, error)) from error
             item.notes += ["path rule: " + b.text() for b in path_rule.breaks(
                 None, item.source.frames, item.target.name, settings.method, rows=broken)]
-            item.frames = self.frames
+            item.frames = self._frames_of(item)
             item.packed = [fcurves.PackedKeys.from_pairs(rows, self.increasing) for rows in keys]
             yield item
 
@@ -247,20 +277,20 @@ class BakePlan:
         > 0): no Blender data is touched, so it may run on a worker thread."""
         settings, source = self.settings, item.source
         try:
-            curve = source.curve(settings.method, **settings.curve_options())
+            curve = source.curve(settings.method, **self._options(item))
             broken = path_rule.breaks(curve, source.frames, item.target.name, settings.method)
         except ValueError as error:
             raise BakeError("%s: %s" % (item.target.name, error)) from error
         item.notes += ["path rule: " + b.text() for b in broken]
-        item.frames = self.frames
-        quats = np.asarray(curve.sample(self.frames), dtype=np.float64)
+        item.frames = self._frames_of(item)
+        quats = np.asarray(curve.sample(item.frames), dtype=np.float64)
         item.values = output_values(quats, item.output_mode, reference)
         if not np.isfinite(item.values).all():
             raise BakeError("%s: the %s curve gave non-finite values"
                             % (item.target.name, methods.label(settings.method)))
         try:
             # Proved against the curve at every instant, not only at the baked frames.
-            item.reduced = reduce_keys(self.frames, item.values, item.output_mode,
+            item.reduced = reduce_keys(item.frames, item.values, item.output_mode,
                                        math.radians(settings.tolerance), curve=curve)
         except ValueError as error:
             raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
@@ -328,7 +358,27 @@ class BakePlan:
             keys, interpolation = item.reduced.keys, item.reduced.interpolation
         else:
             keys, interpolation = item.packed, "LINEAR"
-        return write.RotationWrite(item.target, item.output_mode, keys, interpolation, own_action=item.own_action)
+        return write.RotationWrite(item.target, item.output_mode, keys, interpolation, own_action=item.own_action,
+                                   cycles=BakePlan._cycle_modes(item))
+
+    @staticmethod
+    def _cycle_modes(item):
+        """The Cycles modifier's (mode_before, mode_after) for a loop's baked channels (None: open):
+        Repeat with Offset where the source repeats with offset and every baked Euler angle ends a
+        whole number of turns from its start (a wheel); Repeat otherwise — Blender plays each period
+        from its own keys, so the rotation is the same either way."""
+        if item.loop is None:
+            return None
+        if item.loop.offset and item.output_mode in fcurves.EULER_ORDERS:
+            if item.values is not None:
+                first, last = item.values[0], item.values[-1]
+            else:  # packed (frame, value) pairs: the first key's value is co[1], the last's co[-1]
+                first = np.array([float(k.co[1]) for k in item.packed])
+                last = np.array([float(k.co[-1]) for k in item.packed])
+            turns = (last - first) / (2 * math.pi)
+            if np.all(np.abs(turns - np.round(turns)) < 1e-4) and np.any(np.round(turns) != 0):
+                return ("REPEAT_OFFSET", "REPEAT_OFFSET")
+        return ("REPEAT", "REPEAT")
 
 
 def prepare(found, settings):
@@ -343,6 +393,7 @@ def prepare(found, settings):
             targets.check_editable(target, settings.new_action)
         with fcurves.read_cache():
             sources = [fit.source_keys(t) for t in found]
+        loops = [cycles.loop_of_keys(t, s) for t, s in zip(found, sources)]
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))
@@ -354,7 +405,7 @@ def prepare(found, settings):
     if end is None:
         end = math.ceil(max(s.frames[-1] for s in sources))
     frames = bake_frames(start, end, settings.step)
-    plan = BakePlan(found, settings, sources, frames, time.perf_counter() - begin)
+    plan = BakePlan(found, settings, sources, frames, time.perf_counter() - begin, loops)
     if not settings.new_action:
         _keep_shared_actions(plan)
     return plan

@@ -22,6 +22,7 @@ where it is set: the loop's first and last key frames must then be the range's s
 
 from dataclasses import dataclass
 
+from . import fcurves
 from .targets import TargetError, num
 
 CYCLE_MODES = ("REPEAT", "REPEAT_OFFSET")
@@ -126,3 +127,43 @@ def target_loop(name, prop, curves, mode, action=None):
                              "%s–%s: key the first pose again at frame %s, or set the action's range to the keys"
                              % (name, action.name, num(a0), num(a1), prop, num(start), num(end), num(a1)))
     return Loop(start, end, offset)
+
+
+def loop_of(target, action=None):
+    """The Loop of a targets.Target's rotation channels in its current rotation mode, from `action`
+    (default: its active action), or None (no modifiers, or no action). Raises CycleError as
+    target_loop."""
+    action = action if action is not None else fcurves.active_action(target.id_data)
+    channels = fcurves.Channels.of(target.id_data, action) if action is not None else None
+    if channels is None:
+        return None
+    mode = target.owner.rotation_mode
+    prop, count = fcurves.rotation_property(mode)
+    return target_loop(target.name, prop, channels.find_all(target.data_path(prop), count), mode, action)
+
+
+def loop_of_keys(target, keys, action=None):
+    """loop_of for a target whose targets.RotationKeys `keys` are read: None for NLA-evaluated keys,
+    and None (not a CycleError) when no rotation channel has a Cycles modifier at all — other
+    modifiers are then the reading task's to take or refuse, as for any open keys."""
+    if keys.nla:
+        return None
+    try:
+        return loop_of(target, action)
+    except CycleError:
+        if any("CYCLES" in kinds for kinds in keys.modifiers):
+            raise
+        return None
+
+
+def channel_modes(target, action=None):
+    """Per rotation channel of a loop's target (current mode), (mode_before, mode_after) of its Cycles
+    modifier: what a rewrite of the loop's keys puts back. An unkeyed channel, which the rewrite keys,
+    takes the first keyed channel's."""
+    action = action if action is not None else fcurves.active_action(target.id_data)
+    prop, count = fcurves.rotation_property(target.owner.rotation_mode)
+    found = fcurves.Channels.of(target.id_data, action).find_all(target.data_path(prop), count)
+    modes = [(f.modifiers[0].mode_before, f.modifiers[0].mode_after) if f is not None and len(f.modifiers)
+             else None for f in found]
+    first = next(m for m in modes if m is not None)
+    return tuple(m or first for m in modes)

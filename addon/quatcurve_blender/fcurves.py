@@ -509,6 +509,15 @@ def write_packed(fcurve, packed, interpolation="LINEAR"):
     return fcurve
 
 
+def add_cycles(fcurve, mode_before="REPEAT", mode_after="REPEAT"):
+    """Makes `fcurve` a loop of its keys: a Cycles modifier, repeating without end (cycles.py reads
+    this form back as a loop)."""
+    modifier = fcurve.modifiers.new("CYCLES")
+    modifier.mode_before, modifier.mode_after = mode_before, mode_after
+    modifier.cycles_before = modifier.cycles_after = 0
+    return modifier
+
+
 def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None, handle_right=None,
                with_handles=False):
     """Replaces the keys of `fcurve` by (frames[i], values[i]), in bulk.

@@ -24,6 +24,12 @@ sampler's frames and mapped by A and B, is then reduced by the native `quatcurve
 few keys (a greedy search) whose slerp stays within the tolerance of every sample (times and
 quaternions as the file stores them, float32). Translations, scales, meshes, skins: as the exporter wrote them.
 
+A loop (cycles.py: Cycles modifiers on the target's rotation channels) is written as exactly one
+period, its first key to its last ([t0, t0 + P] in seconds), reduced as a closed curve
+(`reduce_slerp(cyclic=True)`), the last key stored equal to the first: a player that wraps the
+clip's time (three.js LoopRepeat, Unity's Loop Time) plays through the seam without a step or a
+held frame.
+
 Nothing is written on error: the exporter writes a temporary file next to the output, the rewrite
 another, which is renamed over the output last. Errors raise GltfError naming the target or file.
 """
@@ -36,7 +42,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit, glb, methods, native, targets
+from . import cycles, fcurves, fit, glb, methods, native, targets
 from .targets import TargetError
 
 METHODS = ("AUTO", "BLENDER") + fit.METHODS
@@ -239,6 +245,15 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
         return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: "
                 "constraints, drivers, NLA or a parent's scale move it)" % math.degrees(residual))
     curve, how = reference(target, settings)
+    try:
+        loop = cycles.loop_of(target)
+    except cycles.CycleError:
+        if not how.startswith("Blender's playback"):
+            raise
+        loop = None  # Blender's playback of any modifiers, over the exporter's frames, as before
+    if loop is not None:  # one period: the first key to the last
+        frames = np.array([loop.start, loop.end])
+        how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
     step = 1.0 / settings.subframes
     dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
     dense[-1] = frames[-1]
@@ -249,8 +264,14 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
     keep = np.concatenate(([True], t32[1:] > t32[:-1]))  # float32 may merge very close times
     t32, q32 = t32[keep], q32[keep]
     tolerance = math.radians(settings.tolerance)
-    keys = qc.reduce_slerp(t32, q32, max(tolerance - MARGIN, 0.0))
-    out = keys.quats.astype(np.float32)[:, [1, 2, 3, 0]]  # w, x, y, z -> glTF x, y, z, w
+    keys = qc.reduce_slerp(t32, q32, max(tolerance - MARGIN, 0.0), cyclic=loop is not None)
+    kept = keys.quats
+    if loop is not None:
+        # The same key at both ends, as a wrapping player expects (glTF's slerp takes the short way,
+        # so the other sign of the same rotation plays the same).
+        kept = kept.copy()
+        kept[-1] = kept[0]
+    out = kept.astype(np.float32)[:, [1, 2, 3, 0]]  # w, x, y, z -> glTF x, y, z, w
     return t32[keys.indices], out, keys.max_error, how
 
 

@@ -26,7 +26,10 @@ reduction holds at frames and keys (`reduce_values`) and the result line says wh
 not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
 builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
-with modifiers are refused (the bound is for the keys alone).
+with modifiers are refused (the bound is for the keys alone), except a loop's (cycles.py): its period
+is reduced, from its first key to its last (both kept), and the reduced channels get the original's
+Cycles modifiers back. Blender repeats the reduced period as it repeats the original one, so the
+bound proved over one period holds in every period, across the seam too.
 Everything is read and computed before anything is written, so an error leaves the file untouched.
 
 The bake calls `reduce_values` (imported by bake.py) with its method's curve when its tolerance is
@@ -40,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fcurves, native, targets, write
+from . import cycles, fcurves, native, targets, write
 from .workers import parallel_imap
 from .targets import TargetError, num
 
@@ -258,6 +261,8 @@ class TargetReduce:
     original: tuple = None      # read_original's (channels, interpolation); None: not emulated
     between: str = ""           # why nothing is proved between frames (original is None)
     reduced: ReducedChannels = None
+    loop: cycles.Loop = None    # a loop: its period is reduced
+    cycles: tuple = None        # per channel, the Cycles modifier's (mode_before, mode_after) to put back
 
 
 @dataclass
@@ -346,8 +351,12 @@ def read_target(target):
     if source.mode not in ("QUATERNION", "AXIS_ANGLE") + fcurves.EULER_ORDERS:
         raise ReduceError("%s: rotation mode %s: key reduction handles quaternion, Euler and axis-angle "
                           "rotations" % (target.name, source.mode))
+    try:
+        loop = cycles.loop_of_keys(target, source)
+    except TargetError as error:
+        raise ReduceError(str(error)) from error
     for index, modifiers in enumerate(source.modifiers):
-        if modifiers:
+        if modifiers and loop is None:
             raise ReduceError("%s: %s[%d] has F-curve modifiers; the bound holds for keys alone "
                               "(apply or remove the modifiers first)" % (target.name, source.prop, index))
     frames = native.require().whole_frame_samples(source.frames)  # every whole frame and key
@@ -356,7 +365,8 @@ def read_target(target):
     if not np.isfinite(values).all():
         raise ReduceError("%s: %s evaluates to non-finite values" % (target.name, source.prop))
     original, between = read_original(playback, frames)
-    return TargetReduce(target, source.mode, source.prop, frames, values, source.key_count, original, between)
+    return TargetReduce(target, source.mode, source.prop, frames, values, source.key_count, original, between,
+                        loop=loop, cycles=None if loop is None else cycles.channel_modes(target))
 
 
 def reduce(found, settings):
@@ -401,7 +411,7 @@ def reduce(found, settings):
         for item in parallel_imap(reduce_item, read_all()):
             items.append(item)
             yield write.RotationWrite(item.target, item.mode, item.reduced.keys, item.reduced.interpolation,
-                                      replace=(item.prop,))
+                                      replace=(item.prop,), cycles=item.cycles)
 
     actions = write.write_rotations(writes() if settings.new_action else list(writes()),
                                     settings.new_action, "reduced")
@@ -410,8 +420,12 @@ def reduce(found, settings):
         after = item.reduced.key_count
         error_deg = math.degrees(item.reduced.max_error)
         bound = item.reduced.bound
+        text = item.reduced.error_text(settings.tolerance)
+        if item.loop is not None:
+            text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
+                     "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))
         result.targets.append(TargetResult(item.target.name, item.mode, item.keys_before, after,
-                                           error_deg, action.name, item.reduced.error_text(settings.tolerance),
+                                           error_deg, action.name, text,
                                            None if bound is None else math.degrees(bound),
                                            item.reduced.proof is not None and item.reduced.proof.proven,
                                            [] if item.reduced.excluded is None else

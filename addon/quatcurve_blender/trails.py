@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import bake_ops, fcurves, fit, native, targets
+from . import bake_ops, cycles, fcurves, fit, native, targets
 from .targets import TargetError
 
 AXIS_ITEMS = (
@@ -146,22 +146,26 @@ def compute_local(target, method=None, frame_range=None):
     """LocalTrail of `target`: Blender's evaluation of its rotation channels (active action; NLA
     strips are not evaluated here, since that would move the scene's frame) at every whole frame of
     its keyed range (or `frame_range` (start, end)), and `method`'s native curve through the same
-    keys sampled there."""
+    keys sampled there. A loop (cycles.py) draws one period, its first key to its last, whatever the
+    range: every other period is the same path; the method's curve is closed (cyclic=True)."""
     trail = LocalTrail(target.name)
     action = fcurves.active_action(target.id_data)
     try:
         keys = fit.source_keys(target, action=action)
+        loop = cycles.loop_of(target, action)
     except (TargetError, RuntimeError) as error:
         trail.error = str(error)
         return trail
     qc = native.require()
     start, end = frame_range if frame_range is not None else (keys.frames[0], keys.frames[-1])
+    if loop is not None:
+        start, end = loop.start, loop.end
     frames = np.asarray(qc.step_frames(float(start), float(end), 1.0), dtype=np.float64)
     trail.frames = frames
     try:
         trail.quats[BLENDER] = targets.playback(target, action=action).quats(frames)
         if method:
-            trail.quats[method] = np.asarray(keys.curve(method).sample(frames))
+            trail.quats[method] = np.asarray(keys.curve(method, **({"cyclic": True} if loop else {})).sample(frames))
     except (TargetError, ValueError) as error:
         trail.error = str(error)
     return trail

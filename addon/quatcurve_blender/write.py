@@ -21,13 +21,16 @@ class RotationWrite:
     arrays of (frame, value) for BEZIER keys, None otherwise — or fcurves.PackedKeys (LINEAR or
     CONSTANT keys packed beforehand: the bake packs them on its workers, Curve.sample_keys). replace: the rotation properties whose
     F-curves are removed first (all three when the mode changes). own_action: in place was asked
-    for, but the action is shared with objects not being written: write into a copy instead."""
+    for, but the action is shared with objects not being written: write into a copy instead.
+    cycles: a loop's keys (one period): per channel (mode_before, mode_after) of the Cycles modifier
+    put on its new F-curve (None: none on that channel), or one pair for every channel."""
     target: object
     mode: str
     keys: list
     interpolation: str = "LINEAR"
     replace: tuple = fcurves.ROTATION_PROPERTIES
     own_action: bool = False
+    cycles: tuple = None
 
     @property
     def key_count(self):
@@ -110,8 +113,11 @@ def _write_keys(channels, item):
     path = target.data_path(fcurves.rotation_property(item.mode)[0])
     for index, keys in enumerate(item.keys):
         if isinstance(keys, fcurves.PackedKeys):
-            channels.write_packed(path, index, keys, group=group, interpolation=item.interpolation)
-            continue
-        frames, values, left, right = keys
-        channels.write(path, index, frames, values, group=group, interpolation=item.interpolation,
-                       handle_left=left, handle_right=right)
+            fcurve = channels.write_packed(path, index, keys, group=group, interpolation=item.interpolation)
+        else:
+            frames, values, left, right = keys
+            fcurve = channels.write(path, index, frames, values, group=group, interpolation=item.interpolation,
+                                    handle_left=left, handle_right=right)
+        modes = item.cycles[index] if item.cycles and isinstance(item.cycles[0], tuple) else item.cycles
+        if modes:
+            fcurves.add_cycles(fcurve, *modes)
