@@ -161,15 +161,20 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
     if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and > 0");
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
-    if (mode.kind == RotationMode::Kind::euler) {
+    if (mode.kind != RotationMode::Kind::quaternion) {
         // An Euler key at gimbal lock: where the path reaches or leaves it on another triple than the
         // keyed one, the channels change branch in the sample interval beside it (euler_span_values).
-        // Samples 1.05·min_gap from the key (the nearest a generated key may sit) make that change
-        // where the rotation is still within a few hundredths of a degree of the lock.
-        const std::size_t mid = middle_axis(mode.order);
+        // An axis-angle key at the rest pose (angle a multiple of 360°): its axis is any axis, and
+        // the path leaves or reaches it along its own. Samples 1.05·min_gap from the key (the nearest
+        // a generated key may sit) make that change where the rotation is still within a few
+        // hundredths of a degree of the key.
+        const bool euler = mode.kind == RotationMode::Kind::euler;
+        const std::size_t mid = euler ? middle_axis(mode.order) : 0;
         std::vector<double> extra;
         for (std::size_t k = 0; k < K; ++k) {
-            if (!(std::fabs(std::cos(key_values[C * k + mid])) < kAtLock)) continue;
+            const double singular = euler ? std::fabs(std::cos(key_values[C * k + mid]))
+                                          : std::fabs(std::sin(0.5 * key_values[C * k]));
+            if (!(singular < kAtLock)) continue;
             if (k + 1 < K && key_frames[k] + kBesideLock * min_gap < key_frames[k + 1] - min_gap)
                 extra.push_back(static_cast<float>(key_frames[k] + kBesideLock * min_gap));
             if (k > 0 && key_frames[k] - kBesideLock * min_gap > key_frames[k - 1] + min_gap)

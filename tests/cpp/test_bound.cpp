@@ -303,11 +303,17 @@ TEST(FitProof, AxisAngleSpinsProvedWithinTheTolerance) {
     std::vector<double> v = {0.0, 0.0, 0.0, 2.0,  400 * kDeg, 0.0, 0.3, 1.0,  700 * kDeg, 0.0, 0.3, 1.0,
                              680 * kDeg, 1.0, 0.2, 0.4,  600 * kDeg, 0.5, -0.5, 0.7};
     for (auto& x : v) x = static_cast<float>(x);
-    for (Method method : kFitMethods) {
-        const Curve curve = Curve::from_axis_angle(t, v, method);
+    // Eased too (keys 9 and 26 in 0.8, out 0.5): the path leaves the rest pose at frame 1 at another
+    // speed, and the axis turns to its direction within the sample beside that key.
+    CurveOptions eased;
+    eased.ease_in = {0.0, 0.8, 0.0, 0.8, 0.0};
+    eased.ease_out = {0.0, 0.5, 0.0, 0.5, 0.0};
+    for (Method method : kFitMethods)
+        for (const CurveOptions& options : {CurveOptions{}, eased}) {
+        const Curve curve = Curve::from_axis_angle(t, v, method, options);
         const KeyFit fit = fit_through_keys(curve, t, v, mode, 4, tol);
-        EXPECT_TRUE(fit.proof.proven()) << method_name(method) << ": " << fit.proof.bound / kDeg << "° near frame "
-                                        << fit.proof.worst_time;
+        EXPECT_TRUE(fit.proof.proven()) << method_name(method) << (options.ease_in.size() > 1 ? " eased" : "") << ": "
+                                        << fit.proof.bound / kDeg << "° near frame " << fit.proof.worst_time;
         EXPECT_LE(dense_max(curve, fit.keys, mode, 1.0, 40.0, 39 * 64, rng), fit.proof.bound + 1e-6) << method_name(method);
     }
 }

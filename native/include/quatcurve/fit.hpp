@@ -65,7 +65,9 @@ struct KeyFit {
 // the angle (or with the axis reversed), the channels change at the jump that leaves the samples'
 // arc least (axis_angle_span_channels: astride the path's closest approach to the rest pose, where
 // every axis is the same rotation); a change at a sample further than 5° from the rest pose, or
-// one that would play a whole turn between two samples, is refused naming the keys' frames. Keys
+// one that would play a whole turn between two samples, is refused naming the keys' frames. A key
+// at the rest pose (angle a multiple of 2π: any axis) gets the sample beside it, as a key at gimbal
+// lock does, where its axis turns to the path's. Keys
 // keep their values: the curve is made from them, so a refit sees the same path. Throws
 // InvalidArgument for fewer than two keys, mismatched sizes, a tolerance that is not above 0, and
 // whatever the steps throw.
