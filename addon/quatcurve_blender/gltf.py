@@ -20,13 +20,16 @@ frame, and A, B are taken from its first sample and checked on every sample (wit
 against Blender's evaluation of the channels there. A node that fails the check (constraints,
 drivers, a parent's non-uniform scale, NLA: anything but the channels moving it) keeps the sampler
 the exporter wrote, and the result says so. The curve, sampled `subframes` times per frame over the
-sampler's frames and mapped by A and B, is then reduced by the native `quatcurve.reduce_slerp` to
-few keys (a greedy search) whose slerp stays within the tolerance of every sample (times and
-quaternions as the file stores them, float32). Translations, scales, meshes, skins: as the exporter wrote them.
+sampler's frames (times as the file stores them, float32 seconds), is then reduced by the native
+`quatcurve.reduce_slerp_proved` to few keys (a greedy search) whose slerp is proved within the
+tolerance of the curve at every instant (slerp is bi-invariant: the node's A·q·B of them plays the
+same motion turned); where the curve is Blender's playback of keys quatcurve does not emulate, the
+keys hold at the samples (`reduce_slerp`) and the result says so. Translations, scales, meshes,
+skins: as the exporter wrote them.
 
 A loop (cycles.py: Cycles modifiers on the target's rotation channels) is written as exactly one
 period, its first key to its last ([t0, t0 + P] in seconds), reduced as a closed curve
-(`reduce_slerp(cyclic=True)`), the last key stored equal to the first: a player that wraps the
+(`cyclic=True`), the last key stored equal to the first: a player that wraps the
 clip's time (three.js LoopRepeat, Unity's Loop Time) plays through the seam without a step or a
 held frame.
 
@@ -42,7 +45,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import cycles, fcurves, fit, glb, methods, native, targets
+from . import cycles, fcurves, fit, glb, methods, native, reduce, targets
 from .targets import TargetError
 
 METHODS = ("AUTO", "BLENDER") + fit.METHODS
@@ -52,6 +55,8 @@ MAP_TOLERANCE = 1e-4
 # The keys are verified against the samples below the tolerance by this much (radians): the reader's
 # slerp at times between the samples, float32 times and quaternions.
 MARGIN = 1e-5
+# What rounding a unit quaternion to float32 can move it (radians; 4 components, half an ulp each).
+FLOAT32_QUAT = 1e-6
 # The exporter's axis conversion (Blender Z up -> glTF Y up): -90° about X; (w, x, y, z) -> (w, x, z, -y).
 Y_UP = np.array([math.sqrt(0.5), -math.sqrt(0.5), 0.0, 0.0])
 
@@ -191,7 +196,8 @@ def playback(target, frames):
 
 
 def reference(target, settings):
-    """(function frames -> (N, 4) quaternions, description) of the target's curve under `settings`."""
+    """(the target's curve under `settings`, description): a native Curve (a method through the keys),
+    or a function frames -> (N, 4) quaternions (Blender's playback)."""
     action = fcurves.active_action(target.id_data)
     record = fit.find_record(action, target) if action is not None else None
     if settings.method == "BLENDER" or (settings.method == "AUTO" and record is None):
@@ -208,7 +214,24 @@ def reference(target, settings):
     curve, _ = fit.curve_of(keys, fit_settings, ease_in, ease_out, turns)
     how = "%s through %d keys%s" % (methods.label(fit_settings.method), len(keys.frames),
                                     " (fitted)" if record is not None else "")
-    return curve.sample, how
+    return curve, how
+
+
+def proof_reference(target, curve, frames, loop):
+    """What the written keys are proved against at every instant: the method's native Curve, or
+    (channels, interpolation, mode) of the rotation F-curves whose playback quatcurve emulates
+    (reduce.read_original) — or None and why not (NLA, other interpolations, modifiers on an open
+    target: a loop's Cycles modifier changes nothing inside its period)."""
+    if not callable(curve):
+        return curve, ""
+    action = fcurves.active_action(target.id_data)
+    played = targets.playback(target, action)
+    if loop is None and any(fc is not None and len(fc.modifiers) for fc in played.fcurves):
+        return None, "F-curve modifiers on its rotation"
+    original, why = reduce.read_original(played, frames)
+    if original is None:
+        return None, why
+    return (original[0], original[1], target.owner.rotation_mode), ""
 
 
 def node_map(exported, played):
@@ -257,22 +280,47 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
     step = 1.0 / settings.subframes
     dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
     dense[-1] = frames[-1]
-    quats = qc.quat_multiply(qc.quat_multiply(a, np.asarray(curve(dense), dtype=np.float64)), b)
-    quats = quats / np.linalg.norm(quats, axis=1, keepdims=True)
+    # The times the file stores (float32 seconds), as frames.
     t32 = (dense / fps).astype(np.float32).astype(np.float64)
-    q32 = quats.astype(np.float32).astype(np.float64)
-    keep = np.concatenate(([True], t32[1:] > t32[:-1]))  # float32 may merge very close times
-    t32, q32 = t32[keep], q32[keep]
+    t32 = t32[np.concatenate(([True], t32[1:] > t32[:-1]))]  # float32 may merge very close times
     tolerance = math.radians(settings.tolerance)
-    keys = qc.reduce_slerp(t32, q32, max(tolerance - MARGIN, 0.0), cyclic=loop is not None)
-    kept = keys.quats
+    proved_against, why = proof_reference(target, curve, t32 * fps, loop)
+    if proved_against is not None:
+        # Proved at every instant in the channels' own rotation: slerp is bi-invariant, so the file's
+        # keys A·q·B play the same motion turned. The keys sit on times the file stores exactly.
+        if isinstance(proved_against, tuple):
+            channels, ipo, mode = proved_against
+            proved = qc.reduce_slerp_proved(channels, ipo, mode, t32 * fps, max(tolerance - MARGIN, 0.0),
+                                            cyclic=loop is not None, file_unit=1.0 / fps)
+        else:
+            proved = qc.reduce_slerp_proved(proved_against, t32 * fps, max(tolerance - MARGIN, 0.0),
+                                            cyclic=loop is not None, file_unit=1.0 / fps)
+        key_times = (proved.key_times / fps).astype(np.float32).astype(np.float64)
+        kept = qc.quat_multiply(qc.quat_multiply(a, proved.keys.quats), b)
+        # float32 quaternions: within 1e-6 rad of the exact keys (MARGIN's room).
+        error = proved.proof.bound + FLOAT32_QUAT
+        how += ", at every instant" if proved.proof.proven else ", at every instant within %.4f°" % math.degrees(error)
+        if len(proved.excluded):
+            how += (" but inside %d sign flip%s of its quaternion keys, where Blender turns through the flip and the "
+                    "file takes the short way" % (len(proved.excluded), "" if len(proved.excluded) == 1 else "s"))
+    else:
+        sample = curve if callable(curve) else curve.sample
+        quats = qc.quat_multiply(qc.quat_multiply(a, np.asarray(sample(t32 * fps), dtype=np.float64)), b)
+        quats = quats / np.linalg.norm(quats, axis=1, keepdims=True)
+        q32 = quats.astype(np.float32).astype(np.float64)
+        keys = qc.reduce_slerp(t32, q32, max(tolerance - MARGIN, 0.0), cyclic=loop is not None)
+        key_times, kept, error = t32[keys.indices], keys.quats, keys.max_error
+        how += ", at the checked points (between them not proved: %s)" % why
+    kept = kept / np.linalg.norm(kept, axis=1, keepdims=True)
+    for k in range(1, len(kept)):  # one hemisphere chain, as reduce_slerp gives them
+        if np.dot(kept[k], kept[k - 1]) < 0:
+            kept[k] = -kept[k]
     if loop is not None:
         # The same key at both ends, as a wrapping player expects (glTF's slerp takes the short way,
         # so the other sign of the same rotation plays the same).
-        kept = kept.copy()
         kept[-1] = kept[0]
     out = kept.astype(np.float32)[:, [1, 2, 3, 0]]  # w, x, y, z -> glTF x, y, z, w
-    return t32[keys.indices], out, keys.max_error, how
+    return key_times, out, error, how
 
 
 def rewrite(doc, scene, settings, fps):

@@ -534,6 +534,9 @@ otherwise, naming both samples and the angle); the last key is then the first ke
                                "the keys' times (the samples at keys.indices)")
         .def_readonly("proof", &ProvedSlerpKeys::proof,
                       "PlaybackBound of the keys' slerp against the reference over [times[0], times[-1]]")
+        .def_property_readonly("excluded", [](const ProvedSlerpKeys& r) { return pairs_array(r.excluded); },
+                               "(M, 2) sample intervals left out of the proof: a playback's own quaternion sign "
+                               "flips, where Blender turns through them and the keys take the short way")
         .def_readonly("rounds", &ProvedSlerpKeys::rounds, "reductions made (1: the first was proved)")
         .def("__repr__", [](const ProvedSlerpKeys& r) {
             return "<ProvedSlerpKeys " + std::to_string(r.keys.indices.size()) + " keys, " +
@@ -561,7 +564,9 @@ otherwise, naming both samples and the angle); the last key is then the first ke
             const std::vector<double> t = read_times(times);
             py::gil_scoped_release release;
             const PlaybackMotion playback(std::move(original), ipo, mode);
-            return reduce_slerp_proved(playback, t, tolerance, cyclic, file_unit);
+            std::vector<std::pair<double, double>> flips;
+            if (mode.kind == RotationMode::Kind::quaternion) flips = quaternion_flips(playback, t);
+            return reduce_slerp_proved(playback, t, tolerance, cyclic, file_unit, std::move(flips));
         },
         py::arg("channels"), py::arg("channel_interpolation"), py::arg("mode"), py::arg("times"), py::arg("tolerance"),
         py::kw_only(), py::arg("cyclic") = false, py::arg("file_unit") = 0.0,
@@ -571,7 +576,9 @@ times[0] to times[-1], not only at the samples: a ProvedSlerpKeys.
 reduce_slerp_proved(curve, times, tolerance): the reference is a Curve (a method through keys).
 reduce_slerp_proved(channels, channel_interpolation, mode, times, tolerance): the reference is
 Blender's playback of a rotation's F-curves (as reduce_keys_proved takes them: one (frames, values[,
-handle_left, handle_right]) per channel of `mode`, every segment 'LINEAR' or 'BEZIER').
+handle_left, handle_right]) per channel of `mode`, every segment 'LINEAR' or 'BEZIER'); the sample
+intervals across which its quaternion channels flip hemisphere are left out (ProvedSlerpKeys.excluded:
+Blender turns through the flip there, the keys take the short way).
 
 times: (N >= 2,) increasing frames, the samples to start from. The reference there is reduced by
 reduce_slerp at 90% of the tolerance; the keys' slerp is proved against the reference between the

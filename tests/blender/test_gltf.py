@@ -346,6 +346,39 @@ def test_export_plays_blenders_motion_with_few_keys(animated, tmp_path):
     assert not glob.glob(str(tmp_path / ".quatcurve-*"))
 
 
+def dense_times(points=64, random=200, seed=4):
+    """Every 1/points frame from FIRST to LAST and `random` random times: denser than anything the
+    export checks (its samples are every 1/20 frame), to hold its bound at every instant."""
+    rng = np.random.default_rng(seed)
+    even = [FIRST + k / points for k in range((LAST - FIRST) * points + 1)]
+    return sorted(even + list(rng.uniform(FIRST, LAST, random)))
+
+
+@pytest.mark.parametrize("method", ["AUTO", "SQUAD"])
+def test_export_holds_its_bound_at_every_instant(animated, tmp_path, method):
+    """The written file, evaluated by glTF's slerp at 64 points per frame and at random times, stays
+    within the tolerance of what the export plays — Blender's playback (AUTO, unfitted), or squad
+    through the keys (which Blender plays once fitted, within FIT_TOLERANCE at every instant) — and the
+    result says the bound holds at every instant."""
+    from quatcurve_blender import gltf
+    times = dense_times()
+    out = tmp_path / "dense.glb"
+    result = gltf.export(bpy.context.scene, str(out), gltf.ExportSettings(method=method, tolerance=TOLERANCE))
+    rewritten = [r for r in result.samplers if r.rewritten]
+    assert rewritten and all(r.curve.endswith(", at every instant") for r in rewritten), [r.curve for r in rewritten]
+    assert all(r.max_error <= math.radians(TOLERANCE) for r in rewritten)
+    lines = ""
+    slack = 0.0
+    if method != "AUTO":
+        fit_all(method)
+        slack = FIT_TOLERANCE
+    want = exporter_frames(blender_worlds(NAMES, times), exact_export(tmp_path / "exact.glb"), times)
+    errors = file_error(GltfFile(str(out)), want, times)
+    print("\n%s, Blender %s: max error %.4f° at %d times (64 per frame and 200 random)%s" % (
+        method, bpy.app.version_string, max(errors.values()), len(times), ("\n" + lines) if lines else ""))
+    assert max(errors.values()) <= TOLERANCE + slack + 1e-4, errors
+
+
 @pytest.mark.parametrize("method", ["SQUAD", "SPLINE_C2"])
 def test_fitted_targets_export_their_method(animated, tmp_path, method):
     """Fitted targets (AUTO): the file plays the fit's method (Blender plays it within FIT_TOLERANCE)."""

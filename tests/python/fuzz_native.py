@@ -1955,9 +1955,15 @@ def build_reduce_slerp_proved(fn, d):
         expect(proof.proven == (len(proof.violations) == 0 and len(proof.unproven) == 0), "proven disagrees")
         finite(proof.bound, "bound")
         repr(out)
+        # Every flip of the samples lies in a span left out (the key segment around it); nothing else is.
+        spans = np.asarray(out.excluded).reshape(-1, 2)
+        for a, b in excluded:
+            expect(bool(np.any((spans[:, 0] <= a) & (b <= spans[:, 1]))), f"the flip {a}-{b} is not left out: {spans!r}")
+        if form == "curve":
+            expect(len(spans) == 0, "a curve has no flips to leave out")
         kt, kq = out.key_times, out.keys.quats
         ts = np.sort(np.concatenate([np.linspace(kt[0], kt[-1], 2001), rng.uniform(kt[0], kt[-1], 1000)]))
-        for a, b in excluded:
+        for a, b in spans:
             ts = ts[~((ts > a) & (ts < b))]
         seg = np.clip(np.searchsorted(kt, ts, side="right") - 1, 0, len(kt) - 2)
         a, b = kq[seg], kq[seg + 1]

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "quatcurve/bound.hpp"
@@ -74,16 +75,25 @@ SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>
 // (the reference's first and last rotations one loop's seam). Times in the reference's unit (frames);
 // `file_unit` > 0 (seconds per frame, for a file that stores float32 seconds) makes every added sample
 // a time the file stores exactly, float32(t·file_unit)/file_unit, as the given ones should be: the
-// keys then play at the times proved. Throws InvalidArgument as reduce_slerp, and for fewer than two
-// times or a file_unit that is negative or not finite.
+// keys then play at the times proved. `excluded`: spans (sorted, disjoint) whose sample intervals are
+// left out of the proof — a playback's own quaternion sign flips, where Blender turns through the
+// flip and the slerp keys rightly take the short way; they are returned in ProvedSlerpKeys::excluded. Throws InvalidArgument as reduce_slerp, and for fewer than
+// two times or a file_unit that is negative or not finite.
 struct ProvedSlerpKeys {
     std::vector<double> times;  // the samples of the last round: the given ones and those added
     SlerpKeys keys;             // indices into `times`
     PlaybackBound proof;        // the keys' slerp against the reference over [times[0], times[-1]]
+    std::vector<std::pair<double, double>> excluded;  // sample intervals left out of the proof
     int rounds = 0;             // reductions made (1: the first was proved)
 };
 
 ProvedSlerpKeys reduce_slerp_proved(const Motion& reference, const std::vector<double>& times, double tolerance,
-                                    bool cyclic = false, double file_unit = 0.0);
+                                    bool cyclic = false, double file_unit = 0.0,
+                                    std::vector<std::pair<double, double>> excluded = {});
+
+// The spans of a quaternion playback's own sign flips, for reduce_slerp_proved's `excluded`: where two
+// neighbouring `times` see its channel values (as Blender evaluates them, before normalizing) in
+// opposite hemispheres, the key segment around them (from the key before to the key after).
+std::vector<std::pair<double, double>> quaternion_flips(const PlaybackMotion& playback, const std::vector<double>& times);
 
 }  // namespace quatcurve
