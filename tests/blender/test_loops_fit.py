@@ -273,12 +273,14 @@ def test_live_keeps_a_loop_closed(live_scene, tmp_path):
     set_key(euler_t, 1, euler(0, -10, 20))
     for curve in rotation_fcurves(quat_t.owner, "rotation_quaternion"):
         curve.modifiers.remove(curve.modifiers[0])
+    # The Graph Editor's Add and Delete Modifier tag the action for the depsgraph; FModifiers.new and
+    # .remove from Python do not (3.4), or not always: tag it as the editor does.
+    fcurves.active_action(quat_t.id_data).update_tag()
     bpy.context.view_layer.update()
     keys = fit.read_animator_keys(quat_t)
     assert keys.loop is None and fit.find_record(fcurves.active_action(quat_t.id_data), quat_t).signature == \
         keys.signature()
     make_loop(quat_t.owner, "rotation_quaternion")
-    # The Graph Editor's Add Modifier tags the action for the depsgraph; FModifiers.new from Python does not.
     fcurves.active_action(quat_t.id_data).update_tag()
     bpy.context.view_layer.update()
     keys = fit.read_animator_keys(quat_t)
