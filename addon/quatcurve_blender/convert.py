@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit, methods, native, targets
+from . import cycles, fcurves, fit, methods, native, targets
 from .workers import parallel_imap
 from .targets import TargetError
 
@@ -85,7 +85,8 @@ class Source:
     the rotation Blender plays there; first (C,): the source channels' values at times[0]; forced
     (F,): indices in times of the frames that get a key in the new mode (every animator key frame
     and both ends of the range); types (F,) and selected (F,): their key types and selection;
-    source_keys: how many keys the old channels held."""
+    source_keys: how many keys the old channels held; loop: the cycles.Loop its Cycles modifiers make
+    (one period is sampled: Blender repeats it), None when open."""
     target: object
     name: str
     where: str
@@ -103,6 +104,7 @@ class Source:
     types: np.ndarray
     selected: np.ndarray
     source_keys: int
+    loop: cycles.Loop = None
 
 
 def _where(target, action):
@@ -123,15 +125,15 @@ def read_source(target, action, channels, slot, mode, subframes):
     why = fcurves.is_protected(action)
     if why:
         raise ConvertError("%s: the action is %s and cannot be changed" % (where, why))
+    try:
+        loop = cycles.target_loop(where, prop, curves, mode, action)
+    except TargetError as error:
+        raise ConvertError(str(error)) from None
     frames_all, animator, per_channel, source_keys = [], [], [], 0
     for c, curve in enumerate(curves):
         if curve is None:
             per_channel.append(None)
             continue
-        if len(curve.modifiers):
-            raise ConvertError("%s: %s[%d] has F-curve modifiers (%s): the conversion keeps keys only, "
-                               "apply or remove them first" % (where, prop, c,
-                                                              ", ".join(m.type for m in curve.modifiers)))
         if curve.mute:
             raise ConvertError("%s: %s[%d] is muted (Blender does not play it): unmute or delete it first"
                                % (where, prop, c))
@@ -175,7 +177,7 @@ def read_source(target, action, channels, slot, mode, subframes):
     # "Object Transforms"), where tools that look channels up by group (Rigify's) find them.
     group = channels.group_of(path, count) or (target.bone if target.bone is not None else "Object Transforms")
     return Source(target, target.name, where, action, channels, slot, mode, prop, path, group,
-                  times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys)
+                  times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys, loop)
 
 
 def refuse_drivers(target, modes):
@@ -372,8 +374,12 @@ def write_plan(plan):
     source = plan.source
     new_path = source.target.data_path(plan.prop)
     source.channels.remove(sorted({source.path, new_path}), count=4)
+    modes = loop_modes(plan)
     for c, (frames, values, left, right, types, selected) in enumerate(plan.channels):
         curve = source.channels.new_fcurve(new_path, c, group=source.group)
+        if modes is not None:
+            cycle = curve.modifiers.new("CYCLES")
+            cycle.mode_before = cycle.mode_after = modes[c]
         fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
         fcurves.write_key_types(curve, types)
         fcurves.write_key_selection(curve, selected)
@@ -381,6 +387,23 @@ def write_plan(plan):
     if record is not None:
         record.prop = plan.prop
         record.signature = _signature(plan, new_path)
+
+
+def loop_modes(plan):
+    """Per new channel, the Cycles mode that keeps a loop (None when the source is open). One period
+    was converted, and Blender repeats it: Repeat where the period ends on the values it starts from,
+    Repeat with Offset on an Euler or axis-angle channel that ends whole turns from where it started
+    (a wheel keeps turning in its channels). A quaternion channel always repeats: a wheel's period
+    ends on the first rotation's negative, the same rotation, and the next period turns the same."""
+    if plan.source.loop is None:
+        return None
+    modes = []
+    for c, (frames, values, _, _, _, _) in enumerate(plan.channels):
+        step = float(values[-1] - values[0])
+        angle = plan.mode in fcurves.EULER_ORDERS or (plan.mode == "AXIS_ANGLE" and c == 0)
+        offset = angle and abs(step) > 1e-4 and abs(step - 2 * math.pi * round(step / (2 * math.pi))) <= 1e-4
+        modes.append("REPEAT_OFFSET" if offset else "REPEAT")
+    return modes
 
 
 def _owner_path(target):
@@ -399,8 +422,10 @@ def _signature(plan, path):
             types = ch_types[mine].astype(np.int64)
         columns.append(ch_values[mine].astype(np.float32).astype(np.float64))
     values = np.stack(columns, axis=1)
+    modes = loop_modes(plan)
+    loop = None if modes is None else cycles.Loop(float(frames[0]), float(frames[-1]), "REPEAT_OFFSET" in modes)
     keys = fit.AnimatorKeys(plan.source.name, plan.mode, plan.prop, path, frames, values, types,
-                            np.zeros((len(columns), len(frames)), dtype=bool))
+                            np.zeros((len(columns), len(frames)), dtype=bool), loop)
     return keys.signature()
 
 

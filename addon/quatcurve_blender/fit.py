@@ -43,7 +43,7 @@ from dataclasses import dataclass, field, replace
 import bpy
 import numpy as np
 
-from . import fcurves, methods, native, path_rule, targets
+from . import cycles, fcurves, methods, native, path_rule, targets
 from .workers import parallel_map
 from .targets import TargetError
 
@@ -317,7 +317,8 @@ class AnimatorKeys:
     name: the target's name (for messages); mode, prop, path: its rotation mode, property and F-curve
     data path; frames (K,): the union of the channels' animator key frames (channels keyed separately,
     e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
-    (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit."""
+    (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit;
+    loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open."""
     name: str
     mode: str
     prop: str
@@ -326,6 +327,7 @@ class AnimatorKeys:
     values: np.ndarray
     types: np.ndarray
     selected: np.ndarray
+    loop: cycles.Loop = None
 
     @property
     def is_euler(self):
@@ -338,14 +340,18 @@ class AnimatorKeys:
     def signature(self):
         """A digest of the animator's keys (frames, values, types): live mode refits when it changes."""
         h = hashlib.sha256(("%s %s" % (self.mode, self.path)).encode())
+        if self.loop is not None:  # adding or removing the Cycles modifiers refits (or stops)
+            h.update(("loop %r %r %d" % (self.loop.start, self.loop.end, self.loop.offset)).encode())
         for a in (self.frames, self.values, self.types):
             h.update(np.ascontiguousarray(a).tobytes())
         return h.hexdigest()
 
 
 def read_animator_keys(target):
-    """AnimatorKeys of `target` in its current rotation mode, from its active action. Raises FitError
-    (naming target, channel and frame) for no active action, no rotation keys, F-curve modifiers,
+    """AnimatorKeys of `target` in its current rotation mode, from its active action, with the loop its
+    Cycles modifiers make (cycles.target_loop). Raises FitError (naming target, channel and frame)
+    for no active action, no rotation keys, F-curve modifiers other than a loop's Cycles (naming the
+    modifier), a loop whose ends are not animator keys or whose Repeat with Offset is not whole turns,
     NaN/infinite keys, two different keys on one frame, drivers, protected data."""
     try:
         targets.check_editable(target, new_action=False)
@@ -366,14 +372,15 @@ def read_animator_keys(target):
                        % (target.name, " (only NLA strips)" if strips else ""))
     channels = fcurves.Channels.of(target.id_data)
     curves = channels.find_all(path, count) if channels is not None else [None] * count
+    try:
+        loop = cycles.target_loop(target.name, prop, curves, mode, action)
+    except TargetError as e:
+        raise FitError(str(e)) from None
     per_channel = []
     for c, curve in enumerate(curves):
         if curve is None or not fcurves.key_count(curve):
             per_channel.append(None)
             continue
-        if len(curve.modifiers):
-            raise FitError("%s: %s[%d] has F-curve modifiers (%s): the fit shapes keys only, remove them first"
-                           % (target.name, prop, c, ", ".join(m.type for m in curve.modifiers)))
         frames, values = fcurves.read_keys(curve)
         types = fcurves.read_key_types(curve)
         selected = fcurves.read_key_selection(curve)
@@ -441,7 +448,33 @@ def read_animator_keys(target):
         if (~own).any():  # this channel has no key of its own there: Blender's evaluation
             values[~own, c] = fcurves.evaluate(curves[c], frames[~own])
     types[types < 0] = KEY_TYPE_KEYFRAME
-    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected)
+    if loop is not None:
+        check_loop(target.name, prop, curves, loop, frames, values)
+    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop)
+
+
+def check_loop(name, prop, curves, loop, frames, values):
+    """A loop's period runs from the animator's first key to its last (a generated key never ends
+    it), and a channel repeating with offset moves by whole turns per period (Euler angles, the
+    axis-angle angle) or not at all (the axis), so that each period plays the same rotations. Raises
+    FitError naming the channel."""
+    if frames[0] != loop.start or frames[-1] != loop.end:
+        raise FitError("%s: %s loops over frames %s–%s, but the animator's keys span %s–%s: key the loop's "
+                       "first and last frames" % (name, prop, targets.num(loop.start), targets.num(loop.end),
+                                                  targets.num(frames[0]), targets.num(frames[-1])))
+    if not loop.offset:
+        return
+    angle_channels = range(3) if len(values[0]) == 3 else (0,)
+    for c, curve in enumerate(curves):
+        if curve is None or not len(curve.modifiers) or cycles.channel_cycle(curve)[0] != "REPEAT_OFFSET":
+            continue
+        step = float(values[-1, c] - values[0, c])
+        turns = step / (2 * math.pi) if c in angle_channels else 0.0
+        if abs(step - 2 * math.pi * round(turns)) > 1e-4:
+            what = ("%.4g° per period, not whole turns" % math.degrees(step) if c in angle_channels else
+                    "%.6g per period (an axis channel's offset changes the axis each period)" % step)
+            raise FitError("%s: %s[%d] repeats with offset %s: each period would play other rotations; key the "
+                           "last key whole turns from the first, or use Repeat" % (name, prop, c, what))
 
 
 # ---- the fit ------------------------------------------------------------------------------------------
@@ -474,6 +507,8 @@ def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
     fit writes (quaternion signs made to follow the curve; Euler and axis-angle keys as they are,
     their turns kept by the curve)."""
     options = curve_options(settings, ease_in, ease_out, turns)
+    if keys.loop is not None:
+        options["cyclic"] = True
     try:
         curve = targets.build_curve(keys.mode, keys.frames, keys.values, settings.method, keys.name, **options)
     except TargetError as e:
@@ -502,6 +537,8 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     if turns is None or keys.mode != "QUATERNION":
         turns = np.zeros(K)
     turns = np.asarray(turns, float)
+    if keys.loop is not None:
+        ease_in, ease_out = seam_eases(ease_in, ease_out)
     curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
     # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys,
     # and the proof of the bound at every instant (KeyFit.proof).
@@ -532,6 +569,19 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
                    ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns)
 
 
+def seam_eases(ease_in, ease_out):
+    """A loop's first and last keys are one key, the seam: the motion comes into it through the last
+    key and leaves it through the first. An ease set on either end applies at the seam: the first
+    key's ease in becomes the last key's (where that has none), the last key's ease out the first's."""
+    ease_in, ease_out = np.array(ease_in, float), np.array(ease_out, float)
+    if ease_in[-1] == 0:
+        ease_in[-1] = ease_in[0]
+    if ease_out[0] == 0:
+        ease_out[0] = ease_out[-1]
+    ease_in[0], ease_out[-1] = ease_in[-1], ease_out[0]
+    return ease_in, ease_out
+
+
 def euler_notes(keys, kf):
     """Where the channels change representation between keys, one note each: Euler channels change
     branch (beside a key at gimbal lock, or nearest the lock); axis-angle channels change to another
@@ -559,6 +609,8 @@ def write_plan(plan, target):
             if group is False:
                 group = channels.group_of(keys.path)
             curve = channels.new_fcurve(keys.path, c, group=group)
+            if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
+                curve.modifiers.new("CYCLES")
         fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
         fcurves.write_key_types(curve, types)
         chosen = np.zeros(len(frames), dtype=bool)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit
+from . import cycles, fcurves, fit
 from .workers import parallel_map
 
 DEBOUNCE = 0.3   # seconds without a key change before Blender 3.4 refits (it cannot see a drag)
@@ -112,7 +112,7 @@ def drag_in_progress():
 
 def raw_digest(target):
     """A digest of what the fit reads of `target` as Blender stores it — rotation mode, and per
-    rotation channel its keys' frames, values and types, its modifier count — plus the ID's driver
+    rotation channel its keys' frames, values and types, its modifiers (count, and the loop they make) — plus the ID's driver
     count, taken with two bulk reads per channel: equal digests mean nothing the fit reads changed."""
     mode = target.owner.rotation_mode
     prop, count = fcurves.rotation_property(mode)
@@ -131,6 +131,8 @@ def raw_digest(target):
         points.foreach_get("co", co)
         points.foreach_get("type", types)
         h.update(b"%d %d|" % (n, len(curve.modifiers)))
+        if len(curve.modifiers):  # a Cycles modifier's settings make the target a loop or refuse it
+            h.update(repr(cycles.channel_cycle(curve)).encode())
         h.update(co.tobytes())
         h.update(types.tobytes())
     return h.digest()
