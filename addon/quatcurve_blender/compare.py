@@ -29,6 +29,14 @@ mean), the angular speed profile (from consecutive samples) and its max/min rati
 length against the sum of key-to-key geodesic angles, the largest jump of angular velocity and
 acceleration at keys; for Euler sources the closest approach to gimbal lock and its frames.
 
+Loops (cycles.py: Cycles modifiers on every rotation channel) are compared through the seam: the
+seam is a key like the others. One period is sampled (first key to last), and the key metrics
+(velocity and acceleration jumps) also see the segment before the seam (the last one, a period
+earlier) and the one after it (the first, a period later); the engine's curves are closed
+(cyclic=True), Blender's modes are evaluated with a Cycles modifier on the scratch channels (Blender's
+cycle-aware auto handles), and the report marks the target cyclic with its period. A Cycles modifier
+no task reads as a loop (Mirror, a finite count, …) is refused, naming target, channel and modifier.
+
 Compare never changes animation data: Blender's modes are evaluated in scratch actions that are
 removed afterwards (fcurves.scratch_channels); the user's actions are only read.
 """
@@ -43,7 +51,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import fcurves, fit, methods, native, path_rule, plot, targets
+from . import cycles, fcurves, fit, methods, native, path_rule, plot, targets
 from .workers import parallel_imap
 from .targets import TargetError
 
@@ -192,6 +200,7 @@ class TargetComparison:
     recommendation: dict = field(default_factory=dict)
     path_rule: list = field(default_factory=list)  # path_rule.PathRuleBreak of the engine methods
     keyed_speed_ratios: np.ndarray = None  # per key segment (keyed_speed_ratios)
+    loop: cycles.Loop = None          # a loop (Cycles modifiers): compared through its seam
     plot_file: str = None             # set by write_report
     image_name: str = None            # set by make_images
     _pixels: np.ndarray = None
@@ -232,6 +241,8 @@ class TargetComparison:
             "frames": {"start": _num(self.frames[0]), "end": _num(self.frames[-1]), "step": step,
                        "count": int(len(self.frames))},
             "key_frames": [_num(f) for f in self.key_frames],
+            "cyclic": self.loop is not None,
+            "period": _num(self.loop.period) if self.loop is not None else None,
             "reference": REFERENCE_METHOD,
             "sources": {name: s.to_json() for name, s in self.sources.items()},
             "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": [_num(f) for f in frames]}
@@ -264,7 +275,10 @@ class CompareReport:
         """The comparison table as text: per target a header, one row per source, the recommendation."""
         lines = []
         for t in self.targets:
-            lines.append("%s (%s, keys %s)" % (t.name, t.rotation_mode, _frames_text(t.key_frames)))
+            lines.append("%s (%s, keys %s%s)" % (t.name, t.rotation_mode, _frames_text(t.key_frames),
+                                                 "" if t.loop is None else
+                                                 ", a loop: period %g frames, seam at the first and last key"
+                                                 % t.loop.period))
             lines.append("  %-22s %12s %12s %12s" % ("source", "max dev", "speed ratio", "path length"))
             for row in t.table_rows():
                 lines.append("  %-22s %12s %12s %12s" % row)
@@ -307,11 +321,35 @@ def _frames_text(frames):
 
 # ---- Blender's modes in a scratch action ----------------------------------------------------------------
 
-def evaluate_in_scratch(prop, key_frames, key_values, frames, interpolation="BEZIER"):
+def evaluate_in_scratch(prop, key_frames, key_values, frames, interpolation="BEZIER", cycle=None):
     """(N, C) values of C channels keyed (key_frames, key_values[:, c]) with `interpolation` — BEZIER
     with Blender's default auto-clamped handles, or LINEAR — as Blender evaluates them at `frames`
-    (fcurves.evaluate_scratch_keys: a scratch action, removed before returning)."""
-    return fcurves.evaluate_scratch_keys(prop, key_frames, key_values, frames, interpolation)
+    (fcurves.evaluate_scratch_keys: a scratch action, removed before returning); `cycle`
+    ('REPEAT', 'REPEAT_OFFSET') makes them a loop, as Blender's Cycles modifier does."""
+    return fcurves.evaluate_scratch_keys(prop, key_frames, key_values, frames, interpolation, cycle)
+
+
+@dataclass(frozen=True)
+class Seam:
+    """Where a loop's seam is measured: `frames`, the period's sample frames with the last key
+    segment one period earlier before them and the first one period later after them; `key_frames`,
+    the keys with those two neighbours (so the first and last key, the seam, are interior keys);
+    `period`: the slice of `frames` that is the period's samples."""
+    frames: np.ndarray
+    key_frames: np.ndarray
+    period: slice
+
+
+def seam_frames(frames, key_frames):
+    """The Seam of a loop sampled at `frames` (first key to last) with keys `key_frames`: the same
+    sample grid, wrapped by one period on each side over the segment beside the seam."""
+    frames, key_frames = np.asarray(frames, np.float64), np.asarray(key_frames, np.float64)
+    period = float(key_frames[-1] - key_frames[0])
+    before = frames[frames >= key_frames[-2]] - period   # the last segment, ending at the first key
+    after = frames[frames <= key_frames[1]] + period      # the first segment, starting at the last key
+    wrapped = np.concatenate([before[:-1], frames, after[1:]])
+    keys = np.concatenate([before[:1], key_frames, after[-1:]])
+    return Seam(wrapped, keys, slice(len(before) - 1, len(before) - 1 + len(frames)))
 
 
 def euler_keys(keys, key_quats, order):
@@ -321,6 +359,13 @@ def euler_keys(keys, key_quats, order):
     if keys.mode == order:
         return np.asarray(keys.values, dtype=np.float64)
     return native.require().quats_to_channels(key_quats, order, euler="blender")
+
+
+def euler_cycle(values):
+    """The Cycles mode of a loop's Euler keys `values` (K, 3): Repeat when the last key is the first,
+    else Repeat with Offset (a wheel, or keys converted from another mode whose seam key lands whole
+    turns away), so that each period starts where the last ended, as Blender plays them."""
+    return "REPEAT" if np.array_equal(values[0], values[-1]) else "REPEAT_OFFSET"
 
 
 def quaternion_keys(keys, key_quats):
@@ -344,6 +389,8 @@ class _Reading:
     key_quats: np.ndarray
     current: np.ndarray
     paths: dict
+    loop: cycles.Loop = None   # a loop: the paths are sampled at seam.frames, the period at seam.period
+    seam: Seam = None
 
 
 def read_target(target, settings):
@@ -355,7 +402,16 @@ def read_target(target, settings):
         raise CompareError(str(error)) from None
     if len(keys.frames) < 2:
         raise CompareError("%s: one rotation key (frame %g): nothing to compare" % (target.name, keys.frames[0]))
+    try:
+        loop = cycles.loop_of_keys(target, keys)
+    except TargetError as error:
+        raise CompareError(str(error)) from None
     frames = sample_frames(keys.frames, settings.subframes)
+    seam, cycle = None, False
+    if loop is not None:
+        seam = seam_frames(frames, keys.frames)
+        frames = seam.frames  # every path is sampled through the seam; measure slices the period
+        cycle = True
     try:
         played = targets.playback(target)
         key_quats = keys.quats()
@@ -369,17 +425,18 @@ def read_target(target, settings):
     orders = fcurves.EULER_ORDERS if settings.all_euler_orders else (keys.mode if keys.is_euler else "XYZ",)
     for order in orders:
         values = euler_keys(keys, key_quats, order)
-        angles = evaluate_in_scratch("rotation_euler", keys.frames, values, frames, settings.key_interpolation)
+        angles = evaluate_in_scratch("rotation_euler", keys.frames, values, frames, settings.key_interpolation,
+                                     euler_cycle(values) if cycle else None)
         paths[euler_source(order)] = ("blender_euler", qc.channels_to_quats(angles, order), order, angles)
     values = evaluate_in_scratch("rotation_quaternion", keys.frames, quaternion_keys(keys, key_quats), frames,
-                                 settings.key_interpolation)
+                                 settings.key_interpolation, "REPEAT" if cycle else None)
     try:
         quats = targets.channels_to_quats("QUATERNION", values, "%s (Blender quaternion mode)" % target.name,
                                           frames)
     except TargetError as error:
         raise CompareError(str(error)) from None
     paths[SOURCE_BLENDER_QUATERNION] = ("blender_quaternion", quats, None, None)
-    return _Reading(target, keys, frames, key_quats, current, paths)
+    return _Reading(target, keys, frames, key_quats, current, paths, loop, seam)
 
 
 def measure(reading, settings):
@@ -389,21 +446,30 @@ def measure(reading, settings):
     target, keys, frames, key_quats = reading.target, reading.keys, reading.frames, reading.key_quats
     paths = dict(reading.paths)
     methods = [REFERENCE_METHOD] + [m for m in settings.methods if m != REFERENCE_METHOD]
+    cyclic = {"cyclic": True} if reading.loop is not None else {}
     segment_paths, breaks = {}, []
     for method in methods:
         try:
-            curve = keys.curve(method, **settings.curve_options(method))
+            curve = keys.curve(method, **settings.curve_options(method), **cyclic)
             paths[method] = ("engine", np.asarray(curve.sample(frames), dtype=np.float64), None, None)
             segment_paths[method] = np.asarray(curve.segment_paths(), dtype=np.float64).reshape(-1, 2)
             breaks += path_rule.breaks(curve, keys.frames, target.name, method, segment_paths[method])
         except ValueError as error:
             raise CompareError("%s: %s: %s" % (target.name, methods.label(method), error)) from None
+    seam = reading.seam
+    period = seam.period if seam is not None else slice(None)
+    wrapped = paths
+    paths = {name: (kind, quats[period], order, None if angles is None else angles[period])
+             for name, (kind, quats, order, angles) in wrapped.items()}
+    frames = frames[period]
     reference = paths[REFERENCE_METHOD][1]
 
     tolerance = math.radians(settings.gimbal_tolerance)
     sources = {}
     for name, (kind, quats, order, angles) in paths.items():
         metrics = qc.path_metrics(frames, quats, keys.frames, reference, key_quats=key_quats)
+        if seam is not None:
+            seam_jumps(metrics, qc.key_jumps(seam.frames, wrapped[name][1], seam.key_frames), keys.frames)
         result = SourceResult(name, kind, quats, metrics, segment_paths=segment_paths.get(name))
         if order is not None:
             distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances(angles, order), tolerance)
@@ -411,15 +477,29 @@ def measure(reading, settings):
         sources[name] = result
 
     comparison = TargetComparison(target.name, keys.mode, np.asarray(keys.frames, dtype=np.float64), frames,
-                                  settings.subframes, sources, path_rule=breaks)
+                                  settings.subframes, sources, path_rule=breaks, loop=reading.loop)
     comparison.keyed_speed_ratios = keyed_speed_ratios(keys.frames, segment_paths[REFERENCE_METHOD][:, 0], key_quats)
     # How close the motion itself (Blender's evaluation) comes to gimbal lock in each order.
     for order in fcurves.EULER_ORDERS:
-        distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances_from_quats(reading.current, order),
+        distance, where = qc.closest_gimbal_approach(frames, qc.gimbal_distances_from_quats(paths[SOURCE_BLENDER][1], order),
                                                      tolerance)
         comparison.euler_orders[order] = (float(distance), _compress_frames(where))
     comparison.recommendation = recommend(comparison)
     return comparison
+
+
+def seam_jumps(metrics, jumps, key_frames):
+    """Puts a loop's jumps at its keys into `metrics` (path_metrics of the period): `jumps`
+    (velocity, acceleration) from quatcurve.key_jumps through the seam (Seam.key_frames: the keys with
+    a neighbour across the seam on each side), so the first and last key — the seam — have theirs
+    like every other key, and the largest jumps and their keys count the seam."""
+    for kind, values in zip(("velocity", "acceleration"), jumps):
+        values = np.asarray(values, np.float64)[1:-1]   # the keys themselves (the neighbours have one side)
+        metrics[kind + "_jumps"] = values
+        finite = np.isfinite(values)
+        if finite.any():
+            at = int(np.flatnonzero(finite)[np.argmax(values[finite])])
+            metrics["max_%s_jump" % kind], metrics["max_%s_jump_time" % kind] = float(values[at]), float(key_frames[at])
 
 
 def compare_target(target, settings):

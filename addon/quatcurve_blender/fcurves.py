@@ -444,11 +444,14 @@ KEY_ENUM_READ_DTYPE = np.int32 if bpy.app.version < (4, 0, 0) else np.uint8
 _NO_ENUM = -1 if KEY_ENUM_READ_DTYPE == np.int32 else 255  # no enum value: a buffer left untouched
 
 
-def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolation="BEZIER"):
+def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolation="BEZIER", cycle=None):
     """(N, C) Blender's evaluation at `frames` of C channels keyed (key_frames, key_values[:, c]) with
     `interpolation` — 'BEZIER' with Blender's default AUTO_CLAMPED handles, computed by Blender
     (fcurve.update()), as keyframe_insert makes them; or 'LINEAR' — built in a scratch action that is
-    removed before returning. data_path: e.g. 'rotation_euler' (only the name of the curves)."""
+    removed before returning. data_path: e.g. 'rotation_euler' (only the name of the curves).
+    cycle: None (open), 'REPEAT' or 'REPEAT_OFFSET': every channel gets a plain Cycles modifier in
+    that mode before its handles are computed, so Blender's cycle-aware auto handles apply (the seam
+    is a key like the others) and frames outside the keys repeat the period."""
     key_values = np.asarray(key_values, dtype=np.float64)
     key_values = key_values.reshape(len(key_values), -1)
     frames = np.asarray(frames, dtype=np.float64)
@@ -456,7 +459,9 @@ def evaluate_scratch_keys(data_path, key_frames, key_values, frames, interpolati
     with scratch_channels() as scratch:
         for c in range(key_values.shape[1]):
             fcurve = scratch.write(data_path, c, key_frames, key_values[:, c], interpolation=interpolation)
-            fcurve.update()  # Blender computes the automatic handles
+            if cycle is not None:
+                add_cycles(fcurve, cycle, cycle)
+            fcurve.update()  # Blender computes the automatic handles (cycle-aware with the modifier)
             out[:, c] = evaluate(fcurve, frames)
     return out
 
