@@ -80,6 +80,19 @@ KEY_TOLERANCE_DEG = 0.01
 REVERSAL_DEG = 150.0
 
 
+# What the menus and reports call each source ("C2 Spline", "Blender Euler XYZ"); the JSON keeps the
+# identifiers.
+SOURCE_NAMES = dict({method: methods.label(method) for method in methods.ALL},
+                    BLENDER="Blender (as keyed)", BLENDER_QUATERNION="Blender Quaternion")
+
+
+def source_label(source):
+    """'Slerp', 'C2 Spline', 'Blender Euler XYZ', 'Blender (as keyed)' for a source identifier."""
+    if source.startswith("BLENDER_EULER_"):
+        return "Blender Euler " + source[len("BLENDER_EULER_"):]
+    return SOURCE_NAMES.get(source, source)
+
+
 def euler_source(order):
     """Source name of Blender's Euler mode in `order`: 'BLENDER_EULER_XYZ', …"""
     return "BLENDER_EULER_" + order
@@ -281,7 +294,7 @@ class CompareReport:
                                                  % t.loop.period))
             lines.append("  %-22s %12s %12s %12s" % ("source", "max dev", "speed ratio", "path length"))
             for row in t.table_rows():
-                lines.append("  %-22s %12s %12s %12s" % row)
+                lines.append("  %-22s %12s %12s %12s" % ((source_label(row[0]),) + row[1:]))
             for b in t.path_rule:
                 lines.append("  path rule: " + b.text())
             lines.append("  -> " + t.recommendation.get("text", ""))

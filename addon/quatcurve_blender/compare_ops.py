@@ -19,7 +19,8 @@ KEY_INTERPOLATION_ITEMS = (
 
 # Display names of the compared sources (the report and the CLI keep the source identifiers).
 METHOD_NAMES = {method: methods.label(method) for method in methods.ALL}
-SOURCE_NAMES = dict(METHOD_NAMES, BLENDER="Blender (as keyed)", BLENDER_QUATERNION="Blender Quaternion")
+SOURCE_NAMES = compare.SOURCE_NAMES
+source_label = compare.source_label  # 'Slerp', 'Blender Euler XYZ', 'Blender (as keyed)'; lives in compare.py
 
 
 def compare_properties():
@@ -78,13 +79,6 @@ def source_rows(comparison):
                      "velocity_jump_deg": compare._deg(m["max_velocity_jump"]),
                      "acceleration_jump_deg": compare._deg(m["max_acceleration_jump"])})
     return rows
-
-
-def source_label(source):
-    """'Slerp', 'Blender Euler XYZ', 'Blender (as keyed)' for a source identifier."""
-    if source.startswith("BLENDER_EULER_"):
-        return "Blender Euler " + source[len("BLENDER_EULER_"):]
-    return SOURCE_NAMES.get(source, source)
 
 
 def recommendation_sentence(recommendation):

@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import compare, compare_ops, fit_ops, native, opsutil, reduce_ops, trails
+from . import compare, compare_ops, fit_ops, methods, native, opsutil, reduce_ops, trails
 
 
 def draw_status(layout):
@@ -446,7 +446,7 @@ def draw_trail_status(layout, context, settings):
     col.label(text="%s: frames %g..%g" % (target.name, trail.frames[0], trail.frames[-1]))
     col.label(text="Magenta: Blender's evaluation")
     if method:
-        col.label(text="Cyan: %s" % method)
+        col.label(text="Cyan: %s" % methods.label(method))
 
 
 # The task panels in the order they are drawn (a new task: one class here).
