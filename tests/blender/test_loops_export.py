@@ -277,3 +277,38 @@ def test_cli_gltf_writes_one_period(loops, tmp_path):
         times, values, _ = glb_file.samplers[glb_file.node(target.bone or target.object.name)]
         np.testing.assert_allclose(times[[0, -1]], np.float32([loop.start / FPS, loop.end / FPS]), rtol=0, atol=1e-6)
         assert (values[0] == values[-1]).all(), name
+
+
+@pytest.mark.parametrize("task", [["--fit", "--method", "SQUAD", "--tolerance", "0.05"], ["--convert", "QUATERNION"],
+                                  ["--convert", "ZXY"]])
+def test_cli_fits_and_converts_loops_keeping_them_loops(loops, tmp_path, task):
+    """--fit and --convert on the quaternion loop, the uneven Euler loop, the offset wheel and the rig's
+    bones: every target stays a loop over the same period (its Cycles modifiers kept; a wheel
+    converted to quaternions repeats: a quaternion loop has no offset)."""
+    from test_cli import run_cli
+    source, out = tmp_path / "loops.blend", tmp_path / "out.blend"
+    periods = {name: cycles.loop_of(t) for name, (_, t) in loops.items()}
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    proc = run_cli(task + ["--output", out, source])
+    assert proc.returncode == 0, proc.stderr
+    bpy.ops.wm.open_mainfile(filepath=str(out), load_ui=False)
+    for name, loop in periods.items():
+        obj_name, _, bone = name.partition("/")
+        target = targets.Target(bpy.data.objects[obj_name], bone or None)
+        after = cycles.loop_of(target)
+        assert after is not None and (after.start, after.end) == (loop.start, loop.end), (name, after, proc.stdout)
+
+
+def test_cli_gltf_with_an_explicit_method_writes_one_period(loops, tmp_path):
+    """--gltf-curve SQUAD on loops: one period per sampler, the first and last keys equal."""
+    from test_cli import run_cli
+    source, out = tmp_path / "loops.blend", tmp_path / "loops.glb"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    proc = run_cli(["--gltf", out, "--gltf-curve", "SQUAD", source])
+    assert proc.returncode == 0, proc.stderr
+    glb_file = GltfFile(str(out))
+    for name, (owner, target) in loops.items():
+        loop = cycles.loop_of(target)
+        times, values, _ = glb_file.samplers[glb_file.node(target.bone or target.object.name)]
+        np.testing.assert_allclose(times[[0, -1]], np.float32([loop.start / FPS, loop.end / FPS]), rtol=0, atol=1e-6)
+        assert (values[0] == values[-1]).all(), name
