@@ -312,3 +312,50 @@ def test_cli_gltf_with_an_explicit_method_writes_one_period(loops, tmp_path):
         times, values, _ = glb_file.samplers[glb_file.node(target.bone or target.object.name)]
         np.testing.assert_allclose(times[[0, -1]], np.float32([loop.start / FPS, loop.end / FPS]), rtol=0, atol=1e-6)
         assert (values[0] == values[-1]).all(), name
+
+
+# ---- axis-angle loops, an action's Cyclic Animation range ------------------------------------------------
+
+def axis_angle_loop(name="AxisLoop", cyclic_range=True):
+    """An axis-angle loop (a spin about a tilted axis and back), its action a Cyclic Animation over the
+    loop's keys (manual frame range, use_cyclic)."""
+    owner = add_empty(name, "AXIS_ANGLE")
+    key(owner, "rotation_axis_angle", ((1, (0.2, 0.3, 1, 0.1)), (9, (1.3, 0.3, 1, 0.1)),
+                                       (20, (0.6, 1, 0.2, 0.3)), (25, (0.2, 0.3, 1, 0.1))))
+    make_cyclic(owner, "rotation_axis_angle")
+    action = owner.animation_data.action
+    if cyclic_range:
+        action.use_frame_range, action.frame_start, action.frame_end = True, 1, 25
+        action.use_cyclic = True
+    return owner, targets.Target(owner)
+
+
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD"])
+def test_axis_angle_loop_with_a_cyclic_range_fits_and_bakes_as_a_loop(scene, method):
+    from quatcurve_blender import fit
+    scene.render.fps = FPS
+    fitted, target = axis_angle_loop("Fitted")
+    loop = cycles.loop_of(target)
+    assert loop == cycles.Loop(1.0, 25.0, False)
+    frames = three_periods(loop)
+    want = closed_curve(target, method).sample(frames)
+    fit.fit([target], fit.FitSettings(method=method, tolerance=0.05))
+    assert cycles.loop_of(target) == loop
+    error = np.degrees(angles_between(played(fitted, frames), want)).max()
+    assert error < 0.05, error
+    baked, target = axis_angle_loop("Baked")
+    whole = three_periods(loop, per_frame=1)  # baked LINEAR keys at every frame: compared there
+    want = closed_curve(target, method).sample(whole)
+    result = bake.bake([target], bake.BakeSettings(method=method))
+    assert "one period baked" in " ".join(result.targets[0].notes)
+    assert cycles.loop_of(target) is not None
+    error = np.degrees(angles_between(played(baked, whole), want)).max()
+    assert error < 1e-3, error
+
+
+def test_a_cyclic_range_that_is_not_the_loop_is_refused(scene):
+    from quatcurve_blender import fit
+    owner, target = axis_angle_loop("Short")
+    owner.animation_data.action.frame_end = 20
+    with pytest.raises(fit.FitError, match="Cyclic Animation over frames 1–20"):
+        fit.fit([target], fit.FitSettings(method="SQUAD"))
