@@ -262,11 +262,8 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
     frames = times * fps
     whole = np.round(frames)
     frames = np.where(np.abs(frames - whole) < 1e-3, whole, frames)  # float32 seconds -> the exporter's frames
-    played = playback(target, frames)
-    a, b, residual = node_map(exported, played)
-    if residual > MAP_TOLERANCE:
-        return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: "
-                "constraints, drivers, NLA or a parent's scale move it)" % math.degrees(residual))
+    # The target's curve first: keys a method cannot be built from are refused whatever the exporter
+    # wrote for them.
     curve, how = reference(target, settings)
     try:
         loop = cycles.loop_of(target)
@@ -274,6 +271,11 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
         if not how.startswith("Blender's playback"):
             raise
         loop = None  # Blender's playback of any modifiers, over the exporter's frames, as before
+    played = playback(target, frames)
+    a, b, residual = node_map(exported, played)
+    if residual > MAP_TOLERANCE:
+        return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: "
+                "constraints, drivers, NLA or a parent's scale move it)" % math.degrees(residual))
     if loop is not None:  # one period: the first key to the last
         frames = np.array([loop.start, loop.end])
         how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
