@@ -359,3 +359,42 @@ def test_a_cyclic_range_that_is_not_the_loop_is_refused(scene):
     owner.animation_data.action.frame_end = 20
     with pytest.raises(fit.FitError, match="Cyclic Animation over frames 1–20"):
         fit.fit([target], fit.FitSettings(method="SQUAD"))
+
+
+@pytest.mark.parametrize("task", [["--method", "SQUAD"], ["--reduce", "--tolerance", "0.1"],
+                                  ["--convert", "QUATERNION"]])
+def test_batch_passes_loops_through_every_task(loops, tmp_path, task):
+    """A batch run over a .blend of loops (bake, reduce, convert): the saved file keeps every target a
+    loop over its period; --gltf writes one period per sampler."""
+    from test_batch import read_results, run_batch
+    source = tmp_path / "loops.blend"
+    periods = {name: cycles.loop_of(t) for name, (_, t) in loops.items()}
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    out = tmp_path / "out"
+    proc = run_batch(task + ["--jobs", "1", "--output", out, source])
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, _ = read_results(out)
+    assert records["loops.blend"]["status"] == "done", records
+    bpy.ops.wm.open_mainfile(filepath=str(out / "loops.blend"), load_ui=False)
+    for name, loop in periods.items():
+        obj_name, _, bone = name.partition("/")
+        target = targets.Target(bpy.data.objects[obj_name], bone or None)
+        after = cycles.loop_of(target)
+        assert after is not None and (after.start, after.end) == (loop.start, loop.end), (name, after, proc.stdout)
+
+
+def test_batch_gltf_writes_one_period(loops, tmp_path):
+    from test_batch import read_results, run_batch
+    source = tmp_path / "loops.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    out = tmp_path / "gltf"
+    proc = run_batch(["--gltf", tmp_path / "unused.glb", "--jobs", "1", "--output", out, source])
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, _ = read_results(out)
+    assert records["loops.blend"]["status"] == "done", records
+    glb_file = GltfFile(str(out / "loops.glb"))
+    for name, (owner, target) in loops.items():
+        loop = cycles.loop_of(target)
+        times, values, _ = glb_file.samplers[glb_file.node(target.bone or target.object.name)]
+        np.testing.assert_allclose(times[[0, -1]], np.float32([loop.start / FPS, loop.end / FPS]), rtol=0, atol=1e-6)
+        assert (values[0] == values[-1]).all(), name
