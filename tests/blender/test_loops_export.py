@@ -188,10 +188,7 @@ def test_reduce_keeps_the_period_and_modifier_and_its_bound_holds_across_the_sea
 def test_a_modifier_that_is_no_loop_is_refused_naming_target_channel_and_modifier(loops, task, tmp_path):
     owner, target = loops["EulerLoop"]
     loop_curves(owner, "rotation_euler")[1].modifiers.new("NOISE")
-    # glTF with a method given reads the keys through fit.py, which refuses every modifier until it
-    # takes loops (another branch): the refusal names a target and channel either way.
-    message = (r"EulerLoop: rotation_euler\[1\] has F-curve modifiers after its Cycles modifier \(NOISE\)"
-               if task != "gltf" else r"Loop: rotation_\w+\[\d\] has F-curve modifiers")
+    message = r"EulerLoop: rotation_euler\[1\] has F-curve modifiers after its Cycles modifier \(NOISE\)"
     with pytest.raises(targets.TargetError, match=message):
         if task == "bake":
             bake.bake([target], bake.BakeSettings())
