@@ -147,7 +147,7 @@ def test_bake_with_tolerance_reduces_one_period_within_it_everywhere(loops, tmp_
     want = {}
     for name, (owner, target) in loops.items():
         loop = cycles.loop_of(target)
-        frames = three_periods(loop, per_frame=8)
+        frames = three_periods(loop, per_frame=64)
         want[name] = (frames, closed_curve(target, "SQUAD").sample(frames))
     result = bake.bake([t for _, t in loops.values()], bake.BakeSettings(method="SQUAD", tolerance=tolerance))
     for t in result.targets:
@@ -166,7 +166,7 @@ def test_reduce_keeps_the_period_and_modifier_and_its_bound_holds_across_the_sea
     want = {}
     for name, (owner, target) in loops.items():
         loop = cycles.loop_of(target)
-        frames = three_periods(loop, per_frame=8)
+        frames = three_periods(loop, per_frame=64)
         want[name] = (loop, frames, played(owner, frames))
     tolerance = 0.1
     result = reduce.reduce(found, reduce.ReduceSettings(tolerance=tolerance))

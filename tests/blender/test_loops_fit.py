@@ -25,7 +25,7 @@ from test_fit import fresh_blender_quats
 METHODS = fit.METHODS
 TOL = 0.05        # degrees
 PERIODS = 3       # periods checked before and after the keyed one
-PER_FRAME = 16    # check points per frame over the seven periods (and 200 random times)
+PER_FRAME = 64    # check points per frame over the seven periods (and 200 random times)
 
 
 def quat(axis, degrees):
