@@ -41,7 +41,7 @@ constexpr double kTightenMargin = 0.97;   // a failing scale shrinks by at least
 constexpr int kAllocationSteps = 40;      // multiplier updates of the allocation
 constexpr double kMultiplierPower = 6.0;  // λ ← λ·(E / target)^this
 constexpr int kBracketSteps = 10;         // verifications to bracket the largest passing scale
-constexpr int kBisectSteps = 4;           // then bisections of the bracket
+constexpr int kBisectSteps = 2;           // then bisections of the bracket
 constexpr int kMeasureRounds = 2;         // measurement + allocation rounds (stages 2–4)
 constexpr double kMinScale = 1.0 / 16.0, kMaxScale = 64.0;  // α_j per allocation
 
