@@ -277,8 +277,8 @@ def load_plan(path):
 def new_record(plan, entry, digest):
     return {"input": entry["input"], "output": entry["output"], "operation": plan["operation"],
             "options": plan["options"], "digest": digest, "status": "failed", "targets": [],
-            "keys_before": 0, "keys_after": 0, "max_error_deg": None, "reason": None, "seconds": 0.0,
-            "phase_seconds": {}}
+            "keys_before": 0, "keys_after": 0, "max_error_deg": None, "max_distance": None, "reason": None,
+            "seconds": 0.0, "phase_seconds": {}}
 
 
 def read_records(output):
@@ -377,6 +377,8 @@ def progress_line(record):
     if record["status"] == "failed":
         return "%s: failed: %s" % (record["input"], record["reason"])
     error = "" if record["max_error_deg"] is None else ", %.3f°" % record["max_error_deg"]
+    if record.get("max_distance") is not None:
+        error += ", worst distance %.6g" % record["max_distance"]
     return "%s: %s, %s → %s keys%s, %.1f s" % (record["input"], record["status"], _count(record["keys_before"]),
                                               _count(record["keys_after"]), error, record["seconds"])
 
@@ -541,6 +543,10 @@ def summarize(plan, records, seconds=None, jobs=None):
     present = [r for r in records if r["status"] in ("done", "skipped")]
     errors = [(r["max_error_deg"], r["input"]) for r in present if r["max_error_deg"] is not None]
     worst = max(errors, key=lambda e: e[0]) if errors else (None, None)
+    distances = [(r["max_distance"], r["input"]) for r in present if r.get("max_distance") is not None]
+    farthest = max(distances, key=lambda e: e[0]) if distances else (None, None)
+    if worst[1] is None:
+        worst = (None, farthest[1])
     counts = {status: sum(r["status"] == status for r in records) for status in ("done", "skipped", "failed")}
     work = sum(r["seconds"] for r in records)
     phases = {phase: round(sum(r["phase_seconds"].get(phase, 0.0) for r in records), 3)
@@ -555,7 +561,7 @@ def summarize(plan, records, seconds=None, jobs=None):
             "done": counts["done"], "skipped": counts["skipped"], "failed": counts["failed"],
             "missing": len(plan["files"]) - len(records),
             "keys_before": sum(r["keys_before"] for r in present), "keys_after": sum(r["keys_after"] for r in present),
-            "max_error_deg": worst[0], "worst_input": worst[1],
+            "max_error_deg": worst[0], "max_distance": farthest[0], "worst_input": worst[1],
             "failures": [{"input": r["input"], "reason": r["reason"]} for r in records if r["status"] == "failed"],
             "timing": timing}
 
@@ -565,6 +571,7 @@ def summary_table(summary):
     head = ("files", "done", "skipped", "failed", "keys before", "keys after", "worst error", "time", "files/s")
     row = (_count(summary["files"]), _count(summary["done"]), _count(summary["skipped"]), _count(summary["failed"]),
            _count(summary["keys_before"]), _count(summary["keys_after"]),
+           "%.6g" % summary["max_distance"] if summary.get("max_distance") is not None else
            "-" if summary["max_error_deg"] is None else "%.4f°" % summary["max_error_deg"],
            "-" if t["seconds"] is None else "%.1f s" % t["seconds"],
            "-" if t["files_per_second"] is None else "%.2f" % t["files_per_second"])
@@ -751,7 +758,8 @@ def work_on(plan, task, args, index):
         phases["save"] = time.perf_counter() - begin - phases["load"] - phases["task"]
         record.update(status="done", targets=outcome.targets, keys_before=outcome.keys_before,
                       keys_after=outcome.keys_after,
-                      max_error_deg=None if outcome.max_error_deg is None else round(outcome.max_error_deg, 6))
+                      max_error_deg=None if outcome.max_error_deg is None else round(outcome.max_error_deg, 6),
+                      max_distance=None if outcome.max_distance is None else float("%.9g" % outcome.max_distance))
     except (UsageError, targets.TargetError, RuntimeError, OSError, ValueError) as error:
         # Paths as the records name them: relative to the inputs' and the outputs' folders.
         reason = str(error).replace(entry["path"], entry["input"]).replace(output, entry["output"])

@@ -153,6 +153,16 @@ def add_task_arguments(p):
                    help="interpolation of the kept keys (default BEZIER: the fewest keys)")
     g.add_argument("--synchronized", action="store_true",
                    help="the same key frames on every rotation channel of a target")
+    g.add_argument("--error", dest="reduce_error", choices=reduce.ERRORS, default="ANGLE",
+                   help="the bound: ANGLE (default: each target's rotation within --tolerance) or DISTANCE "
+                        "(per armature, every bone's tail and the points at --shell along its axes within "
+                        "--distance in the armature's space)")
+    g.add_argument("--distance", type=float, default=0.0, metavar="LENGTH",
+                   help="--error DISTANCE: how far a tail or shell point may move, in scene units (default 0: "
+                        "1 mm in real size)")
+    g.add_argument("--shell", type=float, default=0.0, metavar="LENGTH",
+                   help="--error DISTANCE: the shell points' distance from each bone's head, in scene units "
+                        "(default 0: 10 cm in real size)")
 
     g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
                                      "Blender's glTF exporter, each rotation sampler replaced by few slerp "
@@ -229,12 +239,14 @@ def refuse_options(args, table, why):
 
 
 # Options only --reduce uses.
-REDUCE_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"))
+REDUCE_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"),
+               ("reduce_error", "ANGLE", "--error"), ("distance", 0.0, "--distance"), ("shell", 0.0, "--shell"))
 
 
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
-    refuse_options(args, REDUCE_ONLY, "not an option of a bake (they are --reduce's)")
+    refuse_options(args, REDUCE_ONLY, "not an option of a bake (they are --reduce's; for a distance bound, bake "
+                                      "with --tolerance 0, then --reduce --error DISTANCE)")
     if args.tolerance is None:
         args.tolerance = 0.0
     frame_range = tuple(args.frame_range) if args.frame_range else (None, None)
@@ -291,7 +303,12 @@ def reduce_settings(args):
     defaults = reduce.ReduceSettings()
     settings = reduce.ReduceSettings(
         tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
-        interpolation=args.reduce_interpolation, synchronized=args.synchronized, new_action=args.new_action)
+        interpolation=args.reduce_interpolation, synchronized=args.synchronized, new_action=args.new_action,
+        error=args.reduce_error, distance=args.distance, shell=args.shell)
+    if settings.error == "DISTANCE" and args.tolerance is not None:
+        raise UsageError("--tolerance: not an option of --reduce --error DISTANCE (its bound is --distance)")
+    if settings.error == "ANGLE" and (args.distance or args.shell):
+        raise UsageError("--distance, --shell: options of --error DISTANCE")
     try:
         reduce.check_settings(settings)
     except reduce.ReduceError as error:
@@ -571,13 +588,15 @@ class Outcome:
     """What a task did, in the terms every task shares (batch's records): the targets' names, rotation
     keys before and after (as the task counts them), and the largest error measured after the
     operation by the task's own check, in degrees (None where the task has no bound: a bake with
-    tolerance 0 writes the method's samples themselves)."""
+    tolerance 0 writes the method's samples themselves). max_distance: a reduction under the distance
+    bound's worst virtual-vertex distance in scene units (its bound is not an angle), else None."""
 
-    def __init__(self, targets, keys_before, keys_after, max_error_deg):
+    def __init__(self, targets, keys_before, keys_after, max_error_deg, max_distance=None):
         self.targets = list(targets)
         self.keys_before = int(keys_before)
         self.keys_after = int(keys_after)
         self.max_error_deg = None if max_error_deg is None else float(max_error_deg)
+        self.max_distance = None if max_distance is None else float(max_distance)
 
 
 class Task:
@@ -704,8 +723,10 @@ class ReduceTask(Task):
         if hasattr(scene, "quatcurve_reduce"):
             scene.quatcurve_reduce.last_summary = result.summary()
             scene.quatcurve_reduce.last_lines = "\n".join(result.lines())
-        print("quatcurve %s (Blender %s): reduce, tolerance %g°, %s keys, %s → %s" % (
-            native.require().__version__, bpy.app.version_string, settings.tolerance, settings.interpolation,
+        bound = ("tolerance %g°" % settings.tolerance if settings.error == "ANGLE" else
+                 "distance %s, shell %s" % (result.length(result.distance), result.length(result.shell)))
+        print("quatcurve %s (Blender %s): reduce, %s, %s keys, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, bound, settings.interpolation,
             os.path.basename(source), "in place" if source == output else output))
         for line in result.lines():
             print("  " + line)
@@ -713,6 +734,9 @@ class ReduceTask(Task):
         return result
 
     def outcome(self, result):
+        if result.error == "DISTANCE":
+            return Outcome([t.name for t in result.targets], result.keys_before, result.keys_after, None,
+                           max_distance=result.worst_distance)
         return Outcome([t.name for t in result.targets], result.keys_before, result.keys_after,
                        result.max_error_deg)
 

@@ -16,10 +16,14 @@
 //      again). Stage 4 runs for the dominant-shell budgets, for one angle for all, and after each of
 //      two rounds of stages 2–3; the passing result with fewest keys is kept.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "quatcurve/errors.hpp"
 #include "quatcurve/quat.hpp"
@@ -37,7 +41,7 @@ constexpr double kTightenMargin = 0.97;   // a failing scale shrinks by at least
 constexpr int kAllocationSteps = 40;      // multiplier updates of the allocation
 constexpr double kMultiplierPower = 6.0;  // λ ← λ·(E / target)^this
 constexpr int kBracketSteps = 10;         // verifications to bracket the largest passing scale
-constexpr int kBisectSteps = 4;           // then bisections of the bracket
+constexpr int kBisectSteps = 2;           // then bisections of the bracket
 constexpr int kMeasureRounds = 2;         // measurement + allocation rounds (stages 2–4)
 constexpr double kMinScale = 1.0 / 16.0, kMaxScale = 64.0;  // α_j per allocation
 
@@ -92,12 +96,45 @@ std::vector<Quat> evaluate_bone(const Problem& pr, std::size_t b, const ReducedK
     return out;
 }
 
+// f(i) for every i in [0, count), on up to hardware_concurrency() threads (this one included), in
+// no set order. f(i) must touch only what belongs to i. The first exception thrown is rethrown here
+// once every thread has stopped.
+template <class F>
+void parallel_for(std::size_t count, F&& f) {
+    const std::size_t threads = std::min<std::size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
+    if (threads <= 1) {
+        for (std::size_t i = 0; i < count; ++i) f(i);
+        return;
+    }
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
+    auto work = [&] {
+        for (std::size_t i; (i = next.fetch_add(1)) < count;) {
+            try {
+                f(i);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure) failure = std::current_exception();
+                next = count;  // the others stop at their next item
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+    for (std::thread& thread : pool) thread.join();
+    if (failure) std::rethrow_exception(failure);
+}
+
 // A bone reduced at a budget: its keys and their evaluated rotations (cached per budget).
 struct Reduced {
     ReducedKeys keys;
     std::vector<Quat> rotation;
 };
 
+// Reducer::at for different bones may run on different threads at once (each bone has its own
+// cache); for one bone, on one thread at a time.
 class Reducer {
 public:
     explicit Reducer(const Problem& pr) : pr_(pr), cache_(pr.bones) {}
@@ -309,8 +346,10 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
     std::vector<Mat4> poses;
     int rounds = 0;
 
+    // Every bone's reduction is independent of the others': on worker threads (the caller's Python
+    // releases the GIL), the same keys as one after the other.
     auto reduce_all = [&] {
-        for (std::size_t b = 0; b < bones; ++b) reduced[b] = &reducer.at(b, budgets[b]);
+        parallel_for(bones, [&](std::size_t b) { reduced[b] = &reducer.at(b, budgets[b]); });
         ++rounds;
     };
     auto keep_if_best = [&](const VertexError& error) {
@@ -366,6 +405,12 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
             for (std::size_t b = 0; b < bones; ++b) order[b] = b;
             std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
                 return reduced[a]->keys.key_count() > reduced[b]->keys.key_count();
+            });
+            // Each bone's loosened reduction, ahead on worker threads: bone j's budget and keys change
+            // only at its own turn below, so these are the reductions the turns ask for.
+            parallel_for(bones, [&](std::size_t j) {
+                if (reduced[j]->keys.key_count() > pr.min_keys[j] && budgets[j] < kPi)
+                    reducer.at(j, std::min(kPi, budgets[j] * factor));
             });
             for (const std::size_t j : order) {
                 if (reduced[j]->keys.key_count() <= pr.min_keys[j] || budgets[j] >= kPi) continue;
