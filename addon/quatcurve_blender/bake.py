@@ -5,6 +5,12 @@ code. Data flows one way: targets.py reads each target's keys → a native curve
 native channel values of the output rotation mode (quatcurve.quats_to_channels) → write.py writes
 them (optionally reduced first by reduce.reduce_values).
 
+With error='DISTANCE' the targets are baked dense (every `step` frames), then the written action is
+reduced by reduce.reduce(error='DISTANCE') — the reduction the `quatcurve.reduce` operator runs —
+so every armature's virtual vertices stay within `distance` of the dense bake's at every frame and
+key (objects: their own shell points). A refusal of the reduction after the dense keys are written
+removes the new actions again.
+
     found = targets.gather_targets(bpy.context)        # or [targets.Target(obj), targets.Target(rig, "Bone")]
     result = bake.bake(found, bake.BakeSettings(method="SQUAD", rotation_mode="QUATERNION"))
     print(result.summary())
@@ -28,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import cycles, fcurves, fit, methods, native, path_rule, targets, write
+from . import cycles, fcurves, fit, methods, native, path_rule, reduce, targets, write
 from .workers import parallel_imap, parallel_map, thread_count
 from .reduce import reduce_values as reduce_keys
 from .targets import TargetError, num
@@ -60,6 +66,9 @@ class BakeSettings:
     bias: float = 0.0                 # TCB
     shortest_path: bool = True        # SLERP
     clamped: bool = True              # SQUAD, TCB, CATMULL_ROM: overshoot-free tangents (False: textbook)
+    error: str = "ANGLE"              # DISTANCE: baked dense, then reduced as reduce(error='DISTANCE')
+    distance: float = 0.0             # DISTANCE: scene units (0: 1 mm in real size), as ReduceSettings
+    shell: float = 0.0                # DISTANCE: scene units (0: 10 cm in real size)
 
     def curve_options(self):
         """Keyword options of quatcurve.Curve for this method (only the ones it accepts)."""
@@ -77,6 +86,26 @@ def check_settings(settings):
         raise BakeError("step %s: must be at least 1 frame" % num(settings.step))
     if not (settings.tolerance >= 0):
         raise BakeError("tolerance %s°: must be 0 or more" % num(settings.tolerance))
+    if settings.error not in reduce.ERRORS:
+        raise BakeError("error %r: unknown (expected ANGLE or DISTANCE)" % (settings.error,))
+    if settings.error == "DISTANCE":
+        if settings.tolerance != 0:
+            raise BakeError("tolerance %s°: the distance bound is the reduction's bound (give tolerance 0 with "
+                            "error DISTANCE)" % num(settings.tolerance))
+        if not settings.new_action:
+            raise BakeError("error DISTANCE bakes into a new action (its dense keys are written, then reduced; a "
+                            "refusal of the reduction removes them again): turn New Action on")
+    try:
+        reduce.check_settings(distance_settings(settings))
+    except reduce.ReduceError as error:
+        raise BakeError(str(error)) from None
+
+
+def distance_settings(settings):
+    """The ReduceSettings of a bake's reduction under the distance bound (error='DISTANCE'): in place
+    on the action the bake wrote, BEZIER keys per channel."""
+    return reduce.ReduceSettings(error="DISTANCE", distance=settings.distance, shell=settings.shell,
+                                 new_action=False)
 
 
 def bake_frames(frame_start, frame_end, step):
@@ -143,10 +172,21 @@ class BakeResult:
     targets: list = field(default_factory=list)
     keys_written: int = 0
     seconds: float = 0.0
+    reduction: object = None     # error='DISTANCE': the reduce.ReduceResult of the dense bake's reduction
 
     def summary(self):
-        return "%d target%s, %s keys, %.2f s" % (len(self.targets), "" if len(self.targets) == 1 else "s",
-                                                f"{self.keys_written:,}", self.seconds)
+        text = "%d target%s, %s keys" % (len(self.targets), "" if len(self.targets) == 1 else "s",
+                                         f"{self.keys_written:,}")
+        r = self.reduction
+        if r is not None:
+            text += ", worst distance %s (bound %s, shell %s) at every frame and key of the dense bake" % (
+                r.length(r.worst_distance), r.length(r.distance), r.length(r.shell))
+        return text + ", %.2f s" % self.seconds
+
+    @property
+    def worst_distance(self):
+        """error='DISTANCE': the worst virtual-vertex distance (scene units), else None."""
+        return None if self.reduction is None else self.reduction.worst_distance
 
     def lines(self):
         """One line per target, each followed by its notes (held channels, modifiers, NLA, …)."""
@@ -156,6 +196,8 @@ class BakeResult:
                        % (t.name, methods.label(self.method), t.source_mode, t.output_mode, t.source_keys,
                           f"{t.keys_written:,}", t.action))
             out.extend(t.notes)
+        if self.reduction is not None:
+            out.extend("reduced: " + line for line in self.reduction.lines())
         return out
 
     def notes(self):
@@ -328,6 +370,7 @@ class BakePlan:
         writes = (self._write_of(item) for item in items)
         if not settings.new_action:
             writes = list(writes)
+        before = _assignments(self.items)
         try:
             actions = write.write_rotations(writes, settings.new_action, settings.method.lower())
         finally:
@@ -335,8 +378,10 @@ class BakePlan:
                 computing.close()  # a failure: stop the workers now, not when the generator is collected
         self.computed = len(self.items)
         result = BakeResult(settings.method, float(self.frames[0]), float(self.frames[-1]))
+        if settings.error == "DISTANCE":
+            result.reduction = self._reduce_distance(before, actions)
         for item, action in zip(self.items, actions):
-            count = self._write_of(item).key_count
+            count = self._write_of(item).key_count if result.reduction is None else _rotation_keys(item)
             result.keys_written += count
             result.targets.append(TargetResult(item.target.name, item.source.mode, item.output_mode,
                                                len(item.source.frames), count, action.name,
@@ -345,6 +390,26 @@ class BakePlan:
         self.seconds += time.perf_counter() - begin
         result.seconds = self.seconds
         return result
+
+    def _reduce_distance(self, before, actions):
+        """error='DISTANCE': the actions just written (the dense bake) reduced in place by
+        reduce.reduce(error='DISTANCE'), against the dense keys at every frame and key. A ReduceError
+        puts the original actions and rotation modes back, removes the new actions and becomes a
+        BakeError: the file is as it was."""
+        try:
+            return reduce.reduce([item.target for item in self.items], distance_settings(self.settings))
+        except BaseException as error:
+            for id_data, action, fake_user, owners in before.values():
+                if action is not None:
+                    fcurves.assign_action(id_data, action)
+                    action.use_fake_user = fake_user
+                for target, mode in owners:
+                    target.owner.rotation_mode = mode
+            for action in {a.name_full: a for a in actions}.values():
+                fcurves.remove_action(action)
+            if isinstance(error, TargetError):
+                raise BakeError("distance bound: %s" % error) from None
+            raise
 
     @staticmethod
     def _reduced_error_deg(item):
@@ -381,6 +446,47 @@ class BakePlan:
         return ("REPEAT", "REPEAT")
 
 
+def _assignments(items):
+    """{ID name: [ID, its action, the action's fake user, [(target, its rotation mode)]]} before a
+    write, to put back (error='DISTANCE', a refused reduction)."""
+    out = {}
+    for item in items:
+        id_data = item.target.id_data
+        if id_data.name_full not in out:
+            action = fcurves.active_action(id_data)
+            out[id_data.name_full] = [id_data, action, action.use_fake_user if action is not None else False, []]
+        out[id_data.name_full][3].append((item.target, item.target.owner.rotation_mode))
+    return out
+
+
+def _rotation_keys(item):
+    """The keys on the target's rotation channels of its output mode, as written now."""
+    prop, count = fcurves.rotation_property(item.output_mode)
+    channels = fcurves.Channels.of(item.target.id_data)
+    return sum(fcurves.key_count(f) for f in channels.find_all(item.target.data_path(prop), count) if f is not None)
+
+
+def _check_distance(found, loops):
+    """error='DISTANCE': refuses, before anything is written, what the reduction of the baked
+    action would refuse (skeleton.py: NLA, drivers, constraints, modifiers besides the baked
+    rotation channels, inherit scale, …) and loops (the bake writes Cycles modifiers, which the
+    distance bound does not model)."""
+    from . import skeleton
+    for target, loop in zip(found, loops):
+        if loop is not None:
+            raise BakeError("%s: a loop (Cycles modifier) is baked as one period with a Cycles modifier, which the "
+                            "distance bound does not model (bake with error ANGLE)" % target.name)
+    groups = {}
+    for target in found:
+        groups.setdefault(target.object.name_full, (target.object, []))[1].append(target)
+    for obj, group in groups.values():
+        bones = [t.bone for t in group if t.bone is not None]
+        if bones:
+            skeleton.check_armature(obj, bones)
+        if any(t.bone is None for t in group):
+            skeleton.check_object(obj)
+
+
 def prepare(found, settings):
     """Checks settings and targets (targets.Target) and reads every source; returns a BakePlan
     (nothing written). Raises BakeError naming what is wrong."""
@@ -397,6 +503,8 @@ def prepare(found, settings):
         if settings.rotation_mode != "KEEP":
             for target in found:
                 targets.refuse_drivers(target, *fcurves.rotation_property(settings.rotation_mode))
+        if settings.error == "DISTANCE":
+            _check_distance(found, loops)
     except TargetError as error:
         raise BakeError(str(error)) from None
     start, end = settings.frame_start, settings.frame_end

@@ -17,6 +17,13 @@ from .targets import TargetError
 
 METHOD_ITEMS = methods.enum_items(methods.ALL)
 
+ERROR_ITEMS = (
+    ("ANGLE", "Angle", "Tolerance above 0: each baked rotation reduced within the Tolerance (degrees) of the "
+                       "method, at every instant"),
+    ("DISTANCE", "Distance", "Baked dense, then reduced as Reduce Keys with Error Distance does: per armature, "
+                             "every bone's tail and shell points within Distance of the dense bake's"),
+)
+
 ROTATION_MODE_ITEMS = (
     ("KEEP", "Keep", "The target's current rotation mode"),
     ("QUATERNION", "Quaternion (WXYZ)", "Quaternion keys, hemisphere-continuous"),
@@ -65,6 +72,18 @@ def bake_properties():
                                      description="Bake into a new action named after the original, which is "
                                                  "kept (fake user) and untouched; off: replace the rotation "
                                                  "curves in place"),
+        "error": P.EnumProperty(
+            name="Error", items=ERROR_ITEMS, default="ANGLE",
+            description="What the reduction of the baked keys bounds: each rotation's angle (Tolerance), or how far "
+                        "the armature's bones move (Distance)"),
+        "distance": P.FloatProperty(
+            name="Distance", default=0.0, min=0.0, soft_max=0.1, precision=4, subtype="DISTANCE", unit="LENGTH",
+            description="How far, in scene units, any bone's tail or shell point may move from the dense bake's, in "
+                        "the armature's object space, on every frame and key; 0: 1 mm in real size"),
+        "shell": P.FloatProperty(
+            name="Shell", default=0.0, min=0.0, soft_max=1.0, precision=3, subtype="DISTANCE", unit="LENGTH",
+            description="Distance, in scene units, from each bone's head of the three points along its axes measured "
+                        "with its tail; 0: 10 cm in real size"),
     }
 
 
@@ -108,7 +127,8 @@ def settings_from(values, frame_range=(None, None)):
         method=values.method, rotation_mode=values.rotation_mode, frame_start=start, frame_end=end,
         step=values.step, tolerance=values.tolerance, new_action=values.new_action, tension=values.tension,
         continuity=values.continuity, bias=values.bias, shortest_path=values.shortest_path,
-        clamped=getattr(values, "clamped", True))
+        clamped=getattr(values, "clamped", True), error=getattr(values, "error", "ANGLE"),
+        distance=getattr(values, "distance", 0.0), shell=getattr(values, "shell", 0.0))
 
 
 class QUATCURVE_OT_bake(bpy.types.Operator):

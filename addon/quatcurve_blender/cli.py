@@ -156,7 +156,8 @@ def add_task_arguments(p):
     g.add_argument("--error", dest="reduce_error", choices=reduce.ERRORS, default="ANGLE",
                    help="the bound: ANGLE (default: each target's rotation within --tolerance) or DISTANCE "
                         "(per armature, every bone's tail and the points at --shell along its axes within "
-                        "--distance in the armature's space)")
+                        "--distance in the armature's space). On a bake (not --reduce): DISTANCE bakes dense, "
+                        "then reduces the baked keys so, against the dense bake")
     g.add_argument("--distance", type=float, default=0.0, metavar="LENGTH",
                    help="--error DISTANCE: how far a tail or shell point may move, in scene units (default 0: "
                         "1 mm in real size)")
@@ -238,19 +239,24 @@ def refuse_options(args, table, why):
         raise UsageError("%s: %s" % (", ".join(given), why))
 
 
-# Options only --reduce uses.
-REDUCE_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"),
-               ("reduce_error", "ANGLE", "--error"), ("distance", 0.0, "--distance"), ("shell", 0.0, "--shell"))
+# Options only --reduce uses, and the distance bound's, which --reduce and the bake use.
+REDUCE_KEYS_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"))
+DISTANCE_OPTIONS = (("reduce_error", "ANGLE", "--error"), ("distance", 0.0, "--distance"), ("shell", 0.0, "--shell"))
+REDUCE_ONLY = REDUCE_KEYS_ONLY + DISTANCE_OPTIONS
 
 
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
-    refuse_options(args, REDUCE_ONLY, "not an option of a bake (they are --reduce's; for a distance bound, bake "
-                                      "with --tolerance 0, then --reduce --error DISTANCE)")
+    refuse_options(args, REDUCE_KEYS_ONLY, "not an option of a bake (they are --reduce's)")
+    if args.reduce_error == "DISTANCE" and args.tolerance is not None:
+        raise UsageError("--tolerance: not an option of a bake with --error DISTANCE (its bound is --distance)")
+    if args.reduce_error == "ANGLE" and (args.distance or args.shell):
+        raise UsageError("--distance, --shell: options of --error DISTANCE")
     if args.tolerance is None:
         args.tolerance = 0.0
     frame_range = tuple(args.frame_range) if args.frame_range else (None, None)
     settings = bake_ops.settings_from(args, frame_range)
+    settings.error = args.reduce_error
     try:
         bake.check_settings(settings)
         if args.frame_range:
@@ -666,7 +672,7 @@ class BakeTask(Task):
         before = sum(t.source_keys * (4 if t.source_mode in ("QUATERNION", "AXIS_ANGLE") else 3)
                      for t in result.targets)
         return Outcome([t.name for t in result.targets], before, result.keys_written,
-                       max(errors) if errors else None)
+                       max(errors) if errors else None, max_distance=result.worst_distance)
 
     def save(self, result, output):
         report = self.report

@@ -102,6 +102,29 @@ def read_armature(obj, reduced_names):
     """ReadSkeleton of armature object `obj`, every bone posed, the bones named in `reduced_names`
     reduced. Raises TargetError as the module says, and as targets.read_rotation_keys for a bone to
     reduce (no rotation keys, drivers, jumps, NaN)."""
+    return _sampled_skeleton(obj, *_armature_channels(obj, reduced_names))
+
+
+def check_armature(obj, replaced_names):
+    """Raises TargetError where read_armature would refuse `obj` once the bones named in
+    `replaced_names` have new rotation keys (the bake's, before it writes them): their rotation
+    channels are not looked at; everything else is, without sampling anything."""
+    _armature_channels(obj, (), replaced=set(replaced_names))
+
+
+def check_object(obj):
+    """Raises TargetError where read_object would refuse `obj` once it has new rotation keys (the
+    bake's): what plays on it besides its keys, and modifiers on its scale."""
+    _refuse_animation_system(obj, None)
+    channels = fcurves.Channels.of(obj)
+    _refuse_modifiers(obj.name, "scale", _channel_fcurves(channels, Target(obj).data_path("scale"), 3))
+
+
+def _armature_channels(obj, reduced_names, replaced=frozenset()):
+    """The refusals of read_armature, and what it samples: (bones in parent-first order, per bone
+    (target, rotation mode, rotation property, {property: F-curves}), the keyed frames per property,
+    bone index by name, the names reduced). Bones in `replaced` have their rotation channels left
+    out of the checks."""
     _refuse_animation_system(obj, "pose.bones[")
     bones = _parent_first(list(obj.data.bones))
     index = {b.name: i for i, b in enumerate(bones)}
@@ -131,15 +154,16 @@ def read_armature(obj, reduced_names):
                  "location": _channel_fcurves(channels, target.data_path("location"), 3),
                  "scale": _channel_fcurves(channels, target.data_path("scale"), 3)}
         for p, f in found.items():
-            _refuse_modifiers(name, p, f)
+            if not (p == prop and bone.name in replaced):
+                _refuse_modifiers(name, p, f)
         if bone.name in wanted:
             targets.read_rotation_keys(target)  # refuses what today's reduction refuses
         keyed += [fcurves.key_frames([f for f in fs if f is not None]) for fs in found.values() if any(fs)]
         per_bone.append((target, pb.rotation_mode, prop, found))
-    missing = sorted(wanted - set(index))
+    missing = sorted((wanted | set(replaced)) - set(index))
     if missing:
         raise TargetError("%s: no bone %s" % (obj.name, missing[0]))
-    return _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted)
+    return bones, per_bone, keyed, index, wanted
 
 
 def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted):

@@ -32,7 +32,13 @@ def draw_bake_settings(layout, settings):
         row.prop(settings, "frame_start")
         row.prop(settings, "frame_end")
     col.prop(settings, "step")
-    col.prop(settings, "tolerance")
+    col = layout.column(align=True)
+    col.row(align=True).prop(settings, "error", expand=True)
+    if settings.error == "DISTANCE":
+        col.prop(settings, "distance", text="Distance (0: 1 mm)" if settings.distance == 0 else "Distance")
+        col.prop(settings, "shell", text="Shell (0: 10 cm)" if settings.shell == 0 else "Shell")
+    else:
+        col.prop(settings, "tolerance")
     layout.prop(settings, "new_action")
 
 

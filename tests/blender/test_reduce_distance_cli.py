@@ -77,7 +77,7 @@ def test_cli_reduce_distance_keeps_blenders_pose_within_the_default(clip, tmp_pa
 
 def test_cli_distance_options_are_refused_where_they_mean_nothing(clip, tmp_path):
     out = tmp_path / "out.blend"
-    for args, words in ((["--error", "DISTANCE"], "--error: not an option of a bake"),
+    for args, words in ((["--reduce-keys", "LINEAR"], "--reduce-keys: not an option of a bake"),
                         (["--reduce", "--distance", "0.1"], "--distance, --shell: options of --error DISTANCE"),
                         (["--reduce", "--error", "DISTANCE", "--tolerance", "0.1"],
                          "--tolerance: not an option of --reduce --error DISTANCE"),
