@@ -134,7 +134,7 @@ struct SkeletonReduction {
 //
 // How the budgets are chosen (every candidate verified as above, the passing one with fewest keys
 // kept): the dominant-shell budgets, and one angle for every bone, each scaled by the largest factor
-// that passes; then, twice, each bone's own share of the error is measured — the virtual vertices of
+// that passes; then each bone's own share of the error is measured — the virtual vertices of
 // its subtree with only that bone reduced — and the budgets are rescaled under a model linear in
 // each budget, loosening most the bones whose reduction saves many keys for little error, and
 // scaled to pass again; last, each bone is loosened on its own (×2, ×√2, ×2^¼, most keys first)
