@@ -133,8 +133,8 @@ struct SkeletonReduction {
 // unless even every bone at its float32 floor cannot reach it (then the last, tightest, try).
 //
 // How the budgets are chosen (every candidate verified as above, the passing one with fewest keys
-// kept): the dominant-shell budgets, and one angle for every bone, each scaled by the largest factor
-// that passes; then each bone's own share of the error is measured — the virtual vertices of
+// kept): the dominant-shell budgets scaled by the largest factor that passes (where none passes, one
+// angle for every bone, scaled so); then each bone's own share of the error is measured — the virtual vertices of
 // its subtree with only that bone reduced — and the budgets are rescaled under a model linear in
 // each budget, loosening most the bones whose reduction saves many keys for little error, and
 // scaled to pass again; last, each bone is loosened on its own (×2, ×√2, ×2^¼, most keys first)
