@@ -182,13 +182,14 @@ VertexError verify(const Problem& pr, const std::vector<const Reduced*>& reduced
 }
 
 // D_j: per bone j, the displacement of every virtual vertex of its subtree (subtree order, then sample,
-// then vertex) with only bone j's rotation replaced.
+// then vertex) with only bone j's rotation replaced. Bones on worker threads (each j writes out[j]
+// only): the same values as one after the other.
 std::vector<std::vector<float>> shares(const Problem& pr, const std::vector<const Reduced*>& reduced) {
     const std::size_t n = pr.n;
     std::vector<std::vector<float>> out(pr.bones);
-    std::vector<Mat4> work(pr.bones);
-    Vec3 v[kVirtualVertices];
-    for (std::size_t j = 0; j < pr.bones; ++j) {
+    parallel_for(pr.bones, [&](std::size_t j) {
+        std::vector<Mat4> work(pr.bones);
+        Vec3 v[kVirtualVertices];
         const std::vector<std::size_t>& sub = pr.subtree[j];
         out[j].assign(sub.size() * n * kVirtualVertices, 0.0f);
         for (std::size_t s = 0; s < n; ++s)
@@ -204,7 +205,7 @@ std::vector<std::vector<float>> shares(const Problem& pr, const std::vector<cons
                     out[j][(a * n + s) * kVirtualVertices + q] =
                         static_cast<float>(glm::length(v[q] - pr.verts0[k * kVirtualVertices + q]));
             }
-    }
+    });
     return out;
 }
 
