@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "quatcurve/euler.hpp"
 #include "quatcurve/fit.hpp"
 #include "quatcurve/reduce.hpp"
+#include "quatcurve/skeleton.hpp"
 #include "quatcurve/slerp_keys.hpp"
 
 namespace quatcurve::bindings {
@@ -588,6 +590,77 @@ every instant whatever its verdict. Slerp is bi-invariant: keys A·q·B (an expo
 parent maps) play the same motion turned, within the same bound. cyclic: as reduce_slerp. file_unit
 > 0 (seconds per frame): every sample the proof adds is a time a file of float32 seconds stores exactly
 (float32(t·file_unit)/file_unit), as the given times should be.)doc");
+
+    py::class_<SlerpBone>(m, "SlerpBone", R"doc(One bone's glTF rotation sampler for Skeleton.reduce_slerp: the times its keys are chosen
+among, and what they are held to.
+
+SlerpBone(times, reference=curve | (channels, channel_interpolation, mode), cyclic=False,
+file_unit=0.0): keys proved against the reference at every instant (reduce_slerp_proved; a
+playback's quaternion sign flips left out, as there). SlerpBone(times, samples=(N, 4)): keys held
+at the samples only (reduce_slerp), the proof unproven. times: (N >= 2,) increasing frames.)doc")
+        .def(py::init([](py::handle times, py::object reference, py::object samples, bool cyclic, double file_unit) {
+                 SlerpBone bone;
+                 bone.times = read_times(times);
+                 bone.cyclic = cyclic;
+                 bone.file_unit = file_unit;
+                 if (!reference.is_none() && !samples.is_none())
+                     throw py::value_error("SlerpBone: give a reference or samples, not both");
+                 if (py::isinstance<Curve>(reference)) {
+                     bone.reference = std::make_shared<OwnedCurveMotion>(reference.cast<Curve>());
+                 } else if (!reference.is_none()) {
+                     if (!py::isinstance<py::sequence>(reference) || py::len(reference) != 3)
+                         throw py::type_error("reference: expected a Curve or (channels, channel_interpolation, mode)");
+                     const py::sequence parts = reference.cast<py::sequence>();
+                     const RotationMode mode = parse_rotation_mode(parts[2].cast<std::string>());
+                     const KeyInterpolation ipo = parse_key_interpolation(parts[1].cast<std::string>());
+                     const py::sequence channels = parts[0].cast<py::sequence>();
+                     std::vector<FCurveKeys> original;
+                     for (std::size_t c = 0; c < channels.size(); ++c) original.push_back(read_fcurve_keys(channels[c], c));
+                     auto playback = std::make_shared<PlaybackMotion>(std::move(original), ipo, mode);
+                     if (mode.kind == RotationMode::Kind::quaternion) bone.excluded = quaternion_flips(*playback, bone.times);
+                     bone.reference = std::move(playback);
+                 } else if (!samples.is_none()) {
+                     const Batch q = read_rows(samples, 4, "samples", bone.times.size());
+                     bone.samples.resize(bone.times.size());
+                     for (std::size_t k = 0; k < bone.times.size(); ++k) bone.samples[k] = from_wxyz(q.data() + 4 * k);
+                 } else {
+                     throw py::value_error("SlerpBone: give a reference or samples");
+                 }
+                 return bone;
+             }),
+             py::arg("times"), py::kw_only(), py::arg("reference") = py::none(), py::arg("samples") = py::none(),
+             py::arg("cyclic") = false, py::arg("file_unit") = 0.0)
+        .def_property_readonly("times", [](const SlerpBone& b) { return vector_array(b.times); })
+        .def_readonly("cyclic", &SlerpBone::cyclic)
+        .def_property_readonly("proved", [](const SlerpBone& b) { return static_cast<bool>(b.reference); },
+                               "whether the keys are proved against a reference at every instant")
+        .def("__repr__", [](const SlerpBone& b) {
+            return "<SlerpBone " + std::to_string(b.times.size()) + " times, " +
+                   (b.reference ? "proved against a reference" : "held at samples") + (b.cyclic ? ", cyclic>" : ">");
+        });
+
+    m.def(
+        "play_slerp_keys",
+        [](py::handle key_times, py::handle keys, py::handle at, bool cyclic) {
+            const std::vector<double> kt = read_times(key_times);
+            const Batch q = read_rows(keys, 4, "keys", kt.size());
+            std::vector<Quat> qs(kt.size());
+            for (std::size_t k = 0; k < kt.size(); ++k) qs[k] = from_wxyz(q.data() + 4 * k);
+            const std::vector<double> t = read_times(at);
+            std::vector<Quat> out;
+            {
+                py::gil_scoped_release release;
+                out = play_slerp_keys(kt, qs, t, cyclic);
+            }
+            DArray a({static_cast<py::ssize_t>(out.size()), py::ssize_t{4}});
+            for (std::size_t k = 0; k < out.size(); ++k) to_wxyz(out[k], a.mutable_data() + 4 * k);
+            return a;
+        },
+        py::arg("key_times"), py::arg("keys"), py::arg("at"), py::kw_only(), py::arg("cyclic") = false,
+        R"doc((N, 4): what a glTF LINEAR rotation sampler with keys (K, 4) (w, x, y, z) at key_times (K,)
+plays at each of `at`: the keys rounded to float32 (as a file stores them), glTF's slerp between the
+two around t, the first key before them and the last after; cyclic: the keys are one period and
+repeat.)doc");
 
     m.def(
         "gltf_slerp",

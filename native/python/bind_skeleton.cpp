@@ -145,6 +145,25 @@ std::vector<Mat4> read_pose_matrices(const Skeleton& sk, py::handle pose, std::s
     return out;
 }
 
+// SkeletonReduction and SkeletonSlerpReduction: the same record over two kinds of keys.
+template <class Result>
+void bind_reduction(py::module_& m, const char* name, const char* doc, const char* keys_doc) {
+    py::class_<Result>(m, name, doc)
+        .def_readonly("keys", &Result::keys, keys_doc)
+        .def_property_readonly("budgets", [](const Result& r) {
+            DArray a(static_cast<py::ssize_t>(r.budgets.size()));
+            std::copy(r.budgets.begin(), r.budgets.end(), a.mutable_data());
+            return a;
+        }, "(B,) the angular tolerance (radians) each bone was reduced at")
+        .def_readonly("error", &Result::error, "the verified VertexError, reduced vs original")
+        .def_readonly("rounds", &Result::rounds, "reductions of the skeleton made")
+        .def_property_readonly("key_count", &Result::key_count, "keys over bones (and channels)")
+        .def("__repr__", [name](const Result& r) {
+            return "<" + std::string(name) + " " + std::to_string(r.keys.size()) + " bones, " +
+                   std::to_string(r.key_count()) + " keys, error " + std::to_string(r.error.distance) + ">";
+        });
+}
+
 }  // namespace
 
 void bind_skeleton(py::module_& m) {
@@ -163,21 +182,12 @@ void bind_skeleton(py::module_& m) {
                    std::to_string(e.vertex) + " sample " + std::to_string(e.sample) + ">";
         });
 
-    py::class_<SkeletonReduction>(m, "SkeletonReduction",
-                                  "Every bone's reduced rotation keys under a distance bound, verified.")
-        .def_readonly("keys", &SkeletonReduction::keys, "per bone: its ReducedKeys")
-        .def_property_readonly("budgets", [](const SkeletonReduction& r) {
-            DArray a(static_cast<py::ssize_t>(r.budgets.size()));
-            std::copy(r.budgets.begin(), r.budgets.end(), a.mutable_data());
-            return a;
-        }, "(B,) the angular tolerance (radians) each bone was reduced at")
-        .def_readonly("error", &SkeletonReduction::error, "the verified VertexError, reduced vs original")
-        .def_readonly("rounds", &SkeletonReduction::rounds, "reductions of the skeleton made")
-        .def_property_readonly("key_count", &SkeletonReduction::key_count, "keys over bones and channels")
-        .def("__repr__", [](const SkeletonReduction& r) {
-            return "<SkeletonReduction " + std::to_string(r.keys.size()) + " bones, " + std::to_string(r.key_count()) +
-                   " keys, error " + std::to_string(r.error.distance) + ">";
-        });
+    bind_reduction<SkeletonReduction>(m, "SkeletonReduction",
+                                      "Every bone's reduced rotation keys (ReducedKeys) under a distance bound, verified.",
+                                      "per bone: its ReducedKeys");
+    bind_reduction<SkeletonSlerpReduction>(
+        m, "SkeletonSlerpReduction", "Every bone's glTF slerp keys (ProvedSlerpKeys) under a distance bound, verified.",
+        "per bone: its ProvedSlerpKeys (no keys for a bone kept as it is)");
 
     py::class_<Skeleton>(m, "Skeleton", R"doc(An armature's bones as plain arrays, posed as Blender poses them.
 
@@ -297,7 +307,44 @@ or (N, 3) Blender's evaluation of its rotation channels; locations, scales: (B, 
 reduced: (B,) booleans, the bones whose keys are reduced (default all): the others keep their
 sampled rotation and get empty ReducedKeys.
 Returns a SkeletonReduction: per-bone ReducedKeys (as reduce_keys* returns them), the budgets, and the
-error verified by posing Blender's float32 evaluation of the keys.)doc");
+error verified by posing Blender's float32 evaluation of the keys.)doc")
+        .def(
+            "reduce_slerp",
+            [](const Skeleton& sk, py::handle times, py::handle rotations, py::handle locations, py::handle scales,
+               double distance, double shell, py::sequence bones) {
+                const Batch tb = as_batch(times, {}, "times");
+                if (tb.batch_shape.size() != 1)
+                    throw py::value_error("times: expected a 1-D array, got shape " + shape_string(tb.array));
+                const std::vector<double> t(tb.data(), tb.data() + tb.count);
+                std::size_t n = t.size();
+                const Batch rb = read_bone_rows(rotations, 4, "rotations", sk.size(), n, true);
+                std::vector<Quat> rot(rb.count);
+                for (std::size_t k = 0; k < rb.count; ++k) rot[k] = from_wxyz(rb.data() + 4 * k);
+                const std::vector<Vec3> loc = vec3s(read_bone_rows(locations, 3, "locations", sk.size(), n, true));
+                const std::vector<Vec3> scl = vec3s(read_bone_rows(scales, 3, "scales", sk.size(), n, true));
+                if (static_cast<std::size_t>(py::len(bones)) != sk.size())
+                    throw py::value_error("bones: " + std::to_string(py::len(bones)) + " for " + std::to_string(sk.size()));
+                std::vector<SlerpBone> spec(sk.size());
+                for (std::size_t b = 0; b < sk.size(); ++b) {
+                    if (bones[b].is_none()) spec[b].reduce = false;
+                    else if (py::isinstance<SlerpBone>(bones[b])) spec[b] = bones[b].cast<SlerpBone>();
+                    else throw py::type_error("bones[" + std::to_string(b) + "]: expected a SlerpBone or None");
+                }
+                py::gil_scoped_release release;
+                return reduce_skeleton_slerp(sk, t, rot, loc, scl, distance, shell, spec);
+            },
+            py::arg("times"), py::arg("rotations"), py::arg("locations"), py::arg("scales"), py::arg("distance"),
+            py::arg("shell"), py::arg("bones"),
+            R"doc(glTF LINEAR (slerp) keys for every bone so that no virtual vertex moves more than `distance` from
+the original pose at any sample, each bone's keys proved within its budget of its reference at
+every instant (or held at its samples).
+
+times: (N,) the samples the distance is verified at (every frame and every original key);
+rotations: (B, N, 4) the original rotation of every bone there (its reference sampled); locations,
+scales: (B, N, 3), read, kept; bones: per bone a SlerpBone (its candidate times and reference) or
+None (kept as it is, no keys). Returns a SkeletonSlerpReduction: per bone its ProvedSlerpKeys
+(times in frames), the budgets, and the error verified by posing the keys as a glTF reader plays
+them (play_slerp_keys: float32 quaternions, slerp).)doc");
 }
 
 }  // namespace quatcurve::bindings

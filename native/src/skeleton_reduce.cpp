@@ -49,56 +49,129 @@ constexpr int kBisectSteps = 2;           // then bisections of the bracket
 constexpr int kMeasureRounds = 1;         // measurement + allocation rounds (stages 2–4)
 constexpr double kMinScale = 1.0 / 16.0, kMaxScale = 64.0;  // α_j per allocation
 
+// What every stage shares: the skeleton, the original motion and its virtual vertices.
 struct Problem {
     const Skeleton& skeleton;
-    const std::vector<double>& times;
-    const std::vector<BoneChannels>& rotations;
-    KeyInterpolation interpolation;
-    bool synchronized;
     double distance, shell;
     std::size_t bones, n;
     std::vector<Mat4> offsets;
-    SkeletonPose original;                         // rotations from the given channel values
+    SkeletonPose original;                         // the original rotations, locations, scales
     std::vector<Mat4> pose0;                       // the original pose
     std::vector<Vec3> verts0;                      // its virtual vertices
     std::vector<std::vector<std::size_t>> subtree; // each bone and its descendants, in index order
-    std::vector<std::vector<Quat>> quats;          // QUATERNION bones: hemisphere-continuous samples
-    std::vector<std::size_t> min_keys;             // 2 per channel (a constant rotation)
+    std::vector<std::size_t> min_keys;             // the keys a constant rotation needs (0: a kept bone)
+    std::vector<char> reducible;                   // 0: the bone keeps its original rotations
 };
 
-ReducedKeys reduce_bone(const Problem& pr, std::size_t b, double tolerance) {
-    const BoneChannels& ch = pr.rotations[b];
-    const std::size_t n = pr.n;
-    switch (ch.mode.kind) {
-        case RotationMode::Kind::quaternion:
-            return reduce_keys(pr.times, pr.quats[b], tolerance, pr.interpolation, pr.synchronized);
-        case RotationMode::Kind::euler: {
-            std::vector<Vec3> a(n);
-            for (std::size_t s = 0; s < n; ++s) a[s] = Vec3(ch.values[3 * s], ch.values[3 * s + 1], ch.values[3 * s + 2]);
-            return reduce_keys_euler(pr.times, a, ch.mode.order, tolerance, pr.interpolation, pr.synchronized);
-        }
-        case RotationMode::Kind::axis_angle: {
-            std::vector<Vec4> a(n);
-            for (std::size_t s = 0; s < n; ++s)
-                a[s] = Vec4(ch.values[4 * s], ch.values[4 * s + 1], ch.values[4 * s + 2], ch.values[4 * s + 3]);
-            return reduce_keys_axis_angle(pr.times, a, tolerance, pr.interpolation, pr.synchronized);
-        }
-    }
-    throw InvalidArgument("rotations: unknown rotation mode");
+// The Problem of `original` (checked by check_pose, named `name`).
+Problem make_problem(const Skeleton& skeleton, SkeletonPose original, double distance, double shell,
+                     std::vector<std::size_t> min_keys, std::vector<char> reducible, const char* name) {
+    const std::size_t bones = skeleton.size(), n = original.samples;
+    Problem pr{skeleton, distance, shell, bones, n, {}, std::move(original), {}, {}, {}, std::move(min_keys),
+               std::move(reducible)};
+    check_pose(skeleton, pr.original, name);
+    pr.offsets = detail::rest_offsets(skeleton);
+    pr.pose0 = pose_matrices(skeleton, pr.original);
+    pr.verts0 = virtual_vertices(skeleton, pr.pose0, n, shell);
+    pr.subtree.resize(bones);
+    for (std::size_t b = 0; b < bones; ++b)
+        for (int a = static_cast<int>(b); a >= 0; a = skeleton.parents[a]) pr.subtree[a].push_back(b);
+    return pr;
 }
 
-// The rotations Blender builds from its evaluation (float32) of the keys at every sample.
-std::vector<Quat> evaluate_bone(const Problem& pr, std::size_t b, const ReducedKeys& keys) {
-    const std::size_t c = keys.channels.size(), n = pr.n;
-    std::vector<double> rows(n * c), column;
-    for (std::size_t k = 0; k < c; ++k) {
-        blender_evaluate_sorted(keys.channels[k], keys.interpolation, pr.times, column);
-        for (std::size_t s = 0; s < n; ++s) rows[s * c + k] = column[s];
+// F-curve keys (reduce_skeleton): each bone's channels reduced by reduce_keys*, played as Blender
+// evaluates them (float32).
+class FCurveBones {
+public:
+    using Keys = ReducedKeys;
+    FCurveBones(const std::vector<double>& times, const std::vector<BoneChannels>& rotations,
+                KeyInterpolation interpolation, bool synchronized)
+        : times_(times), rotations_(rotations), interpolation_(interpolation), synchronized_(synchronized),
+          quats_(rotations.size()) {
+        for (std::size_t b = 0; b < rotations.size(); ++b)
+            if (rotations[b].mode.kind == RotationMode::Kind::quaternion) {
+                // reduce_keys keeps the stored scale of each value: the given values, made continuous.
+                quats_[b].resize(times.size());
+                for (std::size_t s = 0; s < times.size(); ++s) quats_[b][s] = from_wxyz(&rotations[b].values[4 * s]);
+                hemisphere_continuous(quats_[b].data(), times.size());
+            }
     }
-    std::vector<Quat> out(n);
-    for (std::size_t s = 0; s < n; ++s) out[s] = channels_to_quat(rows.data() + s * c, pr.rotations[b].mode, s);
-    return out;
-}
+    Keys kept() const {
+        ReducedKeys k;
+        k.interpolation = interpolation_;
+        return k;
+    }
+    Keys reduce(std::size_t b, double tolerance) const {
+        const BoneChannels& ch = rotations_[b];
+        const std::size_t n = times_.size();
+        switch (ch.mode.kind) {
+            case RotationMode::Kind::quaternion:
+                return reduce_keys(times_, quats_[b], tolerance, interpolation_, synchronized_);
+            case RotationMode::Kind::euler: {
+                std::vector<Vec3> a(n);
+                for (std::size_t s = 0; s < n; ++s)
+                    a[s] = Vec3(ch.values[3 * s], ch.values[3 * s + 1], ch.values[3 * s + 2]);
+                return reduce_keys_euler(times_, a, ch.mode.order, tolerance, interpolation_, synchronized_);
+            }
+            case RotationMode::Kind::axis_angle: {
+                std::vector<Vec4> a(n);
+                for (std::size_t s = 0; s < n; ++s)
+                    a[s] = Vec4(ch.values[4 * s], ch.values[4 * s + 1], ch.values[4 * s + 2], ch.values[4 * s + 3]);
+                return reduce_keys_axis_angle(times_, a, tolerance, interpolation_, synchronized_);
+            }
+        }
+        throw InvalidArgument("rotations: unknown rotation mode");
+    }
+    // The rotations Blender builds from its evaluation (float32) of the keys at every sample.
+    std::vector<Quat> evaluate(std::size_t b, const Keys& keys) const {
+        const std::size_t c = keys.channels.size(), n = times_.size();
+        std::vector<double> rows(n * c), column;
+        for (std::size_t k = 0; k < c; ++k) {
+            blender_evaluate_sorted(keys.channels[k], keys.interpolation, times_, column);
+            for (std::size_t s = 0; s < n; ++s) rows[s * c + k] = column[s];
+        }
+        std::vector<Quat> out(n);
+        for (std::size_t s = 0; s < n; ++s) out[s] = channels_to_quat(rows.data() + s * c, rotations_[b].mode, s);
+        return out;
+    }
+
+private:
+    const std::vector<double>& times_;
+    const std::vector<BoneChannels>& rotations_;
+    KeyInterpolation interpolation_;
+    bool synchronized_;
+    std::vector<std::vector<Quat>> quats_;  // QUATERNION bones: hemisphere-continuous samples
+};
+
+// Slerp keys (reduce_skeleton_slerp): each bone's keys proved against its reference at every
+// instant (reduce_slerp_proved) or held at its samples (reduce_slerp), played as glTF plays them.
+class SlerpBones {
+public:
+    using Keys = ProvedSlerpKeys;
+    SlerpBones(const std::vector<double>& times, const std::vector<SlerpBone>& bones) : times_(times), bones_(bones) {}
+    Keys kept() const { return ProvedSlerpKeys{}; }
+    Keys reduce(std::size_t b, double tolerance) const {
+        const SlerpBone& bone = bones_[b];
+        if (bone.reference)
+            return reduce_slerp_proved(*bone.reference, bone.times, tolerance, bone.cyclic, bone.file_unit, bone.excluded);
+        ProvedSlerpKeys out;
+        out.times = bone.times;
+        out.keys = reduce_slerp(bone.times, bone.samples, tolerance, bone.cyclic);
+        out.proof.bound = out.proof.max_evaluated = out.keys.max_error;
+        out.proof.unproven.emplace_back(bone.times.front(), bone.times.back());  // held at the samples only
+        out.rounds = 1;
+        return out;
+    }
+    std::vector<Quat> evaluate(std::size_t b, const Keys& keys) const {
+        std::vector<double> key_times;
+        for (std::size_t i : keys.keys.indices) key_times.push_back(keys.times[i]);
+        return play_slerp_keys(key_times, keys.keys.quats, times_, bones_[b].cyclic);
+    }
+
+private:
+    const std::vector<double>& times_;
+    const std::vector<SlerpBone>& bones_;
+};
 
 // f(i) for every i in [0, count), on up to hardware_concurrency() threads (this one included), in
 // no set order. f(i) must touch only what belongs to i. The first exception thrown is rethrown here
@@ -132,39 +205,44 @@ void parallel_for(std::size_t count, F&& f) {
 }
 
 // A bone reduced at a budget: its keys and their evaluated rotations (cached per budget).
+template <class Keys>
 struct Reduced {
-    ReducedKeys keys;
+    Keys keys;
     std::vector<Quat> rotation;
 };
 
 // Reducer::at for different bones may run on different threads at once (each bone has its own
 // cache); for one bone, on one thread at a time.
+template <class Bones>
 class Reducer {
 public:
-    explicit Reducer(const Problem& pr) : pr_(pr), cache_(pr.bones) {}
-    const Reduced& at(std::size_t b, double budget) {
-        if (!pr_.rotations[b].reduce) budget = 0.0;  // a kept bone: one entry whatever the budget
+    using Result = Reduced<typename Bones::Keys>;
+    Reducer(const Problem& pr, const Bones& bones) : pr_(pr), bones_(bones), cache_(pr.bones) {}
+    const Result& at(std::size_t b, double budget) {
+        if (!pr_.reducible[b]) budget = 0.0;  // a kept bone: one entry whatever the budget
         auto it = cache_[b].find(budget);
         if (it != cache_[b].end()) return it->second;
-        Reduced r;
-        if (!pr_.rotations[b].reduce) {  // kept as sampled: no keys, the original rotations
-            r.keys.interpolation = pr_.interpolation;
+        Result r;
+        if (!pr_.reducible[b]) {  // kept as sampled: no keys, the original rotations
+            r.keys = bones_.kept();
             r.rotation.assign(pr_.original.rotation.begin() + static_cast<std::ptrdiff_t>(b * pr_.n),
                               pr_.original.rotation.begin() + static_cast<std::ptrdiff_t>((b + 1) * pr_.n));
             return cache_[b].emplace(budget, std::move(r)).first->second;
         }
-        r.keys = reduce_bone(pr_, b, budget);
-        r.rotation = evaluate_bone(pr_, b, r.keys);
+        r.keys = bones_.reduce(b, budget);
+        r.rotation = bones_.evaluate(b, r.keys);
         return cache_[b].emplace(budget, std::move(r)).first->second;
     }
 
 private:
     const Problem& pr_;
-    std::vector<std::map<double, Reduced>> cache_;
+    const Bones& bones_;
+    std::vector<std::map<double, Result>> cache_;
 };
 
 // The virtual vertices of the pose with every bone's rotation from `reduced`.
-VertexError verify(const Problem& pr, const std::vector<const Reduced*>& reduced, std::vector<Vec3>& verts,
+template <class R>
+VertexError verify(const Problem& pr, const std::vector<const R*>& reduced, std::vector<Vec3>& verts,
                    std::vector<Mat4>& pose) {
     const std::size_t n = pr.n;
     pose.resize(pr.bones * n);
@@ -184,7 +262,8 @@ VertexError verify(const Problem& pr, const std::vector<const Reduced*>& reduced
 // D_j: per bone j, the displacement of every virtual vertex of its subtree (subtree order, then sample,
 // then vertex) with only bone j's rotation replaced. Bones on worker threads (each j writes out[j]
 // only): the same values as one after the other.
-std::vector<std::vector<float>> shares(const Problem& pr, const std::vector<const Reduced*>& reduced) {
+template <class R>
+std::vector<std::vector<float>> shares(const Problem& pr, const std::vector<const R*>& reduced) {
     const std::size_t n = pr.n;
     std::vector<std::vector<float>> out(pr.bones);
     parallel_for(pr.bones, [&](std::size_t j) {
@@ -266,19 +345,14 @@ std::vector<double> allocate(const Problem& pr, const std::vector<std::vector<fl
     return alpha;
 }
 
-std::size_t total_keys(const std::vector<const Reduced*>& reduced) {
+template <class R>
+std::size_t total_keys(const std::vector<const R*>& reduced) {
     std::size_t k = 0;
-    for (const Reduced* r : reduced) k += r->keys.key_count();
+    for (const R* r : reduced) k += count_keys(r->keys);
     return k;
 }
 
 }  // namespace
-
-std::size_t SkeletonReduction::key_count() const {
-    std::size_t k = 0;
-    for (const ReducedKeys& r : keys) k += r.key_count();
-    return k;
-}
 
 std::vector<double> dominant_shell_budgets(const Skeleton& skeleton, const std::vector<Mat4>& pose,
                                            std::size_t samples, double distance, double shell) {
@@ -300,53 +374,22 @@ std::vector<double> dominant_shell_budgets(const Skeleton& skeleton, const std::
     return budgets;
 }
 
-SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<double>& times,
-                                  const std::vector<BoneChannels>& rotations, const std::vector<Vec3>& locations,
-                                  const std::vector<Vec3>& scales, double distance, double shell,
-                                  KeyInterpolation interpolation, bool synchronized) {
-    check_skeleton(skeleton);
-    detail::check_shell(shell);
-    if (!std::isfinite(distance) || !(distance > 0.0)) throw InvalidArgument("distance: must be finite and > 0");
-    const std::size_t bones = skeleton.size(), n = times.size();
-    if (rotations.size() != bones)
-        throw InvalidArgument("rotations: " + std::to_string(rotations.size()) + " bones for " +
-                              std::to_string(bones) + " in the skeleton");
-    Problem pr{skeleton, times, rotations, interpolation, synchronized, distance, shell, bones, n, {}, {}, {}, {}, {}, {}, {}};
-    pr.original.samples = n;
-    pr.original.location = locations;
-    pr.original.scale = scales;
-    pr.original.rotation.resize(bones * n);
-    pr.quats.resize(bones);
-    pr.min_keys.resize(bones);
-    for (std::size_t b = 0; b < bones; ++b) {
-        const std::size_t c = channel_count(rotations[b].mode);
-        if (rotations[b].values.size() != n * c)
-            throw InvalidArgument("rotations[" + std::to_string(b) + "]: " + std::to_string(rotations[b].values.size()) +
-                                  " values for " + std::to_string(n) + " samples of " + std::to_string(c) + " channels");
-        for (std::size_t s = 0; s < n; ++s)
-            pr.original.rotation[b * n + s] = channels_to_quat(rotations[b].values.data() + s * c, rotations[b].mode, s);
-        pr.min_keys[b] = rotations[b].reduce ? 2 * c : 0;
-        if (rotations[b].mode.kind == RotationMode::Kind::quaternion) {
-            // reduce_keys keeps the stored scale of each value: the given values, made continuous.
-            pr.quats[b].resize(n);
-            for (std::size_t s = 0; s < n; ++s) pr.quats[b][s] = from_wxyz(&rotations[b].values[4 * s]);
-            hemisphere_continuous(pr.quats[b].data(), n);
-        }
-    }
-    check_pose(skeleton, pr.original, "channels");
-    pr.offsets = detail::rest_offsets(skeleton);
-    pr.pose0 = pose_matrices(skeleton, pr.original);
-    pr.verts0 = virtual_vertices(skeleton, pr.pose0, n, shell);
-    pr.subtree.resize(bones);
-    for (std::size_t b = 0; b < bones; ++b)
-        for (int a = static_cast<int>(b); a >= 0; a = skeleton.parents[a]) pr.subtree[a].push_back(b);
+namespace {
 
-    if (bones == 0) return SkeletonReduction{};
-    Reducer reducer(pr);
-    SkeletonReduction best;
+// Stages 1–5 (the file comment) over one kind of keys.
+template <class Bones>
+SkeletonReductionOf<typename Bones::Keys> run(const Problem& pr, const Bones& bones_keys) {
+    using Result = SkeletonReductionOf<typename Bones::Keys>;
+    using R = Reduced<typename Bones::Keys>;
+    const Skeleton& skeleton = pr.skeleton;
+    const std::size_t bones = pr.bones, n = pr.n;
+    const double distance = pr.distance, shell = pr.shell;
+    if (bones == 0) return Result{};
+    Reducer<Bones> reducer(pr, bones_keys);
+    Result best;
     bool have_best = false;
     std::vector<double> budgets = dominant_shell_budgets(skeleton, pr.pose0, n, distance, shell);
-    std::vector<const Reduced*> reduced(bones);
+    std::vector<const R*> reduced(bones);
     std::vector<Vec3> verts;
     std::vector<Mat4> poses;
     int rounds = 0;
@@ -362,7 +405,7 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
         const std::size_t keys = total_keys(reduced);
         if (have_best && keys >= best.key_count()) return;
         best.keys.clear();
-        for (const Reduced* r : reduced) best.keys.push_back(r->keys);
+        for (const R* r : reduced) best.keys.push_back(r->keys);
         best.budgets = budgets;
         best.error = error;
         have_best = true;
@@ -409,19 +452,19 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
             std::vector<std::size_t> order(bones);
             for (std::size_t b = 0; b < bones; ++b) order[b] = b;
             std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-                return reduced[a]->keys.key_count() > reduced[b]->keys.key_count();
+                return count_keys(reduced[a]->keys) > count_keys(reduced[b]->keys);
             });
             // Each bone's loosened reduction, ahead on worker threads: bone j's budget and keys change
             // only at its own turn below, so these are the reductions the turns ask for.
             parallel_for(bones, [&](std::size_t j) {
-                if (reduced[j]->keys.key_count() > pr.min_keys[j] && budgets[j] < kPi)
+                if (count_keys(reduced[j]->keys) > pr.min_keys[j] && budgets[j] < kPi)
                     reducer.at(j, std::min(kPi, budgets[j] * factor));
             });
             for (const std::size_t j : order) {
-                if (reduced[j]->keys.key_count() <= pr.min_keys[j] || budgets[j] >= kPi) continue;
+                if (count_keys(reduced[j]->keys) <= pr.min_keys[j] || budgets[j] >= kPi) continue;
                 const double budget = std::min(kPi, budgets[j] * factor);
-                const Reduced& r = reducer.at(j, budget);
-                if (r.keys.key_count() >= reduced[j]->keys.key_count()) continue;
+                const R& r = reducer.at(j, budget);
+                if (count_keys(r.keys) >= count_keys(reduced[j]->keys)) continue;
                 double worst = 0.0;
                 std::vector<char> inside(bones, 0);
                 for (const std::size_t i : pr.subtree[j]) inside[i] = 1, trial_error[i] = 0.0;
@@ -466,7 +509,7 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
         std::vector<std::size_t> keys(bones);
         for (std::size_t b = 0; b < bones; ++b) {
             reduced[b] = &reducer.at(b, best.budgets[b]);
-            keys[b] = reduced[b]->keys.key_count();
+            keys[b] = count_keys(reduced[b]->keys);
         }
         const std::vector<double> alpha = allocate(pr, shares(pr, reduced), keys);
         std::vector<double> shape(bones);
@@ -476,12 +519,84 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
     if (have_best) loosen();
     // Nothing passed (a distance below the float32 floor of the keys): the last try is returned.
     if (!have_best) {
-        for (const Reduced* r : reduced) best.keys.push_back(r->keys);
+        for (const R* r : reduced) best.keys.push_back(r->keys);
         best.budgets = budgets;
         best.error = verify(pr, reduced, verts, poses);
     }
     best.rounds = rounds;
     return best;
+}
+
+}  // namespace
+
+SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<double>& times,
+                                  const std::vector<BoneChannels>& rotations, const std::vector<Vec3>& locations,
+                                  const std::vector<Vec3>& scales, double distance, double shell,
+                                  KeyInterpolation interpolation, bool synchronized) {
+    check_skeleton(skeleton);
+    detail::check_shell(shell);
+    if (!std::isfinite(distance) || !(distance > 0.0)) throw InvalidArgument("distance: must be finite and > 0");
+    const std::size_t bones = skeleton.size(), n = times.size();
+    if (rotations.size() != bones)
+        throw InvalidArgument("rotations: " + std::to_string(rotations.size()) + " bones for " +
+                              std::to_string(bones) + " in the skeleton");
+    SkeletonPose original;
+    original.samples = n;
+    original.location = locations;
+    original.scale = scales;
+    original.rotation.resize(bones * n);
+    std::vector<std::size_t> min_keys(bones);
+    std::vector<char> reducible(bones);
+    for (std::size_t b = 0; b < bones; ++b) {
+        const std::size_t c = channel_count(rotations[b].mode);
+        if (rotations[b].values.size() != n * c)
+            throw InvalidArgument("rotations[" + std::to_string(b) + "]: " + std::to_string(rotations[b].values.size()) +
+                                  " values for " + std::to_string(n) + " samples of " + std::to_string(c) + " channels");
+        for (std::size_t s = 0; s < n; ++s)
+            original.rotation[b * n + s] = channels_to_quat(rotations[b].values.data() + s * c, rotations[b].mode, s);
+        min_keys[b] = rotations[b].reduce ? 2 * c : 0;
+        reducible[b] = rotations[b].reduce;
+    }
+    const Problem pr = make_problem(skeleton, std::move(original), distance, shell, std::move(min_keys),
+                                    std::move(reducible), "channels");
+    return run(pr, FCurveBones(times, rotations, interpolation, synchronized));
+}
+
+SkeletonSlerpReduction reduce_skeleton_slerp(const Skeleton& skeleton, const std::vector<double>& times,
+                                             const std::vector<Quat>& rotations, const std::vector<Vec3>& locations,
+                                             const std::vector<Vec3>& scales, double distance, double shell,
+                                             const std::vector<SlerpBone>& bones) {
+    check_skeleton(skeleton);
+    detail::check_shell(shell);
+    if (!std::isfinite(distance) || !(distance > 0.0)) throw InvalidArgument("distance: must be finite and > 0");
+    const std::size_t count = skeleton.size(), n = times.size();
+    if (bones.size() != count)
+        throw InvalidArgument("bones: " + std::to_string(bones.size()) + " for " + std::to_string(count) +
+                              " in the skeleton");
+    for (std::size_t s = 0; s < n; ++s)
+        if (!std::isfinite(times[s]) || (s > 0 && !(times[s] > times[s - 1])))
+            throw InvalidArgument("times[" + std::to_string(s) + "]: not finite and increasing");
+    std::vector<std::size_t> min_keys(count);
+    std::vector<char> reducible(count);
+    for (std::size_t b = 0; b < count; ++b) {
+        const SlerpBone& bone = bones[b];
+        const std::string name = "bones[" + std::to_string(b) + "]";
+        reducible[b] = bone.reduce;
+        if (!bone.reduce) continue;
+        min_keys[b] = 2;
+        if (bone.times.size() < 2) throw InvalidArgument(name + ".times: fewer than two times");
+        if (!bone.reference && bone.samples.size() != bone.times.size())
+            throw InvalidArgument(name + ".samples: " + std::to_string(bone.samples.size()) + " rotations for " +
+                                  std::to_string(bone.times.size()) + " times (and no reference)");
+    }
+    SkeletonPose original;
+    original.samples = n;
+    original.location = locations;
+    original.rotation = rotations;
+    original.scale = scales;
+    const Problem pr = make_problem(skeleton, std::move(original), distance, shell, std::move(min_keys),
+                                    std::move(reducible), "rotations");
+    return run(pr, SlerpBones(times, bones));
 }
 
 }  // namespace quatcurve

@@ -1,6 +1,7 @@
 // reduce_slerp and gltf_slerp (slerp_keys.hpp).
 #include "quatcurve/slerp_keys.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -59,6 +60,35 @@ double segment_error(const std::vector<double>& t, const std::vector<Quat>& q, s
 Quat gltf_slerp(const Quat& a, const Quat& b, double t) {
     check_finite(t, "t");
     return slerp_unit(normalized_rotation(a, "a"), normalized_rotation(b, "b"), t);
+}
+
+std::vector<Quat> play_slerp_keys(const std::vector<double>& key_times, const std::vector<Quat>& keys,
+                                  const std::vector<double>& at, bool cyclic) {
+    const std::size_t n = key_times.size();
+    if (keys.size() != n)
+        throw InvalidArgument("keys: " + std::to_string(keys.size()) + " rotations for " + std::to_string(n) + " times");
+    if (n == 0) throw InvalidArgument("key_times: no keys");
+    std::vector<Quat> stored(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!std::isfinite(key_times[k]) || (k && !(key_times[k] > key_times[k - 1])))
+            throw InvalidArgument("key_times[" + std::to_string(k) + "]: not finite and increasing");
+        const Quat& q = keys[k];
+        const Quat f(static_cast<float>(q.w), static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z));
+        stored[k] = normalized_rotation(f, "keys", k);
+    }
+    const double first = key_times.front(), period = key_times.back() - first;
+    std::vector<Quat> out(at.size());
+    for (std::size_t i = 0; i < at.size(); ++i) {
+        check_finite(at[i], "at");
+        double t = at[i];
+        if (cyclic && period > 0.0) t = first + (t - first) - std::floor((t - first) / period) * period;
+        const std::size_t j = static_cast<std::size_t>(
+            std::upper_bound(key_times.begin(), key_times.end(), t) - key_times.begin());
+        if (j == 0) out[i] = stored.front();
+        else if (j == n) out[i] = stored.back();
+        else out[i] = slerp_unit(stored[j - 1], stored[j], (t - key_times[j - 1]) / (key_times[j] - key_times[j - 1]));
+    }
+    return out;
 }
 
 SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance,

@@ -1,14 +1,19 @@
 // Skeletons (skeleton.hpp): the pose against a reference written from Blender's pose formulas in
 // bone-relative terms (BKE_bone_offset_matrix_get's bone_mat, head and parent length — not the
 // rest matrices the library inverts), the virtual vertices and their error, and the distance bound
-// of reduce_skeleton on random skeletons, checked by an independent evaluation of the keys.
+// of reduce_skeleton and reduce_skeleton_slerp on random skeletons, checked by an independent
+// evaluation of the keys (Blender's F-curve evaluation; glTF's slerp written out).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "quatcurve/blender_eval.hpp"
+#include "quatcurve/bound.hpp"
+#include "quatcurve/curve.hpp"
 #include "quatcurve/channels.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/euler.hpp"
@@ -369,4 +374,149 @@ TEST(SkeletonReduce, RefusesBadInput) {
     EXPECT_THROW(reduce_skeleton(sk, {1.0, 2.0}, rot, loc, scale, 0.001, NAN), InvalidArgument);
     EXPECT_THROW(reduce_skeleton(sk, {1.0, 2.0, 3.0}, rot, {Vec3(0.0)}, scale, 0.001, 0.1), InvalidArgument);
     EXPECT_THROW(reduce_skeleton(sk, {2.0, 1.0}, rot, loc, scale, 0.001, 0.1), InvalidArgument);
+}
+
+// ---- slerp keys (glTF LINEAR samplers) under a distance bound ---------------------------------------
+
+namespace {
+
+// glTF 2.0 Appendix C written out: the keys as float32, the shortest way between the two around t.
+Quat spec_play(const std::vector<double>& kt, const std::vector<Quat>& kq, double t) {
+    auto stored = [&](std::size_t i) {
+        const Quat q(static_cast<float>(kq[i].w), static_cast<float>(kq[i].x), static_cast<float>(kq[i].y),
+                     static_cast<float>(kq[i].z));
+        return glm::normalize(q);
+    };
+    if (t <= kt.front()) return stored(0);
+    if (t >= kt.back()) return stored(kt.size() - 1);
+    std::size_t j = 1;
+    while (kt[j] <= t) ++j;
+    const Quat a = stored(j - 1);
+    Quat b = stored(j);
+    double d = glm::dot(a, b);
+    if (d < 0.0) b = -b, d = -d;
+    const double u = (t - kt[j - 1]) / (kt[j] - kt[j - 1]);
+    const double angle = std::acos(std::min(1.0, d));
+    if (angle < 1e-9) return glm::normalize(a * (1.0 - u) + b * u);
+    return glm::normalize(a * (std::sin(angle * (1.0 - u)) / std::sin(angle)) + b * (std::sin(angle * u) / std::sin(angle)));
+}
+
+}  // namespace
+
+TEST(SkeletonSlerp, PlaySlerpKeysIsGltfsSlerpClampedOrWrapped) {
+    const std::vector<double> kt = {2.0, 5.0, 9.0};
+    const std::vector<Quat> kq = {Quat(1, 0, 0, 0), euler_to_quat(Vec3(0.4, 0, 0), EulerOrder::XYZ),
+                                  -euler_to_quat(Vec3(0.4, 1.0, 0), EulerOrder::XYZ)};
+    const std::vector<double> at = {0.0, 2.0, 3.5, 5.0, 7.25, 9.0, 12.0};
+    const std::vector<Quat> got = play_slerp_keys(kt, kq, at);
+    for (std::size_t i = 0; i < at.size(); ++i)
+        EXPECT_LT(angle_between(got[i], spec_play(kt, kq, at[i])), 1e-7) << "t " << at[i];
+    // A loop: one period [2, 9] repeats (its last key is its first rotation).
+    const std::vector<Quat> loop = {kq[0], kq[1], -kq[0]};
+    const std::vector<Quat> wrapped = play_slerp_keys(kt, loop, {3.5, 3.5 + 7.0, 3.5 - 14.0}, true);
+    EXPECT_LT(angle_between(wrapped[0], wrapped[1]), 1e-9);
+    EXPECT_LT(angle_between(wrapped[0], wrapped[2]), 1e-9);
+    EXPECT_THROW(play_slerp_keys({}, {}, {1.0}), InvalidArgument);
+    EXPECT_THROW(play_slerp_keys(kt, {kq[0]}, {1.0}), InvalidArgument);
+    EXPECT_THROW(play_slerp_keys({2.0, 1.0}, {kq[0], kq[1]}, {1.0}), InvalidArgument);
+    EXPECT_THROW(play_slerp_keys(kt, kq, {NAN}), InvalidArgument);
+}
+
+TEST(SkeletonSlerp, DistanceBoundHoldsAndEachBoneIsProvedBetweenSamples) {
+    std::mt19937 rng(4141);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int trial = 0; trial < 4; ++trial) {
+        const std::vector<BoneSpec> specs = random_specs(rng, 4 + 3 * trial, true);
+        const Skeleton sk = skeleton_of(specs);
+        const std::size_t n = 50, bones = specs.size();
+        std::vector<double> times(n), dense;
+        for (std::size_t s = 0; s < n; ++s) times[s] = 1.0 + static_cast<double>(s);
+        for (std::size_t s = 0; s + 1 < n; ++s)
+            for (int k = 0; k < 4; ++k) dense.push_back(times[s] + 0.25 * k);
+        dense.push_back(times.back());
+        const std::vector<BoneChannels> rot = random_motion(rng, bones, n);
+        SkeletonPose original = random_pose(rng, specs, n);  // locations and scales (kept)
+        std::vector<std::shared_ptr<const Motion>> curves(bones);
+        std::vector<SlerpBone> spec(bones);
+        for (std::size_t b = 0; b < bones; ++b) {
+            // Bone 1 keeps its rotation; bone 2 is held at its samples; the others are proved
+            // against a SQUAD curve through the frames' rotations.
+            std::vector<Quat> keys(n);
+            for (std::size_t s = 0; s < n; ++s)
+                keys[s] = channels_to_quat(&rot[b].values[s * channel_count(rot[b].mode)], rot[b].mode);
+            hemisphere_continuous(keys.data(), n);
+            curves[b] = std::make_shared<OwnedCurveMotion>(Curve(times, keys, Method::SQUAD));
+            for (std::size_t s = 0; s < n; ++s) original.rotation[b * n + s] = curves[b]->at(times[s]);
+            spec[b].times = dense;
+            if (b == 1) {
+                spec[b].reduce = false;
+            } else if (b == 2) {
+                for (double t : dense) spec[b].samples.push_back(curves[b]->at(t));
+            } else {
+                spec[b].reference = curves[b];
+            }
+        }
+        const double distance = 0.005, shell = 0.1;
+        const SkeletonSlerpReduction r =
+            reduce_skeleton_slerp(sk, times, original.rotation, original.location, original.scale, distance, shell, spec);
+        ASSERT_EQ(r.keys.size(), bones);
+        // Independently: the keys played as glTF's specification says, posed, against the original.
+        SkeletonPose played = original;
+        std::size_t keys = 0;
+        for (std::size_t b = 0; b < bones; ++b) {
+            const ProvedSlerpKeys& k = r.keys[b];
+            if (b == 1) {
+                EXPECT_TRUE(k.keys.indices.empty());
+                continue;
+            }
+            std::vector<double> kt;
+            for (std::size_t i : k.keys.indices) kt.push_back(k.times[i]);
+            ASSERT_GE(kt.size(), 2u);
+            EXPECT_EQ(kt.front(), dense.front());
+            EXPECT_EQ(kt.back(), dense.back());
+            for (std::size_t s = 0; s < n; ++s) played.rotation[b * n + s] = spec_play(kt, k.keys.quats, times[s]);
+            keys += kt.size();
+            // Each proved bone within its budget at 64 points per frame, denser than its samples.
+            if (b != 2) {
+                EXPECT_TRUE(k.proof.proven()) << "trial " << trial << " bone " << b;
+                double worst = 0.0;
+                for (double t = dense.front(); t <= dense.back(); t += 1.0 / 64.0)
+                    worst = std::max(worst, angle_between(spec_play(kt, k.keys.quats, t), curves[b]->at(t)));
+                for (int i = 0; i < 100; ++i) {
+                    const double t = dense.front() + u(rng) * (dense.back() - dense.front());
+                    worst = std::max(worst, angle_between(spec_play(kt, k.keys.quats, t), curves[b]->at(t)));
+                }
+                EXPECT_LE(worst, r.budgets[b] + 1e-6) << "trial " << trial << " bone " << b;
+            } else {
+                EXPECT_FALSE(k.proof.proven());
+            }
+        }
+        const VertexError e = virtual_vertex_error(sk, original, played, shell);
+        EXPECT_LE(e.distance, distance) << "trial " << trial;
+        EXPECT_NEAR(e.distance, r.error.distance, 1e-9);
+        EXPECT_EQ(keys, r.key_count());
+        EXPECT_LT(keys, (bones - 1) * n / 2) << "trial " << trial;
+    }
+}
+
+TEST(SkeletonSlerp, RefusesBadInput) {
+    std::vector<BoneSpec> specs(1);
+    const Skeleton sk = skeleton_of(specs);
+    const std::vector<Quat> rot = {Quat(1, 0, 0, 0), Quat(1, 0, 0, 0)};
+    const std::vector<Vec3> loc(2, Vec3(0.0)), scale(2, Vec3(1.0));
+    std::vector<SlerpBone> bones(1);
+    bones[0].times = {1.0, 2.0};
+    bones[0].samples = rot;
+    EXPECT_NO_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.001, 0.1, bones));
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.0, 0.1, bones), InvalidArgument);
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.001, -1.0, bones), InvalidArgument);
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {2.0, 1.0}, rot, loc, scale, 0.001, 0.1, bones), InvalidArgument);
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.001, 0.1, {}), InvalidArgument);
+    std::vector<SlerpBone> short_samples = bones;
+    short_samples[0].samples.pop_back();
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.001, 0.1, short_samples), InvalidArgument);
+    std::vector<SlerpBone> one_time = bones;
+    one_time[0].times = {1.0};
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, rot, loc, scale, 0.001, 0.1, one_time), InvalidArgument);
+    EXPECT_THROW(reduce_skeleton_slerp(sk, {1.0, 2.0}, {rot[0]}, loc, scale, 0.001, 0.1, bones), InvalidArgument);
 }

@@ -2234,7 +2234,8 @@ def build_skeleton(fn, d):
     rot = fill(rng, (bones, n, 4), level)
     scale = fill(rng, (bones, n, 3), level)
     shell = float(d.pick((0.1, 0.0, 1.0, -1.0, NAN), "shell"))
-    method = d.pick(("pose", "virtual_vertices", "vertex_error", "dominant_shell_budgets", "reduce"), "method")
+    method = d.pick(("pose", "virtual_vertices", "vertex_error", "dominant_shell_budgets", "reduce", "reduce_slerp"),
+                    "method")
     finite_in = all(np.all(np.isfinite(a)) for a in (loc, rot, scale))
     if method in ("pose", "vertex_error") and not finite_in:
         must_fail = must_fail or "non-finite channels"
@@ -2254,11 +2255,30 @@ def build_skeleton(fn, d):
             return sk.dominant_shell_budgets(sk.pose(loc, rot, scale), distance, shell)
         m = min(n, 20)
         angles = np.clip(np.cumsum(fill(rng, (bones, m, 3), "calm") * 0.05, axis=1), -10, 10)
+        if method == "reduce_slerp":
+            # Per bone: kept, held at samples (half-frame times) or proved against a curve through the frames.
+            t = np.arange(m, dtype=float)
+            dense = np.arange(2 * m - 1) * 0.5
+            quats = np.array([qc.euler_to_quat(a, "XYZ") for a in angles]) if bones else np.zeros((0, m, 4))
+            specs = []
+            for b in range(bones):
+                kind = d.pick(("kept", "samples", "curve"), "slerp_bone")
+                curve = qc.Curve(t, quats[b], method="SQUAD") if m >= 2 else None
+                if kind == "kept" or curve is None:
+                    specs.append(None)
+                elif kind == "samples":
+                    specs.append(qc.SlerpBone(dense, samples=curve.sample(dense)))
+                else:
+                    specs.append(qc.SlerpBone(dense, reference=curve))
+                if curve is not None:
+                    quats[b] = curve.sample(t)
+            return sk.reduce_slerp(t, quats, np.clip(loc[:, :m], -1e3, 1e3), np.ones((bones, m, 3)), distance, shell,
+                                   specs)
         return sk.reduce(np.arange(m, dtype=float), [("XYZ", a) for a in angles], np.clip(loc[:, :m], -1e3, 1e3),
                          np.ones((bones, m, 3)), distance, shell)  # unit scales: the float32 floor stays below the distance
 
     def check(out):
-        if method == "reduce":
+        if method in ("reduce", "reduce_slerp"):
             finite(out.budgets, "budgets")
             expect(out.error.distance <= distance or out.error.distance < 1e-5,  # or the float32 floor
                    f"error {out.error.distance!r} above distance {distance!r}")
@@ -2269,6 +2289,73 @@ def build_skeleton(fn, d):
             finite(out, method)
 
     return Case(call, max(bones * n, 1), check, must_fail, 200 * bones * n, (parents, rest, lengths, method))
+
+
+def build_slerp_bone(fn, d):
+    """SlerpBone(times, reference=... | samples=...): built from a Curve, from F-curves of any mode, or
+    from samples; refused with neither, with both, with samples that do not match the times, with bad
+    F-curves or a bad mode."""
+    rng = d.rng
+    n = int(rng.integers(2, 30))
+    times = np.cumsum(rng.uniform(0.1, 3.0, n))
+    form = d.pick(("curve", "playback", "samples", "neither", "both", "short", "bad_mode"), "form")
+    curve = qc.Curve(times, rng.normal(size=(n, 4)), method="SLERP")
+    must_fail = {"neither": "no reference or samples", "both": "reference and samples", "short": "samples short",
+                 "bad_mode": "unknown mode"}.get(form, "")
+
+    def call():
+        if form == "curve":
+            return fn(times, reference=curve, cyclic=False)
+        if form in ("playback", "bad_mode"):
+            channels = [(times, rng.normal(size=n)) for _ in range(4)]
+            return fn(times, reference=(channels, "LINEAR", "QUATERNION" if form == "playback" else "XYZW"))
+        if form == "samples":
+            return fn(times, samples=curve.sample(times))
+        if form == "both":
+            return fn(times, reference=curve, samples=curve.sample(times))
+        if form == "short":
+            return fn(times, samples=curve.sample(times)[:-1])
+        return fn(times)
+
+    def check(out):
+        expect(out.proved == (form in ("curve", "playback")), "proved flag")
+        expect(np.array_equal(out.times, times), "times kept")
+        repr(out)
+
+    return Case(call, n, check, must_fail, 0, (form,))
+
+
+def build_play_slerp_keys(fn, d):
+    """play_slerp_keys: unit rotations; the keys themselves (float32) at their times; the first key
+    before them and the last after (or wrapped, cyclic); refused for sizes that differ, unsorted or
+    non-finite times, no keys."""
+    rng = d.rng
+    k = int(rng.integers(1, 12))
+    kt = np.cumsum(rng.uniform(0.1, 5.0, k))
+    keys = rng.normal(size=(k, 4))
+    at = np.concatenate([kt, rng.uniform(kt[0] - 5, kt[-1] + 5, 20)])
+    cyclic = bool(d.chance(0.3, "cyclic"))
+    bad = d.pick(("ok",) * 5 + ("sizes", "unsorted", "nan", "empty"), "form")
+    must_fail = ""
+    if bad == "sizes":
+        keys, must_fail = keys[:-1] if k > 1 else np.zeros((0, 4)), "sizes differ"
+    elif bad == "unsorted" and k > 1:
+        kt, must_fail = kt[::-1].copy(), "unsorted"
+    elif bad == "nan":
+        at, must_fail = np.append(at, NAN), "nan time"
+    elif bad == "empty":
+        kt, keys, must_fail = np.zeros(0), np.zeros((0, 4)), "no keys"
+
+    def check(out):
+        shape_is(out, (len(at), 4), "play_slerp_keys")
+        unit(out, "play_slerp_keys")
+        stored = keys.astype(np.float32).astype(np.float64)
+        stored /= np.linalg.norm(stored, axis=1, keepdims=True)
+        got = out[:k]
+        expect(np.all(np_angle(got[:-1] if cyclic else got, stored[:-1] if cyclic else stored) < 1e-6),
+               "keys not played at their times")
+
+    return Case(lambda: fn(kt, keys, at, cyclic=cyclic), len(at), check, must_fail, 0, (kt, keys, cyclic))
 
 
 def _not_constructible(fn, d):
@@ -2324,6 +2411,9 @@ REGISTRY.update({
     "Skeleton": build_skeleton,
     "VertexError": _not_constructible,
     "SkeletonReduction": _not_constructible,
+    "SkeletonSlerpReduction": _not_constructible,
+    "SlerpBone": build_slerp_bone,
+    "play_slerp_keys": build_play_slerp_keys,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
     "Curve": None,
 })

@@ -122,6 +122,83 @@ def test_reduce_keeps_the_distance():
     assert result.budgets.shape == (6,)
 
 
+def spec_slerp(a, b, u):
+    """glTF 2.0 Appendix C: the shortest way from a to b."""
+    if np.dot(a, b) < 0:
+        b = -b
+    angle = np.arccos(min(1.0, float(np.dot(a, b))))
+    if angle < 1e-9:
+        q = a * (1 - u) + b * u
+    else:
+        q = (np.sin(angle * (1 - u)) * a + np.sin(angle * u) * b) / np.sin(angle)
+    return q / np.linalg.norm(q)
+
+
+def spec_play(key_times, keys, t):
+    """A glTF LINEAR rotation sampler at t: keys as float32, clamped outside them."""
+    keys = keys.astype(np.float32).astype(np.float64)
+    keys /= np.linalg.norm(keys, axis=1, keepdims=True)
+    if t <= key_times[0]:
+        return keys[0]
+    if t >= key_times[-1]:
+        return keys[-1]
+    j = int(np.searchsorted(key_times, t, side="right"))
+    return spec_slerp(keys[j - 1], keys[j], (t - key_times[j - 1]) / (key_times[j] - key_times[j - 1]))
+
+
+def test_reduce_slerp_keeps_the_distance_and_each_bone_its_budget():
+    rng = np.random.default_rng(11)
+    parents, lengths, connected, inherit, offs, rest = random_skeleton(rng, 6)
+    sk = qc.Skeleton(parents, rest, lengths, inherit_rotation=inherit, connected=connected)
+    N = 40
+    times = np.arange(1.0, N + 1.0)
+    dense = np.arange(4 * (N - 1) + 1) * 0.25 + 1.0
+    curves, bones = [], []
+    for b in range(6):
+        angles = 0.6 * np.sin(rng.uniform(0.02, 0.1, 3) * times[:, None] + rng.uniform(-3, 3, 3))
+        curves.append(qc.Curve(times, qc.channels_to_quats(angles, "YXZ"), method="CATMULL_ROM"))
+        bones.append(None if b == 3 else qc.SlerpBone(dense, reference=curves[-1], file_unit=1 / 24))
+    original = np.stack([c.sample(times) for c in curves])
+    loc, scale = np.zeros((6, N, 3)), np.ones((6, N, 3))
+    result = sk.reduce_slerp(times, original, loc, scale, 0.002, 0.1, bones)
+    assert type(result).__name__ == "SkeletonSlerpReduction" and len(result.keys) == 6
+    assert len(result.keys[3].key_times) == 0  # kept
+    played = original.copy()
+    for b, keys in enumerate(result.keys):
+        if b == 3:
+            continue
+        assert keys.proof.proven
+        played[b] = [spec_play(keys.key_times, keys.keys.quats, t) for t in times]
+        assert np.allclose(np.abs(np.sum(played[b] * qc.play_slerp_keys(keys.key_times, keys.keys.quats, times), 1)), 1)
+        # Within its budget between the samples too (64 points per frame, scipy-free numpy slerp).
+        fine = np.linspace(dense[0], dense[-1], 64 * (N - 1) + 1)
+        got = np.array([spec_play(keys.key_times, keys.keys.quats, t) for t in fine])
+        want = curves[b].sample(fine)
+        angle = 2 * np.arccos(np.clip(np.abs(np.sum(got * want, 1)), 0, 1))
+        assert angle.max() <= result.budgets[b] + 1e-6
+    e = sk.vertex_error((loc, original, scale), (loc, played, scale), 0.1)
+    assert e.distance <= 0.002
+    assert e.distance == pytest.approx(result.error.distance, abs=1e-9)
+    assert result.key_count < 5 * N
+
+
+def test_slerp_bone_refuses_what_it_cannot_hold():
+    times = np.arange(5.0)
+    curve = qc.Curve(times, np.tile([1.0, 0, 0, 0], (5, 1)))
+    with pytest.raises(ValueError, match="reference or samples"):
+        qc.SlerpBone(times)
+    with pytest.raises(ValueError, match="not both"):
+        qc.SlerpBone(times, reference=curve, samples=curve.sample(times))
+    with pytest.raises(ValueError, match="samples: 4 rows for 5 times"):
+        qc.SlerpBone(times, samples=curve.sample(times)[:4])
+    sk = qc.Skeleton([-1], np.eye(4)[None], [0.1])
+    with pytest.raises(ValueError, match="bones: 2 for 1"):
+        sk.reduce_slerp(times, curve.sample(times)[None], np.zeros((1, 5, 3)), np.ones((1, 5, 3)), 0.001, 0.1,
+                        [None, None])
+    with pytest.raises(TypeError, match="bones\\[0\\]"):
+        sk.reduce_slerp(times, curve.sample(times)[None], np.zeros((1, 5, 3)), np.ones((1, 5, 3)), 0.001, 0.1, [1])
+
+
 def test_reduce_keeps_the_bones_not_reduced():
     """reduced=False bones get no keys and are posed as sampled; the bound holds with them."""
     rng = np.random.default_rng(8)

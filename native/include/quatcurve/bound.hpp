@@ -81,6 +81,24 @@ private:
     const Curve& curve_;
 };
 
+// A Curve as a motion that owns its copy of the curve (for a motion kept beyond the caller's curve).
+class OwnedCurveMotion : public Motion {
+public:
+    explicit OwnedCurveMotion(Curve curve) : curve_(std::move(curve)), motion_(curve_) {}
+    OwnedCurveMotion(const OwnedCurveMotion&) = delete;
+    OwnedCurveMotion& operator=(const OwnedCurveMotion&) = delete;
+    Quat at(double t) const override { return motion_.at(t); }
+    void bounds(double t0, double t1, double& speed, double& accel) const override {
+        motion_.bounds(t0, t1, speed, accel);
+    }
+    std::vector<double> breaks() const override { return motion_.breaks(); }
+    std::vector<double> breaks_within(double t0, double t1) const override { return motion_.breaks_within(t0, t1); }
+
+private:
+    Curve curve_;
+    CurveMotion motion_;
+};
+
 // The rotation Blender plays from the keys of a rotation's F-curves (channel_count(mode) of them,
 // in channel order): each channel evaluated as blender_evaluate does, the rotation built as Blender
 // builds it (a zero quaternion is (0, 1, 0, 0) after Blender's normalize; a zero axis no rotation).

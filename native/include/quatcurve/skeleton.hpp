@@ -31,11 +31,14 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "quatcurve/blender_eval.hpp"
 #include "quatcurve/channels.hpp"
 #include "quatcurve/reduce.hpp"
+#include "quatcurve/slerp_keys.hpp"
 #include "quatcurve/types.hpp"
 
 namespace quatcurve {
@@ -116,13 +119,25 @@ struct BoneChannels {
     bool reduce = true;
 };
 
-struct SkeletonReduction {
-    std::vector<ReducedKeys> keys;  // per bone: its rotation channels' keys (reduce_keys* output)
+inline std::size_t count_keys(const ReducedKeys& keys) { return keys.key_count(); }
+inline std::size_t count_keys(const ProvedSlerpKeys& keys) { return keys.keys.indices.size(); }
+
+// The keys each bone's rotation was reduced to, under one distance bound, verified.
+template <class Keys>
+struct SkeletonReductionOf {
+    std::vector<Keys> keys;         // per bone: its keys (empty for a bone kept as it is)
     std::vector<double> budgets;    // per bone: the angular tolerance (radians) its keys were reduced at
     VertexError error;              // verified: reduced vs original, every bone, sample and vertex
     int rounds = 0;                 // reductions of the skeleton made (each reduces the bones that changed)
-    std::size_t key_count() const;  // keys summed over bones and channels
+    std::size_t key_count() const { // keys summed over bones (and channels)
+        std::size_t k = 0;
+        for (const Keys& r : keys) k += count_keys(r);
+        return k;
+    }
 };
+
+using SkeletonReduction = SkeletonReductionOf<ReducedKeys>;        // F-curve keys (reduce_keys*)
+using SkeletonSlerpReduction = SkeletonReductionOf<ProvedSlerpKeys>;  // glTF LINEAR keys (reduce_slerp*)
 
 // Reduce the rotation keys of every bone so that the virtual vertices of Blender's pose of the
 // reduced keys stay within `distance` of the original pose's at every sample (times: the frames
@@ -146,5 +161,36 @@ SkeletonReduction reduce_skeleton(const Skeleton& skeleton, const std::vector<do
                                   const std::vector<Vec3>& scales, double distance, double shell,
                                   KeyInterpolation interpolation = KeyInterpolation::BEZIER,
                                   bool synchronized = false);
+
+// ---- slerp keys (glTF LINEAR rotation samplers) under a distance bound ------------------------------
+//
+// What a glTF file plays for each bone: keys chosen among its own candidate times (the file's,
+// float32 seconds as frames), played by glTF's slerp (slerp_keys.hpp), each bone's keys proved within
+// its angular budget of its reference motion at EVERY instant of its times (reduce_slerp_proved), and
+// the skeleton posed from the keys (float32, as the file stores them) verified within `distance` of
+// the original pose at every sample of `times`, as reduce_skeleton verifies F-curve keys. The budgets
+// are chosen by the same stages as reduce_skeleton.
+struct SlerpBone {
+    // The motion the keys are proved against at every instant; null: the keys hold at `samples` only
+    // (reduce_slerp), and the ProvedSlerpKeys' proof says unproven over the whole range.
+    std::shared_ptr<const Motion> reference;
+    std::vector<double> times;      // candidate key times (frames), increasing: the file's times
+    std::vector<Quat> samples;      // with no reference: the motion at `times`
+    bool cyclic = false;            // a loop's one period (reduce_slerp's cyclic): played wrapped
+    double file_unit = 0.0;         // as reduce_slerp_proved: seconds per frame of the file
+    std::vector<std::pair<double, double>> excluded;  // as reduce_slerp_proved (quaternion sign flips)
+    bool reduce = true;             // false: the bone keeps its original rotations and gets no keys
+};
+
+// Reduce every bone's rotation to slerp keys (above) so that the virtual vertices of the pose they
+// play stay within `distance` of the original pose's at every sample of `times` (strictly increasing
+// frames: every frame and every original key). rotations: the original rotation of every bone at
+// every sample ([bone·n + sample], the reference motions sampled there); locations and scales as
+// reduce_skeleton. Throws InvalidArgument as reduce_skeleton, for a bone count that differs, and as
+// reduce_slerp_proved for a bone's times.
+SkeletonSlerpReduction reduce_skeleton_slerp(const Skeleton& skeleton, const std::vector<double>& times,
+                                             const std::vector<Quat>& rotations, const std::vector<Vec3>& locations,
+                                             const std::vector<Vec3>& scales, double distance, double shell,
+                                             const std::vector<SlerpBone>& bones);
 
 }  // namespace quatcurve

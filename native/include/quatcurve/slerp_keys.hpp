@@ -58,6 +58,13 @@ struct SlerpKeys {
 SlerpKeys reduce_slerp(const std::vector<double>& times, const std::vector<Quat>& quats, double tolerance,
                        bool cyclic = false);
 
+// The rotation glTF plays from slerp keys at each of `at` (in the keys' unit): the keys (their quaternions
+// rounded to float32, as a file stores them) between the two around t; before the first key the
+// first, after the last the last; cyclic keys (one period) repeat, t wrapped into their range. key
+// times increasing, at least one key. Throws InvalidArgument for sizes that differ or no key.
+std::vector<Quat> play_slerp_keys(const std::vector<double>& key_times, const std::vector<Quat>& keys,
+                                  const std::vector<double>& at, bool cyclic = false);
+
 // ---- slerp keys proved at every instant --------------------------------------------------------------
 // reduce_slerp holds its keys to the samples. reduce_slerp_proved holds them to a REFERENCE motion
 // (bound.hpp: a method's curve, or Blender's playback of a rotation's keys) at EVERY time from
