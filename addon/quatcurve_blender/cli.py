@@ -167,8 +167,10 @@ def add_task_arguments(p):
 
     g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
                                      "Blender's glTF exporter, each rotation sampler replaced by few slerp "
-                                     "keys within --tolerance (default 0.1°) of the target's curve, checked at "
-                                     "--subframes points per frame (default 20). IN.blend is not changed.")
+                                     "keys within --tolerance (default 0.1°) of the target's curve at every "
+                                     "instant, chosen among --subframes times per frame (default 20); with "
+                                     "--error DISTANCE, every bone's virtual vertices within --distance (at "
+                                     "--shell) of its curves' pose instead. IN.blend is not changed.")
     g.add_argument("--gltf", metavar="OUT.glb", help="the binary glTF file to write")
     g.add_argument("--gltf-curve", choices=gltf.METHODS, default="AUTO", metavar="CURVE",
                    help="the curve each rotation sampler plays: AUTO (default: fitted targets their fit's "
@@ -346,7 +348,7 @@ def convert_settings(args):
 
 
 # Options of bake, fit and compare that mean nothing to --gltf (argparse defaults: what is not given).
-NOT_FOR_GLTF = NOT_FOR_FIT + (("fit", False, "--fit"),
+NOT_FOR_GLTF = tuple(o for o in NOT_FOR_FIT if o not in DISTANCE_OPTIONS) + (("fit", False, "--fit"),
                               ("objects", None, "--objects"), ("bones", None, "--bones"), ("method", "SLERP", "--method"),
                               ("tension", 0.0, "--tension"), ("continuity", 0.0, "--continuity"), ("bias", 0.0, "--bias"),
                               ("shortest_path", True, "--no-shortest-path"), ("clamped", True, "--no-clamp"),
@@ -360,9 +362,14 @@ def gltf_settings(args):
     refuse_options(args, NOT_FOR_GLTF, "not an option of --gltf (it exports the whole scene; choose the curve "
                                        "with --gltf-curve)")
     defaults = gltf.ExportSettings()
+    if args.reduce_error == "DISTANCE" and args.tolerance is not None:
+        raise UsageError("--tolerance: not an option of --gltf --error DISTANCE (its bound is --distance)")
+    if args.reduce_error == "ANGLE" and (args.distance or args.shell):
+        raise UsageError("--distance, --shell: options of --error DISTANCE")
     settings = gltf.ExportSettings(
         method=args.gltf_curve, tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
-        subframes=defaults.subframes if args.subframes is None else args.subframes)
+        subframes=defaults.subframes if args.subframes is None else args.subframes, error=args.reduce_error,
+        distance=args.distance, shell=args.shell)
     try:
         gltf.check_settings(settings, args.gltf)
     except gltf.GltfError as error:
@@ -789,8 +796,15 @@ class GltfTask(Task):
         with blender_output_silenced():  # the exporter's progress lines
             result = gltf.export(bpy.context.scene, output, settings)
         curve = methods.label_and_id(settings.method) if settings.method in methods.ALL else settings.method
-        print("quatcurve %s (Blender %s): glTF, curve %s, tolerance %g°, %d subframes, %s -> %s" % (
-            native.require().__version__, bpy.app.version_string, curve, settings.tolerance,
+        if settings.error == "DISTANCE":
+            scene = bpy.context.scene
+            distance, shell = reduce.scene_lengths(settings, scene)
+            units = (scene.unit_settings.system, scene.unit_settings.scale_length or 1.0)
+            bound = "distance %s, shell %s" % (reduce.length_text(distance, *units), reduce.length_text(shell, *units))
+        else:
+            bound = "tolerance %g°" % settings.tolerance
+        print("quatcurve %s (Blender %s): glTF, curve %s, %s, %d subframes, %s -> %s" % (
+            native.require().__version__, bpy.app.version_string, curve, bound,
             settings.subframes, os.path.basename(source), result.filepath))
         for line in result.lines():
             print("  " + line)
@@ -798,6 +812,9 @@ class GltfTask(Task):
         return result
 
     def outcome(self, result):
+        if result.settings.error == "DISTANCE":
+            return Outcome(sorted({s.target for s in result.samplers}), result.keys_before, result.keys_after, None,
+                           max_distance=max([d.distance for d in result.distances] or [0.0]))
         return Outcome(sorted({s.target for s in result.samplers}), result.keys_before, result.keys_after,
                        math.degrees(result.max_error))
 

@@ -68,10 +68,17 @@ class GltfError(TargetError):
 @dataclass
 class ExportSettings:
     """method: AUTO, BLENDER or a fit method (see the module); tolerance: degrees, largest angle between
-    the file's slerp and the curve at every checked point; subframes: checked points per frame."""
+    the file's slerp and the curve at every instant; subframes: candidate key times per frame.
+    error: ANGLE (the tolerance per rotation sampler) or DISTANCE (per armature, every bone's virtual
+    vertices within `distance` of the curve's pose, the bone's angle budgets chosen for it; each
+    object its own three shell points); distance, shell: scene units, 0 the defaults (1 mm at 10 cm
+    in real size, as reduce.scene_lengths)."""
     method: str = "AUTO"
     tolerance: float = 0.1
     subframes: int = 20
+    error: str = "ANGLE"
+    distance: float = 0.0
+    shell: float = 0.0
 
 
 def check_settings(settings, filepath):
@@ -79,6 +86,12 @@ def check_settings(settings, filepath):
         raise GltfError("method %r: unknown (methods: %s)" % (settings.method, ", ".join(METHODS)))
     if not (settings.tolerance > 0) or not math.isfinite(settings.tolerance):
         raise GltfError("tolerance %r°: must be a finite angle above 0" % (settings.tolerance,))
+    if settings.error not in reduce.ERRORS:
+        raise GltfError("error %r: unknown (expected ANGLE or DISTANCE)" % (settings.error,))
+    for name in ("distance", "shell"):
+        value = getattr(settings, name)
+        if not (value >= 0) or not math.isfinite(value):
+            raise GltfError("%s %r: must be a finite length of 0 or more (0: the default)" % (name, value))
     if int(settings.subframes) != settings.subframes or not 1 <= settings.subframes <= 100:
         raise GltfError("subframes %r: must be a whole number from 1 to 100" % (settings.subframes,))
     if not filepath or not str(filepath).lower().endswith(".glb"):
@@ -108,11 +121,25 @@ class SamplerResult:
 
 
 @dataclass
+class DistanceResult:
+    """The distance bound of one armature (or object) in the file: its worst virtual-vertex distance
+    (scene units) at the checked frames, where, and its text in the scene's units."""
+    name: str
+    distance: float
+    bone: str
+    frame: float
+    vertex: str
+    text: str
+    bound_text: str
+
+
+@dataclass
 class ExportResult:
     filepath: str
     settings: ExportSettings
     samplers: list = field(default_factory=list)
     size: int = 0
+    distances: list = field(default_factory=list)  # DistanceResult per armature or object (error DISTANCE)
 
     @property
     def keys_before(self):
@@ -128,15 +155,23 @@ class ExportResult:
 
     def summary(self):
         kept = sum(not s.rewritten for s in self.samplers)
-        return ("Exported %s: %d rotation samplers, %d keys (sampled: %d), max error %.4f° (tolerance %g°), "
-                "%d bytes%s" % (os.path.basename(self.filepath), len(self.samplers), self.keys_after,
-                                self.keys_before, math.degrees(self.max_error), self.settings.tolerance,
-                                self.size, ", %d left as sampled" % kept if kept else ""))
+        if self.settings.error == "DISTANCE":
+            worst = max(self.distances, key=lambda d: d.distance, default=None)
+            bound = ("worst distance %s (bound %s) at %s frame %s" % (
+                worst.text, worst.bound_text, worst.name if worst.bone == worst.name else
+                "%s/%s" % (worst.name, worst.bone), targets.num(worst.frame)) if worst else "no armature or object")
+        else:
+            bound = "max error %.4f° (tolerance %g°)" % (math.degrees(self.max_error), self.settings.tolerance)
+        return ("Exported %s: %d rotation samplers, %d keys (sampled: %d), %s, %d bytes%s" % (
+            os.path.basename(self.filepath), len(self.samplers), self.keys_after, self.keys_before, bound, self.size,
+            ", %d left as sampled" % kept if kept else ""))
 
     def lines(self):
-        return ["%s: %d -> %d keys, %s%s" % (s.target or s.node, s.keys_before, s.keys_after,
-                                              ("max error %.4f°, " % math.degrees(s.max_error)) if s.rewritten else "",
-                                              s.curve) for s in self.samplers]
+        out = ["%s: worst distance %s (bound %s) at %s frame %s, %s" % (
+            d.name, d.text, d.bound_text, d.bone, targets.num(d.frame), d.vertex) for d in self.distances]
+        return out + ["%s: %d -> %d keys, %s%s" % (s.target or s.node, s.keys_before, s.keys_after,
+                                                    ("max error %.4f°, " % math.degrees(s.max_error)) if s.rewritten
+                                                    else "", s.curve) for s in self.samplers]
 
 
 # ---- the exporter ------------------------------------------------------------------------------------
@@ -251,10 +286,38 @@ def node_map(exported, played):
 
 # ---- the rewrite --------------------------------------------------------------------------------------------
 
-def rewrite_sampler(doc, sampler, target, settings, fps):
-    """The new keys of one rotation sampler (times in seconds, (K, 4) x, y, z, w; float32) and its
-    SamplerResult fields, or the reason it is kept (a string)."""
-    qc = native.require()
+@dataclass(eq=False)
+class SamplerPlan:
+    """One rotation sampler to rewrite: its target, the node's maps (node = A·q·B), the target's
+    curve (a native Curve or a function frames -> quaternions) and its description, the candidate
+    key times (frames the file stores exactly), and what the keys are proved against (a Curve,
+    (channels, interpolation, mode) of a playback quatcurve emulates, or None and why not)."""
+    target: object
+    a: np.ndarray
+    b: np.ndarray
+    loop: object
+    curve: object
+    how: str
+    frames: np.ndarray
+    proved_against: object
+    why: str
+    fps: float
+
+    def sample(self, frames):
+        """The target's curve at `frames`, (N, 4) in the channels' own rotation."""
+        sample = self.curve if callable(self.curve) else self.curve.sample
+        return np.asarray(sample(np.asarray(frames, dtype=np.float64)), dtype=np.float64)
+
+    def slerp_bone(self):
+        """The native SlerpBone of this sampler (the distance mode's per-bone reduction)."""
+        qc = native.require()
+        if self.proved_against is None:
+            return qc.SlerpBone(self.frames, samples=self.sample(self.frames), cyclic=self.loop is not None)
+        return qc.SlerpBone(self.frames, reference=self.proved_against, cyclic=self.loop is not None, file_unit=1.0 / self.fps)
+
+
+def plan_sampler(doc, sampler, target, settings, fps):
+    """The SamplerPlan of one rotation sampler, or the reason it is kept as the exporter wrote it."""
     times = doc.accessor_array(sampler["input"])[:, 0]
     exported = doc.accessor_array(sampler["output"])[:, [3, 0, 1, 2]]  # glTF x, y, z, w -> w, x, y, z
     if sampler.get("interpolation", "LINEAR") == "CUBICSPLINE" or len(times) != len(exported):
@@ -285,48 +348,176 @@ def rewrite_sampler(doc, sampler, target, settings, fps):
     # The times the file stores (float32 seconds), as frames.
     t32 = (dense / fps).astype(np.float32).astype(np.float64)
     t32 = t32[np.concatenate(([True], t32[1:] > t32[:-1]))]  # float32 may merge very close times
-    tolerance = math.radians(settings.tolerance)
     proved_against, why = proof_reference(target, curve, t32 * fps, loop)
-    if proved_against is not None:
+    return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps)
+
+
+def reduce_sampler(plan, settings):
+    """(key frames, (K, 4) keys in the channels' rotation, error bound (radians), description): the
+    sampler's keys within the tolerance of its curve (ANGLE)."""
+    qc = native.require()
+    tolerance = max(math.radians(settings.tolerance) - MARGIN, 0.0)
+    how = plan.how
+    if plan.proved_against is not None:
         # Proved at every instant in the channels' own rotation: slerp is bi-invariant, so the file's
         # keys A·q·B play the same motion turned. The keys sit on times the file stores exactly.
-        if isinstance(proved_against, tuple):
-            channels, ipo, mode = proved_against
-            proved = qc.reduce_slerp_proved(channels, ipo, mode, t32 * fps, max(tolerance - MARGIN, 0.0),
-                                            cyclic=loop is not None, file_unit=1.0 / fps)
+        if isinstance(plan.proved_against, tuple):
+            channels, ipo, mode = plan.proved_against
+            proved = qc.reduce_slerp_proved(channels, ipo, mode, plan.frames, tolerance, cyclic=plan.loop is not None,
+                                            file_unit=1.0 / plan.fps)
         else:
-            proved = qc.reduce_slerp_proved(proved_against, t32 * fps, max(tolerance - MARGIN, 0.0),
-                                            cyclic=loop is not None, file_unit=1.0 / fps)
-        key_times = (proved.key_times / fps).astype(np.float32).astype(np.float64)
-        kept = qc.quat_multiply(qc.quat_multiply(a, proved.keys.quats), b)
-        # float32 quaternions: within 1e-6 rad of the exact keys (MARGIN's room).
-        error = proved.proof.bound + FLOAT32_QUAT
-        how += ", at every instant" if proved.proof.proven else ", at every instant within %.4f°" % math.degrees(error)
-        if len(proved.excluded):
-            how += (" but inside %d sign flip%s of its quaternion keys, where Blender turns through the flip and the "
-                    "file takes the short way" % (len(proved.excluded), "" if len(proved.excluded) == 1 else "s"))
-    else:
-        sample = curve if callable(curve) else curve.sample
-        quats = qc.quat_multiply(qc.quat_multiply(a, np.asarray(sample(t32 * fps), dtype=np.float64)), b)
-        quats = quats / np.linalg.norm(quats, axis=1, keepdims=True)
-        q32 = quats.astype(np.float32).astype(np.float64)
-        keys = qc.reduce_slerp(t32, q32, max(tolerance - MARGIN, 0.0), cyclic=loop is not None)
-        key_times, kept, error = t32[keys.indices], keys.quats, keys.max_error
-        how += ", at the checked points (between them not proved: %s)" % why
+            proved = qc.reduce_slerp_proved(plan.proved_against, plan.frames, tolerance,
+                                            cyclic=plan.loop is not None, file_unit=1.0 / plan.fps)
+        return proved.key_times, proved.keys.quats, proved.proof.bound + FLOAT32_QUAT, how + proof_text(proved)
+    # Held at the samples: the node's rotation as the file stores it (float32), reduced there.
+    quats = qc.quat_multiply(qc.quat_multiply(plan.a, plan.sample(plan.frames)), plan.b)
+    quats = quats / np.linalg.norm(quats, axis=1, keepdims=True)
+    q32 = quats.astype(np.float32).astype(np.float64)
+    t32 = plan.frames / plan.fps
+    keys = qc.reduce_slerp(t32, q32, tolerance, cyclic=plan.loop is not None)
+    back = qc.quat_multiply(qc.quat_multiply(qc.quat_conjugate(plan.a), keys.quats), qc.quat_conjugate(plan.b))
+    return (plan.frames[keys.indices], back, keys.max_error,
+            how + ", at the checked points (between them not proved: %s)" % plan.why)
+
+
+def proof_text(proved):
+    """How far a ProvedSlerpKeys holds, for the sampler's line."""
+    error = proved.proof.bound + FLOAT32_QUAT
+    text = ", at every instant" if proved.proof.proven else ", at every instant within %.4f°" % math.degrees(error)
+    if len(proved.excluded):
+        text += (" but inside %d sign flip%s of its quaternion keys, where Blender turns through the flip and the "
+                 "file takes the short way" % (len(proved.excluded), "" if len(proved.excluded) == 1 else "s"))
+    return text
+
+
+def sampler_keys(plan, key_frames, keys):
+    """(key times in seconds, (K, 4) float32 glTF x, y, z, w): `keys` (the channels' rotation) turned
+    into the node's (A·q·B), one hemisphere chain, a loop's last key its first."""
+    qc = native.require()
+    key_times = (np.asarray(key_frames, dtype=np.float64) / plan.fps).astype(np.float32).astype(np.float64)
+    kept = qc.quat_multiply(qc.quat_multiply(plan.a, np.asarray(keys, dtype=np.float64)), plan.b)
     kept = kept / np.linalg.norm(kept, axis=1, keepdims=True)
     for k in range(1, len(kept)):  # one hemisphere chain, as reduce_slerp gives them
         if np.dot(kept[k], kept[k - 1]) < 0:
             kept[k] = -kept[k]
-    if loop is not None:
+    if plan.loop is not None:
         # The same key at both ends, as a wrapping player expects (glTF's slerp takes the short way,
         # so the other sign of the same rotation plays the same).
         kept[-1] = kept[0]
-    out = kept.astype(np.float32)[:, [1, 2, 3, 0]]  # w, x, y, z -> glTF x, y, z, w
-    return key_times, out, error, how
+    return key_times, kept.astype(np.float32)[:, [1, 2, 3, 0]]  # w, x, y, z -> glTF x, y, z, w
+
+
+# ---- the distance bound (error='DISTANCE') -------------------------------------------------------------
+
+def file_skeleton(read, rotations, rewritten):
+    """The armature as the file poses it, as a quatcurve.Skeleton; `read`'s arrays changed in place
+    for the bones not in `rewritten` (indices). A glTF node inherits all of its parent's transform;
+    the exporter writes a bone whose rotation is not its channels' alone (Inherit Rotation off, a
+    parent's scale it does not inherit; such samplers are kept as sampled) as its pose relative to
+    its parent's, frame by frame. So every bone not rewritten is posed in the file by that fixed
+    local transform, offs⁻¹·parent pose⁻¹·pose (Blender's pose of `rotations`), under the parent's pose
+    in the file: it becomes a bone that inherits everything, with that transform's rotation, scale
+    and location as its channels. Raises GltfError where that transform shears (not a rotation
+    times a scale along its axes)."""
+    qc = native.require()
+    pose = read.skeleton().pose(read.locations, rotations, read.scales)
+    inherit_rotation, connected = read.inherit_rotation.copy(), read.connected.copy()
+    inherit_scale = list(read.inherit_scale)
+    for b, parent in enumerate(read.parents):
+        if b in rewritten or parent < 0 or (inherit_rotation[b] and inherit_scale[b] == "FULL"):
+            continue
+        offset = np.linalg.inv(read.rest[parent]) @ read.rest[b]
+        local = np.linalg.inv(offset) @ np.linalg.inv(pose[parent]) @ pose[b]  # (N, 4, 4)
+        scale = np.linalg.norm(local[:, :3, :3], axis=1)                       # the columns' lengths
+        turn = local[:, :3, :3] / scale[:, None, :]
+        shear = np.abs(np.einsum("nji,njk->nik", turn, turn) - np.eye(3)).max()
+        if shear > 1e-4:
+            raise GltfError("%s/%s: the glTF file poses it with a sheared transform (its parent's non-uniform "
+                            "scale), which the distance bound does not model; export with error='ANGLE'"
+                            % (read.object.name, read.names[b]))
+        rotations[b] = qc.matrix_to_quat(turn)
+        read.locations[b] = local[:, :3, 3]
+        read.scales[b] = scale
+        inherit_rotation[b], connected[b], inherit_scale[b] = True, False, "FULL"
+    return qc.Skeleton(read.parents, read.rest, read.lengths, inherit_rotation, connected, inherit_scale)
+
+
+def reduce_distance(plans, settings, scene):
+    """{id(plan): (key frames, keys, error, description)} for every plan, and a DistanceResult per
+    armature or object: per armature, every bone's keys chosen by the native
+    Skeleton.reduce_slerp so that every bone's virtual vertices (tail, and the points at `shell`
+    along its axes) played from the file stay within `distance` of its curve's pose at every frame
+    of the sampler and every key there (bones without a rewritten sampler posed as Blender poses
+    them); per object, its own three shell points. Raises GltfError as skeleton.py refuses (what
+    the bound does not model), for a loop, and where no keys reach the distance."""
+    from . import skeleton
+    qc = native.require()
+    distance, shell = reduce.scene_lengths(settings, scene)
+    units = scene.unit_settings
+    system, scale_length = units.system, units.scale_length or 1.0
+    groups = {}
+    for plan in plans:
+        obj = plan.target.object
+        key = (obj.name_full, plan.target.bone is not None)
+        groups.setdefault(key, (obj, plan.target.bone is not None, []))[2].append(plan)
+    done, results = {}, []
+    for obj, is_armature, group in groups.values():
+        for plan in group:
+            if plan.loop is not None:
+                raise GltfError("%s: loops with the distance bound are not supported yet: its rotation loops (Cycles "
+                                "modifiers); export with error='ANGLE'" % plan.target.name)
+        span = (min(p.frames[0] for p in group), max(p.frames[-1] for p in group))
+        try:
+            read = (skeleton.read_armature(obj, [], span=span) if is_armature else
+                    skeleton.read_object(obj, span=span, keys_required=False))
+        except TargetError as error:
+            raise GltfError(str(error)) from None
+        index = {name: b for b, name in enumerate(read.names)}
+        frames = read.frames
+        rotations = np.array([qc.channels_to_quats(v, mode) for mode, v in read.rotations])
+        bones = [None] * len(read.names)
+        by_bone = {}
+        for plan in group:
+            b = index[plan.target.bone if is_armature else read.names[0]]
+            rotations[b] = plan.sample(frames)
+            bones[b] = plan.slerp_bone()
+            by_bone[b] = plan
+        sk = read.skeleton()
+        if is_armature:
+            sk = file_skeleton(read, rotations, set(by_bone))
+        slack = reduce.float32_slack(read, shell)
+        if slack >= 0.5 * distance:
+            raise GltfError("%s: a distance of %s is below what float32 keeps at this size (%s)" % (
+                obj.name, reduce.length_text(distance, system, scale_length),
+                reduce.length_text(2 * slack, system, scale_length)))
+        try:
+            result = sk.reduce_slerp(frames, rotations, read.locations, read.scales, distance - slack, shell, bones)
+        except ValueError as error:
+            raise GltfError("%s: %s" % (obj.name, error)) from None
+        error = result.error
+        if error.distance > distance - slack:
+            raise GltfError("%s: no keys keep every virtual vertex within %s (the float32 floor reaches %s)" % (
+                obj.name, reduce.length_text(distance, system, scale_length),
+                reduce.length_text(error.distance, system, scale_length)))
+        for b, plan in by_bone.items():
+            keys = result.keys[b]
+            how = plan.how + ", angle budget %.4g°" % math.degrees(result.budgets[b])
+            if plan.proved_against is not None:
+                how += proof_text(keys)
+            else:
+                how += " at the checked points (between them not proved: %s)" % plan.why
+            done[id(plan)] = (keys.key_times, keys.keys.quats, keys.proof.bound + FLOAT32_QUAT, how)
+        where = read.names[error.bone] if error.bone >= 0 else "-"
+        results.append(DistanceResult(
+            obj.name, error.distance, where, float(frames[error.sample]) if error.bone >= 0 else float(frames[0]),
+            reduce.VERTEX_NAMES[error.vertex] if error.vertex >= 0 else "-",
+            reduce.length_text(error.distance, system, scale_length), reduce.length_text(distance, system, scale_length)))
+    return done, results
 
 
 def rewrite(doc, scene, settings, fps):
-    """Replaces the rotation samplers of `doc` in place; returns the SamplerResults."""
+    """Replaces the rotation samplers of `doc` in place; returns (the SamplerResults, the
+    DistanceResults of error DISTANCE)."""
     mapped = node_targets(doc.json, scene)
     nodes = doc.json.get("nodes", [])
     users = {}
@@ -357,7 +548,7 @@ def rewrite(doc, scene, settings, fps):
                                              "kept: no object or bone of the scene has this name", False))
                 continue
             try:
-                planned = rewrite_sampler(doc, sampler, target, settings, fps)
+                planned = plan_sampler(doc, sampler, target, settings, fps)
             except TargetError as e:
                 raise GltfError(str(e)) from None
             except ValueError as e:
@@ -365,9 +556,22 @@ def rewrite(doc, scene, settings, fps):
             if isinstance(planned, str):
                 results.append(SamplerResult(anim.get("name", ""), name, target.name, count, count, 0.0, planned, False))
                 continue
-            times, quats, error, how = planned
-            results.append(SamplerResult(anim.get("name", ""), name, target.name, count, len(times), error, how))
-            plans.append((sampler, times, quats))
+            results.append(SamplerResult(anim.get("name", ""), name, target.name, count, 0, 0.0, planned.how))
+            plans.append((sampler, planned, results[-1]))
+    distances = []
+    if settings.error == "DISTANCE":
+        found, distances = reduce_distance([plan for _, plan, _ in plans], settings, scene)
+    written = []
+    for sampler, plan, result in plans:
+        try:
+            key_frames, keys, error, how = found[id(plan)] if settings.error == "DISTANCE" else \
+                reduce_sampler(plan, settings)
+        except ValueError as e:
+            raise GltfError("%s: %s" % (plan.target.name, e)) from None
+        times, quats = sampler_keys(plan, key_frames, keys)
+        result.keys_after, result.max_error, result.curve = len(times), error, how
+        written.append((sampler, times, quats))
+    plans = written
     # Key times already stored (the exporter's inputs, and ours as they are written): samplers with
     # the same times share one input accessor (still motion keeps its first and last sample).
     inputs = {}
@@ -401,7 +605,7 @@ def rewrite(doc, scene, settings, fps):
                 users[sampler[key]] = 1
             if key == "input":
                 inputs[np.asarray(values, dtype="<f4").tobytes()] = sampler[key]
-    return results
+    return results, distances
 
 
 def export(scene, filepath, settings=None):
@@ -428,11 +632,11 @@ def export(scene, filepath, settings=None):
         except glb.GlbError as e:
             raise GltfError(str(e)) from None
         with fit.record_index():
-            results = rewrite(doc, scene, settings, fps)
+            results, distances = rewrite(doc, scene, settings, fps)
         glb.write(doc, rewritten)
         os.replace(rewritten, filepath)
     finally:
         for path in (sampled, rewritten):
             if os.path.exists(path):
                 os.remove(path)
-    return ExportResult(filepath, settings, results, os.path.getsize(filepath))
+    return ExportResult(filepath, settings, results, os.path.getsize(filepath), distances)

@@ -98,11 +98,13 @@ def _sampled(owner_target, found_by_prop, frames):
             for prop, found in found_by_prop.items()}
 
 
-def read_armature(obj, reduced_names):
+def read_armature(obj, reduced_names, span=None):
     """ReadSkeleton of armature object `obj`, every bone posed, the bones named in `reduced_names`
-    reduced. Raises TargetError as the module says, and as targets.read_rotation_keys for a bone to
-    reduce (no rotation keys, drivers, jumps, NaN)."""
-    return _sampled_skeleton(obj, *_armature_channels(obj, reduced_names))
+    reduced. span (first, last): sampled over these frames instead of the keyed range (every whole
+    frame and every key within them; the glTF export's range). Raises TargetError as the module
+    says, and as targets.read_rotation_keys for a bone to reduce (no rotation keys, drivers, jumps,
+    NaN)."""
+    return _sampled_skeleton(obj, *_armature_channels(obj, reduced_names), span=span)
 
 
 def check_armature(obj, replaced_names):
@@ -166,10 +168,20 @@ def _armature_channels(obj, reduced_names, replaced=frozenset()):
     return bones, per_bone, keyed, index, wanted
 
 
-def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted):
-    if not keyed:
-        raise TargetError("%s: no keys on any bone" % obj.name)
-    frames = native.require().whole_frame_samples(np.unique(np.concatenate(keyed)))
+def _sample_frames(obj, keyed, span):
+    """Every whole frame and every key of `keyed` over the keyed range, or over `span` (first, last)."""
+    if span is None:
+        if not keyed:
+            raise TargetError("%s: no keys on any bone" % obj.name)
+        return native.require().whole_frame_samples(np.unique(np.concatenate(keyed)))
+    first, last = span
+    frames = np.unique(np.concatenate(keyed + [np.array([first, last], dtype=np.float64)]))
+    frames = native.require().whole_frame_samples(frames)
+    return frames[(frames >= first) & (frames <= last)]
+
+
+def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted, span=None):
+    frames = _sample_frames(obj, keyed, span)
     rotations, locations, scales, props, keys_before = [], [], [], [], []
     for target, mode, prop, found in per_bone:
         values = _sampled(target, found, frames)
@@ -192,13 +204,15 @@ def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted):
         np.array([b.name in wanted for b in bones]), props, np.array(keys_before))
 
 
-def read_object(obj):
+def read_object(obj, span=None, keys_required=True):
     """ReadSkeleton of an object alone: one bone of length 0 at the object's origin (its three shell
     points), posed by its rotation and scale (times its delta scale); its location moves every point
-    alike and is left out."""
+    alike and is left out. span: as read_armature. keys_required: refuse an object without rotation
+    keys (as the reduction does)."""
     _refuse_animation_system(obj, None)
     target = Target(obj)
-    targets.read_rotation_keys(target)  # refuses what today's reduction refuses
+    if keys_required:
+        targets.read_rotation_keys(target)  # refuses what today's reduction refuses
     channels = fcurves.Channels.of(obj)
     prop, count = fcurves.rotation_property(obj.rotation_mode)
     found = {prop: _channel_fcurves(channels, target.data_path(prop), count),
@@ -206,7 +220,7 @@ def read_object(obj):
     for p, f in found.items():
         _refuse_modifiers(obj.name, p, f)
     keyed = [fcurves.key_frames([f for f in fs if f is not None]) for fs in found.values() if any(fs)]
-    frames = native.require().whole_frame_samples(np.unique(np.concatenate(keyed)))
+    frames = _sample_frames(obj, keyed, span)
     values = _sampled(target, found, frames)
     targets.refuse_zero_rotations(obj.rotation_mode, values[prop], obj.name, frames)
     scale = values["scale"] * np.array(obj.delta_scale)

@@ -95,7 +95,8 @@ def build_chain_rig(name="Chain", frames=60, seed=5):
     def key(pb, prop, values):
         path = pb.path_from_id(prop)
         for i in range(values.shape[1]):
-            channels.write(path, i, t, values[:, i], group=pb.name, interpolation="BEZIER")
+            # Blender's automatic handles, as keys an animator sets get them (the bulk write leaves them at 0).
+            channels.write(path, i, t, values[:, i], group=pb.name, interpolation="BEZIER").update()
 
     for bone_name, *_, mode in CHAIN:
         pb = rig.pose.bones[bone_name]
