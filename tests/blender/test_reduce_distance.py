@@ -147,5 +147,15 @@ def test_refusals_name_the_bone_and_write_nothing(scene):
     curve.modifiers.new("NOISE")
     with pytest.raises(RuntimeError, match=r"Chain/root: location\[0\] has F-curve modifiers"):
         bpy.ops.quatcurve.reduce(error="DISTANCE")
+    curve.modifiers.remove(curve.modifiers[0])
+    # A second armature playing the same action: the new keys would move its bones, unmeasured.
+    twin = bpy.data.objects.new("Twin", rig.data.copy())
+    bpy.context.scene.collection.objects.link(twin)
+    twin.animation_data_create()
+    twin.animation_data.action = action
+    if fcurves.SLOTTED:
+        twin.animation_data.action_slot = rig.animation_data.action_slot
+    with pytest.raises(RuntimeError, match=r"Chain: its action '%s' also animates Twin" % action.name):
+        bpy.ops.quatcurve.reduce(error="DISTANCE")
     assert fcurves.active_action(rig) == action
     assert sorted(a.name for a in bpy.data.actions) == [action.name]

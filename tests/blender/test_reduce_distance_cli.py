@@ -103,3 +103,32 @@ def test_batch_reduce_distance_records_the_worst_distance(clip, tmp_path):
     # The record is the native verification of Blender's float32 evaluation; Blender's pose agrees.
     assert abs(worst[0] - record["max_distance"]) <= 0.05 * DISTANCE, (worst, record)
     print(json.dumps(record))
+
+
+def test_cli_and_batch_gltf_distance(clip, tmp_path):
+    """--gltf --error DISTANCE: the export's distance bound from the command line and in a batch (the
+    file itself is measured against Blender's pose in test_gltf_distance.py, through the same
+    gltf.export)."""
+    out = tmp_path / "mocap.glb"
+    proc = run_cli(["--gltf", out, "--error", "DISTANCE", clip.blend])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert any("glTF, curve AUTO, distance 1 mm, shell 10 cm" in line for line in lines), proc.stdout
+    assert any(line.strip().startswith("%s: worst distance" % clip.name) for line in lines), proc.stdout
+    total = next(line for line in lines if line.startswith("total: "))
+    assert "worst distance" in total and "(bound 1 mm)" in total, total
+    assert out.exists()
+    refused = tmp_path / "refused.glb"
+    proc = run_cli(["--gltf", refused, "--error", "DISTANCE", "--tolerance", "0.1", clip.blend])
+    assert proc.returncode == 2 and "--tolerance: not an option of --gltf --error DISTANCE" in error_lines(proc)[0]
+    assert not refused.exists()
+    folder = tmp_path / "glb"
+    proc = run_batch(["--gltf", tmp_path / "unused.glb", "--error", "DISTANCE", "--jobs", "1", "--output", folder,
+                      clip.blend.parent])
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    records, summary = read_results(folder)
+    record = records["mocap.blend"]
+    assert record["status"] == "done" and record["max_error_deg"] is None, record
+    assert 0 < record["max_distance"] <= DISTANCE, record
+    assert summary["max_distance"] == record["max_distance"]
+    assert (folder / "mocap.glb").exists()
