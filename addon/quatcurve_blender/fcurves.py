@@ -61,6 +61,13 @@ def active_action(id_data):
     return anim.action if anim is not None else None
 
 
+def shares_channels(a, b):
+    """Whether ID blocks a and b play the same F-curves: the same active action and (4.4+) the same
+    slot of it."""
+    action = active_action(a)
+    return action is not None and active_action(b) == action and _slot_identifier(a) == _slot_identifier(b)
+
+
 def _slot_identifier(id_data):
     anim = id_data.animation_data
     slot = anim.action_slot if anim is not None else None

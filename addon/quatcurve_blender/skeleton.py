@@ -13,7 +13,8 @@ Refused with a TargetError naming the armature, bone and channel or constraint: 
 beyond the bones' own channels or what the native pose does not model — NLA strips playing on the
 armature, drivers on pose bones, unmuted constraints on a bone, F-curve modifiers on a bone's
 location, rotation or scale, inherit scale other than Full or None, Local Location off, Relative
-Parenting. (B-Bone segments bend the deformation only, not pose_bone.matrix: not refused.)
+Parenting, an action (slot) that also animates another armature. (B-Bone segments bend the
+deformation only, not pose_bone.matrix: not refused.)
 """
 
 from dataclasses import dataclass, field
@@ -93,6 +94,17 @@ def _refuse_animation_system(obj, what):
                               "(remove the driver first)" % (obj.name, driver.data_path, driver.array_index))
 
 
+def _refuse_shared_action(obj):
+    """An armature whose action (slot) also animates another armature: its new keys would move the
+    other's bones, whose skeleton the bound did not measure."""
+    import bpy
+    others = [o.name for o in bpy.data.objects if o != obj and o.type == "ARMATURE" and fcurves.shares_channels(o, obj)]
+    if others:
+        raise TargetError("%s: its action '%s' also animates %s, whose bones the distance bound of this armature "
+                          "does not measure (give each armature its own action: Make Single User)"
+                          % (obj.name, fcurves.active_action(obj).name, ", ".join(sorted(others))))
+
+
 def _sampled(owner_target, found_by_prop, frames):
     return {prop: targets.evaluate_channels(owner_target, prop, found, frames)
             for prop, found in found_by_prop.items()}
@@ -128,6 +140,7 @@ def _armature_channels(obj, reduced_names, replaced=frozenset()):
     bone index by name, the names reduced). Bones in `replaced` have their rotation channels left
     out of the checks."""
     _refuse_animation_system(obj, "pose.bones[")
+    _refuse_shared_action(obj)
     bones = _parent_first(list(obj.data.bones))
     index = {b.name: i for i, b in enumerate(bones)}
     channels = fcurves.Channels.of(obj)
