@@ -65,7 +65,8 @@ def shares_channels(a, b):
     """Whether ID blocks a and b play the same F-curves: the same active action and (4.4+) the same
     slot of it."""
     action = active_action(a)
-    return action is not None and active_action(b) == action and _slot_identifier(a) == _slot_identifier(b)
+    return (action is not None and active_action(b) == action
+            and (not SLOTTED or _slot_identifier(a) == _slot_identifier(b)))
 
 
 def _slot_identifier(id_data):
