@@ -3,8 +3,9 @@ played with no code of ours (struct, json, numpy; glTF 2.0 samplers as the speci
 them), poses each bone so that its virtual vertices — the tail (0, length, 0) and the shell points
 (S, 0, 0), (0, S, 0), (0, 0, S) in the bone's pose space — stay within `distance` of Blender's own
 posed armature (pose_bone.matrix after frame_set) at every whole frame of the exported range;
-fewer rotation keys than Blender's default export; what the bound does not model is refused, with
-nothing written.
+fewer rotation keys than Blender's default export on the clip (the chain, keyed on every frame with
+Bezier handles, needs more: its file follows the handles between frames); what the bound does not
+model is refused, with nothing written.
 
 The oracle: each node's local matrix is T·R·S of its animated or static translation, rotation and
 scale (LINEAR: lerp, slerp for rotations; STEP; CUBICSPLINE), its world matrix the product up its
