@@ -379,6 +379,30 @@ def test_export_holds_its_bound_at_every_instant(animated, tmp_path, method):
     assert max(errors.values()) <= TOLERANCE + slack + 1e-4, errors
 
 
+def test_distance_export_holds_each_budget_at_every_instant(animated, tmp_path):
+    """error='DISTANCE' (tests/blender/test_gltf_distance.py measures the distance itself): each
+    rewritten sampler's line states its angle budget, and the file, evaluated by glTF's slerp at 64
+    points per frame and at random times, stays within that budget of Blender's playback at every one."""
+    import re
+    from quatcurve_blender import gltf
+    times = dense_times()
+    out = tmp_path / "distance.glb"
+    result = gltf.export(bpy.context.scene, str(out), gltf.ExportSettings(error="DISTANCE", distance=0.001, shell=0.1))
+    budgets = {}
+    for r in result.samplers:
+        assert r.rewritten and r.curve.endswith(", at every instant"), r.curve
+        budgets[r.target] = float(re.search(r"angle budget ([0-9.e-]+)°", r.curve).group(1))
+    assert set(budgets) == set(NAMES)
+    want = exporter_frames(blender_worlds(NAMES, times), exact_export(tmp_path / "exact.glb"), times)
+    errors = file_error(GltfFile(str(out)), want, times)
+    print("\nDISTANCE, Blender %s: %s; per node error / budget (°): %s" % (
+        bpy.app.version_string, result.summary(),
+        ", ".join("%s %.4f/%.4f" % (n, errors[n], budgets[n]) for n in NAMES)))
+    for n in NAMES:
+        # budgets print to 4 significant digits; the file's float32 quaternions add ~1e-6 rad
+        assert errors[n] <= budgets[n] * 1.0005 + 1e-4, (n, errors[n], budgets[n])
+
+
 @pytest.mark.parametrize("method", ["SQUAD", "SPLINE_C2"])
 def test_fitted_targets_export_their_method(animated, tmp_path, method):
     """Fitted targets (AUTO): the file plays the fit's method (Blender plays it within FIT_TOLERANCE)."""
