@@ -5,37 +5,29 @@ frame and 4 subframes. Objects and pose bones, every method, Euler orders and ax
 quaternion signs, refits, bad input (nothing changed), fewer than two keys."""
 import json
 import math
-import os
-import subprocess
-import sys
 
 import bpy
 import numpy as np
 import pytest
 
+import fresh_blender
 from bake_helpers import add_empty, add_rig, angles_between, file_state, key, select_bones, select_objects
 from quatcurve_blender import fcurves, fit, native
 
-EVALUATE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sessions", "evaluate_rotations.py")
-IS_BINARY = bool(bpy.app.binary_path)
 METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
 TOL = 0.05  # degrees
 
 
 def fresh_blender_quats(blend, targets, times, tmp_path, matrices=False):
-    """Blender's evaluation of the targets' rotations at `times`, in a fresh process from `blend`.
+    """Blender's evaluation of the targets' rotations at `times`, from `blend`, in a Blender process
+    that never loads the add-on (fresh_blender.py: one per session, every file opened anew).
     matrices: return ({name: quats}, {name: (N, 4, 4)}), the pose bones' pose_bone.matrix and the
     objects' matrix_basis too."""
     request, out = tmp_path / "request.json", tmp_path / "out.json"
     request.write_text(json.dumps({"targets": targets, "times": [float(t) for t in times], "matrices": matrices}))
-    if IS_BINARY:
-        cmd = [bpy.app.binary_path, "--background", "--factory-startup", str(blend), "--python", EVALUATE,
-               "--", str(request), str(out)]
-    else:
-        cmd = [sys.executable, EVALUATE, str(blend), str(request), str(out)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300,
-                          env=dict(os.environ, PYTHONNOUSERSITE="1"))
-    assert proc.returncode == 0 and out.exists(), proc.stdout[-2000:] + proc.stderr[-2000:]
+    if out.exists():
+        out.unlink()
+    fresh_blender.evaluate(blend, request, out)
     data = json.loads(out.read_text())
     quats = {name: np.array(q) for name, q in data["quats"].items()}
     if matrices:
