@@ -96,7 +96,7 @@ SESSION = textwrap.dedent('''
     def tick():
         try:
             next(steps)
-            return 0.1
+            return 0.02
         except StopIteration:
             pass
         except Exception:
