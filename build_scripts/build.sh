@@ -16,7 +16,7 @@ configure_and_build() {
   [ $# -gt 0 ] && shift
   build=("$@")
   mkdir -p "$dir"
-  cmake -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release \
+  cmake -S "$ROOT" -B "$dir" -DCMAKE_BUILD_TYPE=Release "${CCACHE_LAUNCHER[@]}" \
     -DPython_EXECUTABLE="$venv/bin/python" \
     -Dpybind11_DIR="$("$venv/bin/python" -m pybind11 --cmakedir)" \
     "${configure[@]}" >"$dir/configure.log" 2>&1 \
@@ -30,6 +30,8 @@ log "built $(ls "$BUILD_DIR"/python/quatcurve*.so)"
 for minor in $(python_minors); do
   [ "$minor" = "$PYTHON_MINOR" ] && continue
   dir="$(module_build_dir "$minor")"
-  configure_and_build "$dir" "$(build_venv "$minor")" -DQUATCURVE_TESTS=OFF -- --target quatcurve
+  # The library does not depend on Python: the primary tree's archive is linked, only the bindings compile.
+  configure_and_build "$dir" "$(build_venv "$minor")" -DQUATCURVE_TESTS=OFF \
+    -DQUATCURVE_CORE_LIBRARY="$BUILD_DIR/libquatcurve_core.a" -- --target quatcurve
   log "built $(ls "$dir"/python/quatcurve*.so) (Python $minor)"
 done

@@ -18,6 +18,16 @@ BPY_VERSIONS="${QUATCURVE_BPY_VERSIONS-4.5.15 5.0.1 5.2.3}"
 # Each other minor a Blender needs gets a module-only build in $BUILD_DIR/cp<MM> and a build venv.
 PYTHON_MINOR="${QUATCURVE_PYTHON_MINOR:-3.11}"
 
+# ccache (setup.sh installs it) keeps every compiled object under ~/.cache/ccache: a second clone, or a
+# second tree of the same flags, compiles nothing it compiled before. Paths below the clone are hashed
+# relative to it, so clones in different folders share the cache.
+if command -v ccache >/dev/null 2>&1 && [ -z "${QUATCURVE_NO_CCACHE:-}" ]; then
+  CCACHE_LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=1
+else
+  CCACHE_LAUNCHER=()
+fi
+
 log() { printf '[quatcurve] %s\n' "$*" >&2; }
 die() { printf '[quatcurve] error: %s\n' "$*" >&2; exit 1; }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what a fresh Debian 12 machine lacks to build and test quatcurve. Idempotent and quiet:
 # a second run changes nothing and takes a few seconds.
-#   1. Debian packages: compiler, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
+#   1. Debian packages: compiler, ccache, CMake, GLM, GoogleTest, Blender 3.4.1 (+ numpy, pytest, jsonschema for its
 #      Python), Xvfb; Slurm and munge (the batch's one-node cluster test), Node.js (the Flamenco job type's test)
 #   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
 #      once the module is built (a .pth file points at build/python). It is Python 3.11's; with
@@ -13,7 +13,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-APT_PACKAGES="build-essential cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
+APT_PACKAGES="build-essential ccache cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
 python3-pytest python3-jsonschema blender xvfb xauth slurm-wlm munge nodejs"
 
 missing=()

@@ -2,15 +2,22 @@
 # UndefinedBehaviorSanitizer (QUATCURVE_SANITIZE=ON, no Python module, no Blender suites) and run
 # the GoogleTest executable there. Fails on any failed test and on any sanitizer report (UBSan is
 # built with -fno-sanitize-recover=all, so a report aborts; the output is also scanned).
-#   cmake -DSOURCE_DIR=<repo> -DBINARY_DIR=<build>/sanitize [-DJOBS=2] -P run_sanitized.cmake
+#   cmake -DSOURCE_DIR=<repo> -DBINARY_DIR=<build>/sanitize [-DJOBS=2] [-DLAUNCHER=ccache] -P run_sanitized.cmake
+# Built at -Og with line tables only (-g1): symbolized stack traces, and a compile several times
+# shorter than -O2 -g under ASan + UBSan instrumentation (curve_squad.cpp: 23 s against 143 s).
 cmake_minimum_required(VERSION 3.18)
 if(NOT DEFINED JOBS)
   set(JOBS 2)
 endif()
+set(launcher "")
+if(LAUNCHER)
+  set(launcher "-DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER}")
+endif()
 
 execute_process(
   COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${BINARY_DIR}
-          -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQUATCURVE_SANITIZE=ON -DQUATCURVE_PYTHON=OFF
+          -DCMAKE_BUILD_TYPE=Sanitize "-DCMAKE_CXX_FLAGS_SANITIZE=-Og -g1" ${launcher}
+          -DQUATCURVE_SANITIZE=ON -DQUATCURVE_PYTHON=OFF
           -DQUATCURVE_TESTS=ON -DQUATCURVE_BLENDERS=
           -DCMAKE_GTEST_DISCOVER_TESTS_DISCOVERY_MODE=PRE_TEST
   RESULT_VARIABLE status OUTPUT_VARIABLE log ERROR_VARIABLE log)
