@@ -13,6 +13,7 @@ read back through skeleton.read_armature), posed natively (Skeleton.vertex_error
 Run with any Blender:
   ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_reduce_distance_blender.py
   blender -b --factory-startup --python tests/bench/bench_reduce_distance_blender.py
+`--smoke` (tests/bench/smoke.py): the smaller clip (freebvh) alone, 2 bisection steps instead of 8.
 """
 import math
 import os
@@ -30,7 +31,7 @@ import bench_reduce_blender as base  # noqa: E402  (import_clip, graph_editor_co
 import smoke  # noqa: E402
 from quatcurve_blender import fcurves, native, reduce, skeleton, targets  # noqa: E402
 
-CLIPS = ("mocapbank.bvh", "freebvh.bvh")
+CLIPS = ("freebvh.bvh",) if smoke.SMOKE else ("mocapbank.bvh", "freebvh.bvh")
 SCALE = 0.01             # scene unit scale: the clips are in centimetres
 DISTANCE, SHELL = 0.001 / SCALE, 0.1 / SCALE
 STEPS = 2 if smoke.SMOKE else 8

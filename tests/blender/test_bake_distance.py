@@ -72,6 +72,7 @@ def test_mocap_bake_keeps_every_virtual_vertex_within_the_distance_of_the_dense_
     assert worst[0] <= DISTANCE, worst
 
 
+@pytest.mark.per_kind
 def test_cli_bake_with_error_distance(scene, tmp_path):
     import_clip()
     blend = tmp_path / "mocap.blend"

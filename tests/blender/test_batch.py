@@ -201,6 +201,7 @@ def test_local_run(first_run, library):
     bpy.ops.wm.read_factory_settings(use_empty=True)
 
 
+@pytest.mark.per_kind
 def test_unreadable_files_say_why(addon, tmp_path):
     """A BVH cut in a frame row, an FBX and a .glb cut in half (broken_files.py): each record's reason,
     progress line and summary line give the exception Blender's importer raised and the likely cause,
@@ -227,6 +228,7 @@ def test_unreadable_files_say_why(addon, tmp_path):
     assert "Location:" not in proc.stdout and "Location:" not in " ".join(reasons.values())
 
 
+@pytest.mark.per_kind
 def test_resume_force_and_deterministic(first_run, library, tmp_path):
     out, _, _, _ = first_run
     again = run_batch(["--reduce", "--tolerance", "0.05", "--jobs", "2", "--output", out, library])
@@ -258,6 +260,7 @@ def children(pid):
         return []
 
 
+@pytest.mark.per_kind
 def test_killed_worker_then_rerun(library, tmp_path):
     """A worker killed with SIGKILL from outside while it works on a file (held there by the test hook
     QUATCURVE_BATCH_FAULT='hang:…', which marks when it is there): that file fails with the reason, the
@@ -290,6 +293,7 @@ def test_killed_worker_then_rerun(library, tmp_path):
     assert records[failed[0]]["status"] == "done" and summary["failed"] == 0
 
 
+@pytest.mark.per_kind
 def test_crash_on_one_file_and_kill_during_save(library, tmp_path):
     """A Blender that dies on one file (QUATCURVE_BATCH_FAULT=crash:…) fails only that file, so does
     one that takes longer than --timeout; a kill
@@ -342,6 +346,7 @@ def submitted_job(proc):
     return found.group(1)
 
 
+@pytest.mark.per_kind
 def test_slurm_array(first_run, library, cluster, tmp_path):
     """The library through `--slurm` (4 array tasks of up to 2 files), `--collect`: the same records
     as the local run apart from timings. A rerun submits only the two failed files."""
@@ -367,6 +372,7 @@ def test_slurm_array(first_run, library, cluster, tmp_path):
     assert summary["skipped"] == 5 and summary["failed"] == 2 and summary["missing"] == 0
 
 
+@pytest.mark.per_kind
 def test_plan_for_a_farm(library, tmp_path, capsys):
     """--plan (for Flamenco: farm/flamenco/quatcurve-batch.js) writes the chunked plan and the
     per-chunk script without running anything (in this process)."""
@@ -396,6 +402,7 @@ def test_plan_for_a_farm(library, tmp_path, capsys):
     ("collect-nothing", ["--collect", "{OUT}"], "no batch plan"),
     ("same-output", ["--output", "{OUT}", "{TMP}/same"], "inputs spin.bvh and spin.fbx would both be saved as spin.blend"),
 ])
+@pytest.mark.per_kind
 def test_bad_arguments(library, tmp_path, capsys, name, args, fragment):
     """Checked by the coordinator before any worker starts: run in this process."""
     (tmp_path / "same").mkdir()

@@ -119,6 +119,7 @@ def rotation_key_counts(rig, bone, count=4):
 
 # ---- tests ------------------------------------------------------------------------------------------
 
+@pytest.mark.per_kind
 def test_help_documents_every_option(addon):
     proc = run_cli(["--help"])
     assert proc.returncode == 0, proc.stderr
@@ -244,6 +245,7 @@ def test_fit_keeps_the_animators_keys_and_plays_the_method(addon, source_blend, 
         assert err <= 0.02 + 1e-3, "%s: %.5f°" % (name, err)
 
 
+@pytest.mark.per_kind
 def test_fit_that_fails_exits_1_and_saves_nothing(addon, tmp_path):
     """An axis-angle key with a zero axis cannot be fitted: status 1, one line naming the target,
     channels and frame, no output file."""
@@ -290,6 +292,7 @@ def broken(addon, tmp_path_factory):
     ("fbx", ("Blender's FBX importer: ", "; likely cause: the file ends early: node '")),
     ("glb", ("Blender's glTF importer: ", "; likely cause: the file ends early: its header declares ")),
 ])
+@pytest.mark.per_kind
 def test_unreadable_input_says_why(broken, tmp_path, kind, words):
     """An input Blender's importer cannot read (broken_files.py): status 2, one line with the exception the
     importer raised and the likely cause; not bpy.ops' 'Location:', nor the traceback Blender prints for a
@@ -344,6 +347,7 @@ BAD_ARGUMENTS = [
 ]
 
 
+@pytest.mark.per_kind
 @pytest.mark.parametrize("case", BAD_ARGUMENTS, ids=[c[0] for c in BAD_ARGUMENTS])
 def test_bad_argument_fails_with_one_line_and_leaves_input_alone(addon, source_blend, tmp_path, case):
     _, template, status, words = case

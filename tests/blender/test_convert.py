@@ -510,6 +510,7 @@ def test_gltf_imported_rig_converts(scene, tmp_path):
 
 # ---- the command line --------------------------------------------------------------------------------
 
+@pytest.mark.per_kind
 def test_cli_convert_plays_as_before(scene, tmp_path):
     from test_cli import run_cli
     eul, quat, rig, owners = build_sources()

@@ -476,6 +476,7 @@ def test_round_trip_through_blenders_importer_and_fit(animated, tmp_path):
     assert worst <= TOLERANCE + FIT_TOLERANCE + 1e-4
 
 
+@pytest.mark.per_kind
 def test_cli_writes_the_same_file(animated, tmp_path):
     import subprocess
     import sys

@@ -265,6 +265,7 @@ def test_trails_draw_one_period_of_blender_and_the_closed_curve(loops):
 
 # ---- the CLI ----------------------------------------------------------------------------------------
 
+@pytest.mark.per_kind
 @pytest.mark.parametrize("task", [["--method", "SQUAD"], ["--reduce", "--tolerance", "0.1"]])
 def test_cli_bakes_and_reduces_loops_keeping_them_loops(loops, tmp_path, task):
     from test_cli import run_cli
@@ -280,6 +281,7 @@ def test_cli_bakes_and_reduces_loops_keeping_them_loops(loops, tmp_path, task):
         assert cycles.loop_of(target) == loop, (name, proc.stdout)
 
 
+@pytest.mark.per_kind
 def test_cli_gltf_writes_one_period(loops, tmp_path):
     from test_cli import run_cli
     source, out = tmp_path / "loops.blend", tmp_path / "loops.glb"
@@ -294,6 +296,7 @@ def test_cli_gltf_writes_one_period(loops, tmp_path):
         assert (values[0] == values[-1]).all(), name
 
 
+@pytest.mark.per_kind
 @pytest.mark.parametrize("task", [["--fit", "--method", "SQUAD", "--tolerance", "0.05"], ["--convert", "QUATERNION"],
                                   ["--convert", "ZXY"]])
 def test_cli_fits_and_converts_loops_keeping_them_loops(loops, tmp_path, task):
@@ -314,6 +317,7 @@ def test_cli_fits_and_converts_loops_keeping_them_loops(loops, tmp_path, task):
         assert after is not None and (after.start, after.end) == (loop.start, loop.end), (name, after, proc.stdout)
 
 
+@pytest.mark.per_kind
 def test_cli_gltf_with_an_explicit_method_writes_one_period(loops, tmp_path):
     """--gltf-curve SQUAD on loops: one period per sampler, the first and last keys equal."""
     from test_cli import run_cli
@@ -376,6 +380,7 @@ def test_a_cyclic_range_that_is_not_the_loop_is_refused(scene):
         fit.fit([target], fit.FitSettings(method="SQUAD"))
 
 
+@pytest.mark.per_kind
 @pytest.mark.parametrize("task", [["--method", "SQUAD"], ["--reduce", "--tolerance", "0.1"],
                                   ["--convert", "QUATERNION"]])
 def test_batch_passes_loops_through_every_task(loops, tmp_path, task):
@@ -398,6 +403,7 @@ def test_batch_passes_loops_through_every_task(loops, tmp_path, task):
         assert after is not None and (after.start, after.end) == (loop.start, loop.end), (name, after, proc.stdout)
 
 
+@pytest.mark.per_kind
 def test_batch_gltf_writes_one_period(loops, tmp_path):
     from test_batch import read_results, run_batch
     source = tmp_path / "loops.blend"

@@ -75,6 +75,7 @@ def test_cli_reduce_distance_keeps_blenders_pose_within_the_default(clip, tmp_pa
     check_pose(clip, out, tmp_path)
 
 
+@pytest.mark.per_kind
 def test_cli_distance_options_are_refused_where_they_mean_nothing(clip, tmp_path):
     out = tmp_path / "out.blend"
     for args, words in ((["--reduce-keys", "LINEAR"], "--reduce-keys: not an option of a bake"),
@@ -88,6 +89,7 @@ def test_cli_distance_options_are_refused_where_they_mean_nothing(clip, tmp_path
         assert not out.exists()
 
 
+@pytest.mark.per_kind
 def test_batch_reduce_distance_records_the_worst_distance(clip, tmp_path):
     out = tmp_path / "out"
     proc = run_batch(["--reduce", "--error", "DISTANCE", "--distance", DISTANCE, "--shell", SHELL, "--jobs", "1",
@@ -105,6 +107,7 @@ def test_batch_reduce_distance_records_the_worst_distance(clip, tmp_path):
     print(json.dumps(record))
 
 
+@pytest.mark.per_kind
 def test_cli_and_batch_gltf_distance(clip, tmp_path):
     """--gltf --error DISTANCE: the export's distance bound from the command line and in a batch (the
     file itself is measured against Blender's pose in test_gltf_distance.py, through the same
