@@ -73,6 +73,12 @@ python_missing() {
 
 bpy_python() { echo "$VENV_CACHE/bpy-$1/bin/python"; }
 
+# The pinned zig (PyPI ziglang, build_scripts/requirements-dev.txt) that builds the packages lives in a
+# venv of the per-user cache, at one path for every clone: zig keys its cache of the libc++ and libc it
+# builds for each target (~/.cache/zig) by its own library's path, so a zig inside each clone's .venv
+# would build them again in every clone.
+zig_venv() { echo "$VENV_CACHE/$(grep -E '^ziglang==' "$ROOT/build_scripts/requirements-dev.txt" | sed 's/==/-/')"; }
+
 # build_venv MINOR / module_build_dir MINOR: the venv whose interpreter and pybind11 build the module
 # for MINOR (the root .venv is Python 3.11's, Debian 12's own; another minor's is .venv-cp<MM>), and
 # the build directory of that module.

@@ -49,7 +49,7 @@ if(NOT TARGET glm::glm)
   set_target_properties(glm::glm PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "$tc/include")
 endif()
 EOF
-zig="$("$VENV/bin/python" -c 'import os, ziglang; print(os.path.join(os.path.dirname(ziglang.__file__), "zig"))')"
+zig="$("$(zig_venv)/bin/python" -c 'import os, ziglang; print(os.path.join(os.path.dirname(ziglang.__file__), "zig"))')"
 [ -x "$zig" ] || die "zig not found in the ziglang package ($zig)"
 cat > "$tc/c++" <<EOF
 #!/bin/sh

@@ -6,7 +6,8 @@
 #   2. .venv at the repo root (pinned numpy, scipy, pytest, pybind11, jsonschema); `import quatcurve` works in it
 #      once the module is built (a .pth file points at build/python). It is Python 3.11's; with
 #      QUATCURVE_PYTHON_MINOR=3.13 the primary build's venv is .venv-cp313 instead.
-#   3. one venv per pinned bpy version in $VENV_CACHE, of the Python that bpy release runs (3.11 or 3.13)
+#   3. one venv per pinned bpy version in $VENV_CACHE, of the Python that bpy release runs (3.11 or 3.13),
+#      and one with the pinned zig that builds the packages (common.sh's zig_venv)
 #   4. for every other Python minor a Blender runs (3.13 for bpy 5.2), a small build venv
 #      .venv-cp<MM> with pybind11, for the module's second build (build.sh)
 # A Blender whose Python is not on this machine is left out, and said so (test.sh repeats it).
@@ -64,6 +65,7 @@ for minor in $(python_minors); do
   [ -x "$venv/bin/python" ] && grep -qF -- "$pybind11_req" "$venv/.quatcurve-requirements" 2>/dev/null && continue
   pip_env "$minor" "$venv" "$pybind11_req"
 done
+pip_env "$PYTHON_MINOR" "$(zig_venv)" "$(grep -E '^ziglang==' "$ROOT/build_scripts/requirements-dev.txt")"
 for v in $BPY_VERSIONS; do
   minor="$(bpy_python_minor "$v")"
   have_python "$minor" || continue
