@@ -248,9 +248,6 @@ def verdict(rows, title):
     """Prints the table; returns the failure message (empty when every row holds its bound)."""
     print("\n[everywhere] %s (Blender %s), largest deviation in degrees, ! above the bound:\n%s"
           % (title, bpy.app.version_string, table(rows)))
-    for r in rows:
-        if "ABOVE the tolerance" in r.note and not r.failed:
-            print("[everywhere] reported by the fit, and kept: " + r.text())
     failed = [r for r in rows if r.failed]
     if not failed:
         return ""
