@@ -26,8 +26,9 @@ constexpr double kAddedSampleGap = 1.0 / 1024.0;
 // A sample interval where the proof fails, and the one on either side of it, get samples at their
 // quarters too (add_samples).
 constexpr int kQuarters = 4;
-// prove_within halves an interval down to this (frames): finer than the fit's 1/1024, since a reduction
-// at 90% of the tolerance may run close to it between samples where both playbacks turn fast.
+// prove_within halves an interval down to this (frames): 16 times finer than prove_playback's default
+// 1/1024, since a reduction at 90% of the tolerance may run close to it between samples where both
+// playbacks turn fast (the fit goes down to 1/65536, fit.cpp's kProofMinStep).
 constexpr double kMinStep = 1.0 / 16384.0;
 // Evaluations the proof of a piece may spend per sample (and at least kMinEvaluations): a cap that only
 // a proof stuck at min_step everywhere reaches (what is left then counts as unproven).
