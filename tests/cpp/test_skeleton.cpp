@@ -203,6 +203,61 @@ TEST(Skeleton, InheritRotationOffFollowsTheParentsTailNotItsTurn) {
     expect_near(Mat4(Mat3(m[1])), Mat4(Mat3(2.0)), 1e-12, "hinge axes");
 }
 
+// Inherit scale NONE under a sheared parent pose (a non-uniformly scaled grandparent, a turned parent
+// with FULL inherit scale): Blender takes the parent's axes through orthogonalize_stable around Y. The
+// reference is that rule's statement, not its steps: Y is the parent's Y direction; in the plane
+// across it, the parent's X and Z (projected off Y, at angle phi) each turn by half of (90° − phi),
+// away from each other, so X sits at −(90° − phi)/2 from the parent's X and Z at the same angle
+// beyond the parent's Z.
+TEST(Skeleton, InheritScaleNoneUnderAShearedParentTakesTheStableOrthogonalization) {
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), sc(0.4, 2.5);
+    int sheared = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        std::vector<BoneSpec> specs(3);
+        for (int b = 0; b < 3; ++b) {
+            specs[b].parent = b - 1;
+            specs[b].bone_mat = glm::mat3_cast(random_unit(rng));
+            specs[b].length = 0.3 + 0.2 * std::abs(u(rng));
+            specs[b].head = b == 0 ? Vec3(0.0) : Vec3(u(rng), u(rng), u(rng)) * 0.2;
+        }
+        specs[2].inherit_scale = InheritScale::NONE;
+        const Skeleton sk = skeleton_of(specs);
+        SkeletonPose p;
+        p.samples = 1;
+        p.location = {Vec3(u(rng), u(rng), u(rng)) * 0.3, Vec3(u(rng), u(rng), u(rng)) * 0.3,
+                      Vec3(u(rng), u(rng), u(rng)) * 0.3};
+        p.rotation = {random_unit(rng), random_unit(rng), random_unit(rng)};
+        p.scale = {Vec3(sc(rng), sc(rng), sc(rng)), Vec3(sc(rng), sc(rng), sc(rng)), Vec3(sc(rng), sc(rng), sc(rng))};
+        const std::vector<Mat4> m = pose_matrices(sk, p);
+        const Mat4& parent = m[1];
+        const Vec3 y = glm::normalize(Vec3(parent[1]));
+        const Vec3 xp = glm::normalize(Vec3(parent[0]) - y * glm::dot(Vec3(parent[0]), y));
+        const Vec3 zp = glm::normalize(Vec3(parent[2]) - y * glm::dot(Vec3(parent[2]), y));
+        const double phi = std::acos(std::clamp(glm::dot(xp, zp), -1.0, 1.0));
+        if (std::abs(std::cos(phi)) < 1e-3) continue;  // (nearly) unsheared: nothing to tell apart
+        ++sheared;
+        // The plane across Y: u along the parent's X, w towards its Z.
+        const Vec3 w = glm::normalize(zp - xp * glm::dot(zp, xp));
+        const double turn = (0.5 * kPi - phi) / 2.0;
+        Mat4 stable(1.0);
+        stable[0] = Vec4(xp * std::cos(-turn) + w * std::sin(-turn), 0.0);
+        stable[1] = Vec4(y, 0.0);
+        stable[2] = Vec4(xp * std::cos(phi + turn) + w * std::sin(phi + turn), 0.0);
+        // The child's pose (BKE_bone_parent_transform_calc_from_matrices, inherit scale NONE): its
+        // rotation and scale from the orthonormal axes, its head from the parent's full pose.
+        Mat3 rs = glm::mat3_cast(glm::normalize(p.rotation[2]));
+        for (int c = 0; c < 3; ++c) rs[c] *= p.scale[2][c];
+        Mat4 chan(rs);
+        chan[3] = Vec4(p.location[2], 1.0);
+        const Mat4 offs = offset_of(specs, 2);
+        Mat4 want = stable * offs * chan;
+        want[3] = parent * offs * Vec4(p.location[2], 1.0);
+        expect_near(m[2], want, 1e-9, "inherit scale NONE under a sheared parent");
+    }
+    EXPECT_GT(sheared, 150) << "too few sheared parents to test";
+}
+
 TEST(Skeleton, VertexErrorIsTheWorstDisplacementAndWhereItIs) {
     std::vector<BoneSpec> specs(3);
     specs[0].length = 1.0;
