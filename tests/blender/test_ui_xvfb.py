@@ -207,8 +207,8 @@ def test_trails_drawn_where_the_orientation_projects(tmp_path):
                    + ([MOCAP] if os.path.exists(MOCAP) else []),
                    check=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=240, env=env)
     verdict_path = tmp_path / "trails.json"
-    proc = subprocess.run([xvfb, "-a", "-s", "-screen 0 1600x1200x24", blender, "--factory-startup",
-                           "--window-geometry", "0", "0", "1600", "1200", "--enable-event-simulate", str(demo),
+    proc = subprocess.run([xvfb, "-a", "-s", "-screen 0 1600x900x24", blender, "--factory-startup",
+                           "--window-geometry", "0", "0", "1600", "900", "--enable-event-simulate", str(demo),
                            "--python", os.path.join(os.path.dirname(__file__), "sessions", "trails_session.py"),
                            "--", str(verdict_path), SCREENSHOTS],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600, env=env)

@@ -1,7 +1,7 @@
 """Orientation trails and the sidebar's subpanels in a Blender with a window (run under Xvfb by
 tests/blender/test_ui_xvfb.py):
 
-    xvfb-run -a -s "-screen 0 1600x1200x24" blender --factory-startup --window-geometry 0 0 1600 1200 \
+    xvfb-run -a -s "-screen 0 1600x900x24" blender --factory-startup --window-geometry 0 0 1600 900 \
         --enable-event-simulate DEMO.blend --python tests/blender/sessions/trails_session.py -- VERDICT.json SHOTS
 
 On the demo scene (build_scripts/demo_scene.py): for FixedAngle, Spin and a Mocap bone in turn, makes
