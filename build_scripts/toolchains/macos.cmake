@@ -10,6 +10,9 @@ set(CMAKE_SYSTEM_VERSION 20.0)  # Darwin 20: macOS 11
 set(CMAKE_SYSTEM_PROCESSOR ${QUATCURVE_MACOS_ARCH})
 set(CMAKE_OSX_SYSROOT "" CACHE PATH "zig's own macOS headers and stubs; no SDK")
 quatcurve_zig_compiler(${QUATCURVE_MACOS_ARCH_ZIG}-macos.11.0)
+# No strip after the link (pybind11 strips a Release module when CMAKE_STRIP names a program): the build
+# machine's strip does not know Mach-O, and stripping would break the ad-hoc signature zig's linker writes.
+set(CMAKE_STRIP "" CACHE FILEPATH "no strip: it would break the code signature")
 
 # FindPython, without an interpreter of the target: the headers alone (a module resolves the C API at load).
 if(NOT EXISTS "${QUATCURVE_PYTHON_SDK}/include/Python.h")
