@@ -1,16 +1,17 @@
-"""Assembles the two installable packages from the add-on sources and a built module wheel.
+"""Assembles the installable packages from the add-on sources and the built module wheels.
 
-    python package.py --wheel dist/wheels/quatcurve-…-cp311-….whl --out dist [--blender-ext PATH]
+    python package.py --wheel dist/wheels/quatcurve-…-cp311-….whl [--wheel …] --out dist [--blender-ext PATH]
 
-1. dist/quatcurve_blender-<version>-legacy-<pytag>.zip: a folder `quatcurve_blender/` with the
-   add-on's sources and the compiled module, for Preferences → Add-ons → Install (Blender 3.4–4.1,
-   `bl_info`).
+1. dist/quatcurve_blender-<version>-legacy-<platform>-<pytag>.zip, one per wheel of a Python that
+   Blender 3.4–4.1 run (cp310, cp311): a folder `quatcurve_blender/` with the add-on's sources and that
+   wheel's compiled module, for Preferences → Add-ons → Install (`bl_info`). <platform> is Blender's name
+   of the wheel's platform (linux-x64, windows-x64, macos-arm64, macos-x64).
 2. dist/quatcurve_blender-<version>-extension.zip: a Blender 4.2+ extension (`blender_manifest.toml`)
-   whose native module travels as a platform wheel listed in the manifest; built and validated with
-   Blender's own extension tool (`blender --command extension build/validate`, the script
-   `bl_pkg/cli/blender_ext.py`) when `--blender-ext` names it.
-Several wheels (cp311 and cp313; Linux, Windows, macOS) may be given: the extension lists them all,
-its `platforms` are those of the wheels, and Blender installs the one matching its Python and system.
+   whose native module travels as platform wheels listed in the manifest: every given wheel of a Python
+   that Blender 4.2+ run (cp311, cp313), its `platforms` those of the wheels; Blender installs the one
+   matching its Python and system. Built and validated with Blender's own extension tool
+   (`blender --command extension build/validate`, the script `bl_pkg/cli/blender_ext.py`) when
+   `--blender-ext` names it.
 """
 
 import argparse
@@ -38,12 +39,25 @@ def manifest_version():
         return re.search(r'^version\s*=\s*"([^"]+)"', f.read(), re.M).group(1)
 
 
+# The Pythons of the Blenders that install legacy add-ons (3.4–4.0: 3.10; 4.1: 3.11) and of those that
+# install extensions (4.2–5.0: 3.11; 5.1+: 3.13).
+LEGACY_PYTHONS = ("cp310", "cp311")
+EXTENSION_PYTHONS = ("cp311", "cp313")
+
+
+def python_tag(wheel):
+    return os.path.basename(wheel).split("-")[2]
+
+
 def legacy_zip(wheels, out):
     version = manifest_version()
     paths = []
     for wheel in wheels:
-        pytag = os.path.basename(wheel).split("-")[2]
-        path = os.path.join(out, "quatcurve_blender-%s-legacy-%s.zip" % (version, pytag))
+        pytag = python_tag(wheel)
+        if pytag not in LEGACY_PYTHONS:
+            continue
+        (platform,) = wheel_platforms(wheel)
+        path = os.path.join(out, "quatcurve_blender-%s-legacy-%s-%s.zip" % (version, platform, pytag))
         with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z, zipfile.ZipFile(wheel) as w:
             for name in addon_sources():
                 z.write(os.path.join(ADDON, name), "quatcurve_blender/" + name)
@@ -65,7 +79,7 @@ PLATFORMS = (
 
 
 def wheel_platforms(wheel):
-    """The Blender platforms a wheel serves, from its file name's platform tag(s)."""
+    """The Blender platforms a wheel serves, from its file name's platform tag(s) (a universal2 wheel: two)."""
     found = set()
     for tag in os.path.basename(wheel)[:-len(".whl")].split("-")[-1].split("."):
         found.update(name for pattern, name in PLATFORMS if re.match(pattern, tag))
@@ -76,6 +90,9 @@ def wheel_platforms(wheel):
 
 def extension_zip(wheels, out, blender_ext):
     version = manifest_version()
+    wheels = [w for w in wheels if python_tag(w) in EXTENSION_PYTHONS]
+    if not wheels:
+        raise SystemExit("no wheel for the extension (its Pythons: %s)" % ", ".join(EXTENSION_PYTHONS))
     stage = tempfile.mkdtemp(prefix="quatcurve-ext-")
     try:
         os.makedirs(os.path.join(stage, "wheels"))
@@ -118,6 +135,9 @@ def main():
     parser.add_argument("--blender-ext", help="path to Blender's bl_pkg/cli/blender_ext.py")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    for old in os.listdir(args.out):  # a previous run's zips (platforms or Pythons left out this time)
+        if old.startswith("quatcurve_blender-") and old.endswith(".zip"):
+            os.remove(os.path.join(args.out, old))
     for path in legacy_zip(args.wheel, args.out) + [extension_zip(args.wheel, args.out, args.blender_ext)]:
         print("wrote", os.path.relpath(path, os.getcwd()))
 

@@ -1,21 +1,28 @@
 #!/usr/bin/env bash
-# Builds the installable packages into dist/:
-#   dist/wheels/quatcurve-<v>-cp311-cp311-manylinux_2_28_x86_64.whl   the native module, Python 3.11
-#                                                                       (Blender 3.4–5.0)
-#   dist/wheels/quatcurve-<v>-cp313-cp313-manylinux_2_28_x86_64.whl   the same for Python 3.13 (Blender 5.1+)
-#   dist/quatcurve_blender-<v>-legacy-cp311.zip (and -cp313)           Blender 3.4–4.1: Preferences → Add-ons → Install
-#   dist/quatcurve_blender-<v>-extension.zip                           Blender 4.2+: Install from Disk; lists both
-#                                                                       wheels, Blender installs the one for its Python
+# Builds the installable packages into dist/, for Linux, Windows and macOS, on this Linux machine:
+#   dist/wheels/quatcurve-<v>-cp3XX-cp3XX-<platform>.whl            the native module, one wheel per platform and
+#       Python: manylinux_2_28_x86_64, win_amd64, macosx_11_0_arm64, macosx_11_0_x86_64 for cp311 (Blender
+#       4.1–5.0) and cp313 (Blender 5.1+); manylinux_2_28_x86_64 also for cp310 (official Blender 3.4–4.0)
+#   dist/quatcurve_blender-<v>-extension.zip                        Blender 4.2+: Install from Disk; lists every
+#       cp311 and cp313 wheel, Blender installs the one for its system and Python
+#   dist/quatcurve_blender-<v>-legacy-<platform>-<cp3XX>.zip        Blender 3.4–4.1: Preferences → Add-ons →
+#       Install; one per platform and Python of those Blenders (cp310, cp311)
+# QUATCURVE_PACKAGE_PLATFORMS limits the platforms (default: "linux-x64 windows-x64 macos-arm64 macos-x64").
 #
-# Portable Linux wheels: Blender's own Linux builds need glibc 2.28, and a module built by this
-# machine's compiler would need this machine's newer glibc. Each wheel is `pip wheel .` (scikit-build-core,
-# pyproject.toml) with zig's clang (PyPI `ziglang`) as the C++ compiler, targeting x86_64-linux-gnu.2.28:
-# zig links against glibc 2.28's symbol versions and links its libc++ statically, so the module needs
-# nothing newer than glibc 2.28 and no libstdc++. `auditwheel repair --plat manylinux_2_28_x86_64`
-# checks that and tags the wheel; `auditwheel show` prints the proof (tests/package/run.sh checks it).
-# The cp313 wheel is built when a Python 3.13 is found (common.sh's find_python: /usr/bin/python3.13,
-# pyenv's newest 3.13.*, or python3.13 on PATH); without one, only cp311 is built, with a note.
-# Idempotent: the build venvs and CMake trees in build-wheels/ are reused, so a second run recompiles nothing.
+# Every wheel is the ordinary `pip wheel .` (scikit-build-core, pyproject.toml) with zig's clang (PyPI
+# `ziglang`) as the C++ compiler, run by a build venv of that Python minor (it names the wheel's Python tag):
+# - Linux: targeting x86_64-linux-gnu.2.28. Blender's own Linux builds need glibc 2.28, and a module built by
+#   this machine's compiler would need this machine's newer glibc: zig links against glibc 2.28's symbol
+#   versions and links its libc++ statically, so the module needs nothing newer than glibc 2.28 and no
+#   libstdc++. `auditwheel repair --plat manylinux_2_28_x86_64` checks that and tags the wheel.
+# - Windows and macOS: a CMake toolchain file of build_scripts/toolchains/ (x86_64-windows-gnu;
+#   aarch64/x86_64-macos.11.0), with the target's CPython headers (and Windows import library) from
+#   build_scripts/cross_inputs.py, which fetches and checks them once into the cache. scikit-build-core
+#   names the module and tags the wheel from SETUPTOOLS_EXT_SUFFIX and _PYTHON_HOST_PLATFORM.
+# The cp313 and cp310 wheels are built when a Python of that minor is found (common.sh's find_python:
+# /usr/bin/python3.X, pyenv's newest 3.X.*, or python3.X on PATH); without one, a note says what is left out.
+# Idempotent: the build venvs and CMake trees in build-wheels/ are reused, so a second run recompiles nothing,
+# and a wheel whose inputs were built before (in any clone) comes from the wheel cache (below).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -59,10 +66,28 @@ EOF
 chmod +x "$tc/c++"
 
 # ---- the Pythons ----------------------------------------------------------------------------------
-pythons=("$(base_python 3.11)")
-py313="$(find_python 3.13)"
-if [ -n "$py313" ]; then pythons+=("$py313"); else
-  log "note: building the cp311 wheel only (no Blender 5.1+): no Python 3.13 found ($(python_missing 3.13))"; fi
+# cp311 serves Blender 4.1–5.0 (and Debian's 3.4), cp313 Blender 5.1+, cp310 the official Blender 3.4–4.0.
+# cp310 is built for Linux only: a Windows or macOS module needs CPython 3.10's own headers, which no
+# Debian release carries any more (cross_inputs.py takes them from Debian's source packages).
+declare -A python_of=([cp311]="$(base_python 3.11)")
+for minor in 3.13 3.10; do
+  p="$(find_python "$minor")"
+  if [ -n "$p" ]; then python_of[cp${minor/./}]="$p"; else
+    log "note: no cp${minor/./} wheels: no Python $minor found ($(python_missing "$minor"))"; fi
+done
+PLATFORMS="${QUATCURVE_PACKAGE_PLATFORMS:-linux-x64 windows-x64 macos-arm64 macos-x64}"
+targets=()  # "PLATFORM TAG" pairs, in build order
+for platform in $PLATFORMS; do
+  case "$platform" in linux-x64|windows-x64|macos-arm64|macos-x64) ;; *)
+    die "unknown platform '$platform' in QUATCURVE_PACKAGE_PLATFORMS (linux-x64 windows-x64 macos-arm64 macos-x64)" ;;
+  esac
+  for tag in cp311 cp313 cp310; do
+    [ -n "${python_of[$tag]:-}" ] || continue
+    [ "$tag" = cp310 ] && [ "$platform" != linux-x64 ] && continue
+    targets+=("$platform $tag")
+  done
+done
+cross_inputs() { "$VENV/bin/python" "$ROOT/build_scripts/cross_inputs.py" "$@"; }
 
 # ---- the wheels -----------------------------------------------------------------------------------
 # One build venv per Python holds pyproject.toml's build requirements (scikit-build-core, pybind11):
@@ -80,37 +105,110 @@ build_env() {  # PYTHON TAG: prints the python of the tag's build venv, made or 
   fi
   echo "$env/bin/python"
 }
+# build_wheel PLATFORM TAG: builds one wheel into $DIST/wheels and prints its path.
+build_wheel() {
+  local platform="$1" tag="$2" minor="3.${2:3}" envpy raw buildlog wheel
+  local -a settings=(CMAKE_BUILD_PARALLEL_LEVEL="${CMAKE_BUILD_PARALLEL_LEVEL:-2}"
+                     SKBUILD_BUILD_DIR="$WORK/cmake-$platform-$tag")
+  case "$platform" in
+    linux-x64)
+      settings+=(CXX="$tc/c++" SKBUILD_CMAKE_ARGS="-Dglm_DIR=$tc/glm") ;;
+    windows-x64)
+      settings+=(QUATCURVE_PYTHON_SDK="$(cross_inputs windows-sdk "$minor")" SETUPTOOLS_EXT_SUFFIX=".$tag-win_amd64.pyd"
+                 _PYTHON_HOST_PLATFORM=win-amd64) ;;
+    macos-arm64|macos-x64)
+      local arch="${platform#macos-}"; [ "$arch" = x64 ] && arch=x86_64
+      settings+=(QUATCURVE_PYTHON_SDK="$(cross_inputs macos-sdk "$minor")"
+                 SETUPTOOLS_EXT_SUFFIX=".cpython-${tag#cp}-darwin.so" _PYTHON_HOST_PLATFORM="macosx-11.0-$arch") ;;
+  esac
+  if [ "$platform" != linux-x64 ]; then
+    # The target's headers come from its toolchain file, not from the build machine's interpreter.
+    settings+=(QUATCURVE_ZIG="$zig" SKBUILD_CMAKE_PYTHON_HINTS=false
+               SKBUILD_CMAKE_ARGS="-DCMAKE_TOOLCHAIN_FILE=$ROOT/build_scripts/toolchains/$platform.cmake;-Dglm_DIR=$tc/glm")
+  fi
+  raw="$WORK/raw-$platform-$tag" buildlog="$WORK/build-$platform-$tag.log"
+  rm -rf "$raw"
+  log "building the $platform $tag wheel with ${python_of[$tag]} and zig"
+  envpy="$(build_env "${python_of[$tag]}" "$tag")"
+  if ! env "${settings[@]}" "$envpy" -m pip wheel "$ROOT" --no-deps --no-build-isolation --disable-pip-version-check \
+       -w "$raw" > "$buildlog" 2>&1; then
+    tail -30 "$buildlog" >&2
+    die "the $platform $tag wheel build failed (log: ${buildlog#"$ROOT"/})"
+  fi
+  if [ "$platform" = linux-x64 ]; then
+    # repair: checks every external symbol against the policy (fails if the module needs more than
+    # glibc 2.28 offers) and writes the wheel with exactly this one platform tag.
+    PATH="$VENV/bin:$PATH" "$VENV/bin/auditwheel" repair --only-plat --plat "$PLAT" -w "$DIST/wheels" \
+      "$raw"/quatcurve-*.whl >> "$buildlog" 2>&1 || { tail -20 "$buildlog" >&2; die "auditwheel repair failed for $tag"; }
+    wheel="$(ls "$DIST"/wheels/quatcurve-*-"$tag"-"$tag"-"$PLAT".whl)"
+  else
+    wheel="$(ls "$raw"/quatcurve-*-"$tag"-"$tag"-*.whl)"
+    case "$platform:$(basename "$wheel")" in
+      windows-x64:*-win_amd64.whl|macos-arm64:*-macosx_11_0_arm64.whl|macos-x64:*-macosx_11_0_x86_64.whl) ;;
+      *) die "the $platform $tag build wrote $(basename "$wheel"), not a wheel for $platform" ;;
+    esac
+    cp "$wheel" "$DIST/wheels/"
+    wheel="$DIST/wheels/$(basename "$wheel")"
+  fi
+  log "$(basename "$wheel"): $(( $(stat -c %s "$wheel") / 1024 )) KiB"
+  echo "$wheel"
+}
+# ---- the wheel cache ------------------------------------------------------------------------------
+# A wheel is a function of its inputs: the native sources and the build description (native/,
+# CMakeLists.txt, pyproject.toml, this script, build_scripts/toolchains/, cross_inputs.py with the pinned
+# target headers, the pinned tools), the platform, the Python that builds it (its exact version), zig's
+# and GLM's versions. Each built wheel is kept under
+# $VENV_CACHE/wheels/<sha256 of those inputs>/, so another clone, or a second run, with the same
+# inputs takes the same bytes instead of compiling them again (the suite's package test runs on every
+# change; the module sources change far less often). QUATCURVE_NO_WHEEL_CACHE=1 always builds.
+WHEEL_CACHE="$VENV_CACHE/wheels"
+sources_digest() {
+  (cd "$ROOT" && { find native build_scripts/toolchains -type f 2>/dev/null | LC_ALL=C sort
+                   printf '%s\n' CMakeLists.txt pyproject.toml build_scripts/package.sh build_scripts/cross_inputs.py \
+                     build_scripts/requirements-dev.txt; } \
+     | while read -r f; do [ -f "$f" ] && printf '%s  %s\n' "$(sha256sum < "$f" | cut -d' ' -f1)" "$f"; done) \
+    | sha256sum | cut -d' ' -f1
+}
+SOURCES_DIGEST="$(sources_digest)"
+wheel_key() {  # PLATFORM TAG: the digest naming that wheel's inputs
+  { echo "$SOURCES_DIGEST $1 $2"; "${python_of[$2]}" -c 'import sys; print(sys.version)'
+    dpkg-query -W -f='${Version}\n' libglm-dev 2>/dev/null || true; "$zig" version; } | sha256sum | cut -d' ' -f1
+}
+cached_wheel() {  # PLATFORM TAG: prints the wheel's path in $DIST/wheels, built or taken from the cache
+  local key dir wheel
+  key="$(wheel_key "$1" "$2")"
+  dir="$WHEEL_CACHE/$key"
+  if [ -z "${QUATCURVE_NO_WHEEL_CACHE:-}" ] && [ -f "$dir/done" ]; then
+    wheel="$(ls "$dir"/quatcurve-*.whl)"
+    cp "$wheel" "$DIST/wheels/"
+    log "$(basename "$wheel"): from the wheel cache (inputs ${key:0:12})"
+    echo "$DIST/wheels/$(basename "$wheel")"
+    return
+  fi
+  wheel="$(build_wheel "$1" "$2")"
+  rm -rf "$dir" && mkdir -p "$dir" && cp "$wheel" "$dir/" && touch "$dir/done"
+  echo "$wheel"
+}
+
 rm -f "$DIST"/wheels/quatcurve-*.whl
 wheels=()
-for py in "${pythons[@]}"; do
-  tag="$("$py" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"
-  raw="$WORK/raw-$tag" buildlog="$WORK/build-$tag.log"
-  rm -rf "$raw"
-  log "building the $tag wheel with $py and zig ($ZIG_TARGET)"
-  envpy="$(build_env "$py" "$tag")"
-  if ! env CXX="$tc/c++" CMAKE_BUILD_PARALLEL_LEVEL="${CMAKE_BUILD_PARALLEL_LEVEL:-2}" \
-       SKBUILD_BUILD_DIR="$WORK/cmake-$tag" SKBUILD_CMAKE_ARGS="-Dglm_DIR=$tc/glm" \
-       "$envpy" -m pip wheel "$ROOT" --no-deps --no-build-isolation --disable-pip-version-check -w "$raw" \
-       > "$buildlog" 2>&1; then
-    tail -30 "$buildlog" >&2
-    die "the $tag wheel build failed (log: ${buildlog#"$ROOT"/})"
-  fi
-  # repair: checks every external symbol against the policy (fails if the module needs more than
-  # glibc 2.28 offers) and writes the wheel with exactly this one platform tag.
-  PATH="$VENV/bin:$PATH" "$VENV/bin/auditwheel" repair --only-plat --plat "$PLAT" -w "$DIST/wheels" \
-    "$raw"/quatcurve-*.whl >> "$buildlog" 2>&1 || { tail -20 "$buildlog" >&2; die "auditwheel repair failed for $tag"; }
-  wheel="$(ls "$DIST"/wheels/quatcurve-*-"$tag"-"$tag"-"$PLAT".whl)"
-  wheels+=(--wheel "$wheel")
-  log "$(basename "$wheel"): $(( $(stat -c %s "$wheel") / 1024 )) KiB"
+for target in "${targets[@]}"; do
+  # shellcheck disable=SC2086  # "PLATFORM TAG"
+  wheels+=(--wheel "$(cached_wheel $target)")
 done
 
 # ---- the add-on packages --------------------------------------------------------------------------
-# Blender's own extension tool ships with the bpy module (and with Blender ≥ 4.2 binaries).
-ext="$(ls -d "$VENV_CACHE"/bpy-*/lib/python*/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py \
-        2>/dev/null | head -1 || true)"
-if [ -n "$ext" ]; then
-  extpy="${ext%%/lib/python*}/bin/python"
-  "$extpy" "$ROOT/build_scripts/package.py" "${wheels[@]}" --out "$DIST" --blender-ext "$ext"
+# Blender's own extension tool ships with the bpy module (and with Blender ≥ 4.2 binaries): the first bpy
+# venv builds and validates the extension, every other one validates it again (its Blender's own rules).
+mapfile -t exts < <(ls -d "$VENV_CACHE"/bpy-*/lib/python*/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py \
+                      2>/dev/null | sort -V)
+if [ ${#exts[@]} -gt 0 ]; then
+  "${exts[0]%%/lib/python*}/bin/python" "$ROOT/build_scripts/package.py" "${wheels[@]}" --out "$DIST" --blender-ext "${exts[0]}"
+  version="$(sed -n 's/^version = "\(.*\)"/\1/p' "$ROOT/addon/quatcurve_blender/blender_manifest.toml")"
+  for ext in "${exts[@]:1}"; do
+    "${ext%%/lib/python*}/bin/python" "$ext" validate "$DIST/quatcurve_blender-$version-extension.zip" \
+      || die "Blender's extension validate (${ext#"$VENV_CACHE"/}) refuses the extension zip"
+  done
 else
   "$VENV/bin/python" "$ROOT/build_scripts/package.py" "${wheels[@]}" --out "$DIST"
 fi

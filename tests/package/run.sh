@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# package.install: builds the packages (build_scripts/package.sh) and checks them as a user gets them.
+# package.install: builds the packages (build_scripts/package.sh) and checks the Linux ones as a user gets them
+# (the Windows ones: tests/package/windows.sh; the macOS ones: check_macos.py).
 #   1. wheels: `auditwheel show` of each module wheel, which must be manylinux_2_28_x86_64 (check_wheels.py);
 #      one per Python the Blenders below run (cp311; cp313 for Blender 5.1+), all listed in the extension.
 #   2. every Blender named in $QUATCURVE_BLENDERS (NAME=COMMAND;…): installs the right package into a clean
@@ -10,7 +11,8 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 PY="$ROOT/.venv/bin/python"
-"$ROOT/build_scripts/package.sh"
+# CTest's package.build has run package.sh already (QUATCURVE_PACKAGES_BUILT=1).
+[ "${QUATCURVE_PACKAGES_BUILT:-}" = 1 ] || "$ROOT/build_scripts/package.sh"
 version="$(sed -n 's/^version = "\(.*\)"/\1/p' "$ROOT/addon/quatcurve_blender/blender_manifest.toml")"
 passed=0 failed=0
 result() {  # NAME OK LOG [SUMMARY-PATTERN]
@@ -41,7 +43,7 @@ for entry in "${blenders[@]}"; do
   name="${entry%%=*}" cmd="${entry#*=}"
   user="$(mktemp -d)"
   if [ "$(basename "$cmd")" = blender ]; then
-    zip="$ROOT/dist/quatcurve_blender-$version-legacy-cp311.zip"
+    zip="$ROOT/dist/quatcurve_blender-$version-legacy-linux-x64-cp311.zip"
     run=(env PATH=/usr/local/bin:/usr/bin:/bin BLENDER_USER_SCRIPTS="$user/scripts" BLENDER_USER_CONFIG="$user/config"
          "$cmd" --background --factory-startup --python-exit-code 1 --python "$ROOT/tests/package/install_and_bake.py" -- "$zip")
   else
