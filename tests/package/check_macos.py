@@ -28,6 +28,8 @@ import struct
 import sys
 import zipfile
 
+from check_wheels import check, failures  # beside this file: one record of what failed
+
 MH_MAGIC_64 = 0xFEEDFACF
 CPU = {"arm64": 0x0100000C, "x86_64": 0x01000007}
 MH_DYLIB = 6
@@ -42,14 +44,6 @@ LIBSYSTEM = "/usr/lib/libSystem.B.dylib"
 CSMAGIC_EMBEDDED_SIGNATURE, CSMAGIC_CODEDIRECTORY = 0xFADE0CC0, 0xFADE0C02
 CS_ADHOC, CS_HASHTYPE_SHA256 = 0x2, 2
 
-failures = []
-
-
-def check(ok, message):
-    if not ok:
-        failures.append(message)
-        print("FAILED:", message)
-    return ok
 
 
 def version(packed):
