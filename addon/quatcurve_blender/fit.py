@@ -114,6 +114,20 @@ def target_key(target):
 
 # action pointer → (record count, {(slot, owner path): index of its first record}), inside record_index() only.
 _record_index = None
+# The last fit written for each target, by (action name, slot, owner path): the next fit of the same
+# target reuses its unchanged key segments (native fit_through_keys' previous). Memory only, cleared
+# when a file loads; the native side checks every reused segment against the new keys and curve, so
+# an entry that no longer matches the F-curves (an undo, a renamed action) costs reuse, never truth.
+_last_fits = {}
+
+
+def last_fit(action, target):
+    """The native KeyFit last written for `target` in `action`, or None."""
+    return _last_fits.get((action.name,) + target_key(target)) if action is not None else None
+
+
+def forget_fits():
+    _last_fits.clear()
 
 
 @contextlib.contextmanager
@@ -292,11 +306,13 @@ def set_turns(found, turns):
             changed += int(chosen.sum())
             if keys.is_axis_angle:
                 keys = replace(keys, values=axis_angle_turns(keys.values, chosen, turns))
-                plan = plan_target(keys, settings_of(record), ease_in, ease_out, old)
+                plan = plan_target(keys, settings_of(record), ease_in, ease_out, old,
+                                   previous=last_fit(fcurves.active_action(target.id_data), target))
             else:
                 new = old.copy()
                 new[chosen] = turns
-                plan = plan_target(keys, settings_of(record), ease_in, ease_out, new)
+                plan = plan_target(keys, settings_of(record), ease_in, ease_out, new,
+                                   previous=last_fit(fcurves.active_action(target.id_data), target))
             if plan is not None:
                 plans.append((plan, target))
         if not plans:
@@ -494,6 +510,7 @@ class FitPlan:
     ease_out: np.ndarray
     notes: list = field(default_factory=list)
     turns: np.ndarray = None
+    fit: object = None        # the native KeyFit (the next refit's `previous`)
 
 
 def path_notes(name, curve, frames, method):
@@ -523,8 +540,9 @@ def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
     return curve, keys.values * signs[:, None]
 
 
-def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
-    """The fitted keys of one target (nothing written). Fewer than two keys: None."""
+def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previous=None):
+    """The fitted keys of one target (nothing written). Fewer than two keys: None. previous: the
+    target's last KeyFit (last_fit), whose unchanged key segments are kept."""
     qc = native.require()
     K = len(keys.frames)
     if K < 2:
@@ -544,7 +562,8 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
     # and the proof of the bound at every instant (KeyFit.proof).
     try:
         kf = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode, subframes=int(settings.subframes),
-                                 tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP)
+                                 tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP,
+                                 previous=previous)
     except ValueError as e:
         raise FitError("%s: %s" % (keys.name, e)) from None
     forced, fitted = kf.forced, kf.keys
@@ -566,7 +585,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None):
              " (a change of the angle's turn: convert the target to quaternion for the method's exact path)")
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
     return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, len(kf.times),
-                   ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns)
+                   ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns, kf)
 
 
 def seam_eases(ease_in, ease_out):
@@ -619,6 +638,8 @@ def write_plan(plan, target):
         chosen[on_key] = keys.selected[c, at[on_key]]
         fcurves.write_key_selection(curve, chosen)
     store_record(keys, plan.settings, target, action)
+    if plan.fit is not None:
+        _last_fits[(action.name,) + target_key(target)] = plan.fit
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
     set_key_turns(action, target, keys.frames, plan.turns)
     target.id_data.update_tag(refresh={"TIME"})
@@ -737,10 +758,11 @@ def _fit(found, settings, only_changed, result):
         record = find_record(fcurves.active_action(target.id_data), target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        work.append((target, keys, refit_eases(keys, target, record)))
-    planned = parallel_map(lambda item: plan_target(item[1], settings, *item[2]), work)
+        work.append((target, keys, refit_eases(keys, target, record),
+                     last_fit(fcurves.active_action(target.id_data), target)))
+    planned = parallel_map(lambda item: plan_target(item[1], settings, *item[2], previous=item[3]), work)
     plans = []
-    for (target, keys, _), plan in zip(work, planned):
+    for (target, keys, _, _), plan in zip(work, planned):
         if plan is None:
             result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (
@@ -763,6 +785,7 @@ def unfit(found):
         if record is None:
             continue
         action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
+        _last_fits.pop((action.name,) + target_key(target), None)
         set_key_eases(action, target, [], [], [])
         set_key_turns(action, target, [], [])
         names.append(target.name)

@@ -244,7 +244,7 @@ def set_ease(found, ease_in, ease_out):
         e_in[chosen], e_out[chosen] = ease_in, ease_out
         changed += int(chosen.sum())
         turns = fit.key_turns(action, target, keys.frames)
-        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out, turns)
+        plan = fit.plan_target(keys, fit.settings_of(record), e_in, e_out, turns, previous=fit.last_fit(action, target))
         if plan is not None:
             plans.append((plan, target))
     for plan, target in plans:

@@ -203,6 +203,7 @@ def on_load(*args):
     _pending.clear()
     _unchanged.clear()
     _check_all.clear()
+    fit.forget_fits()
 
 
 def _schedule(delay):
@@ -299,12 +300,13 @@ def _refit_action(action):
         if same:
             _unchanged[key] = raw if raw is not None else raw_digest(target)
         else:
-            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record)))
+            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record),
+                            fit.last_fit(action, target)))
 
     def plan(item):
-        _, keys, settings, eases = item
+        _, keys, settings, eases, previous = item
         try:
-            return fit.plan_target(keys, settings, *eases)
+            return fit.plan_target(keys, settings, *eases, previous=previous)
         except fit.FitError as error:
             return error
 
@@ -312,7 +314,7 @@ def _refit_action(action):
     plans = parallel_map(plan, changed)
     t3 = time.perf_counter()
     STATS.add("plan", t3 - t2)
-    for (target, _, _, _), result in zip(changed, plans):
+    for (target, _, _, _, _), result in zip(changed, plans):
         if isinstance(result, fit.FitError):
             STATS.errors.append(str(result))
             continue

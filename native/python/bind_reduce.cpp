@@ -356,6 +356,15 @@ reaches (emulated), above `tolerance` only where no key could be inserted.)doc")
                                },
                                "(key segment, frame) of every change of Euler branch between keys")
         .def_readonly("proof", &KeyFit::proof, "PlaybackBound of Blender's playback of `keys` against the curve")
+        .def_property_readonly("segment_bounds",
+                               [](const KeyFit& f) {
+                                   std::vector<double> b;
+                                   for (const PlaybackBound& p : f.segment_proofs) b.push_back(p.bound);
+                                   return vector_array(b);
+                               },
+                               "(K-1,) the proved bound of each key segment (radians)")
+        .def_readonly("refitted", &KeyFit::refitted,
+                      "key segments this call fitted; the others are the previous fit's (fit_through_keys' previous)")
         .def("__repr__", [](const KeyFit& f) {
             return "<KeyFit " + std::to_string(f.times.size()) + " samples, " + std::to_string(f.keys.key_count()) +
                    " keys, bound " + std::to_string(f.proof.bound) + " rad>";
@@ -364,16 +373,16 @@ reaches (emulated), above `tolerance` only where no key could be inserted.)doc")
     m.def(
         "fit_through_keys",
         [](const Curve& curve, py::handle key_frames, py::handle key_values, const std::string& mode_name,
-           int subframes, double tolerance, double min_gap) {
+           int subframes, double tolerance, double min_gap, const KeyFit* previous) {
             const RotationMode mode = parse_rotation_mode(mode_name);
             const std::vector<double> kf = read_times(key_frames);
             const Batch v = read_rows(key_values, static_cast<py::ssize_t>(channel_count(mode)), "key_values", kf.size());
             const std::vector<double> kv(v.data(), v.data() + v.count * channel_count(mode));
             py::gil_scoped_release release;
-            return fit_through_keys(curve, kf, kv, mode, subframes, tolerance, min_gap);
+            return fit_through_keys(curve, kf, kv, mode, subframes, tolerance, min_gap, previous);
         },
         py::arg("curve"), py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::kw_only(),
-        py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01,
+        py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01, py::arg("previous") = nullptr,
         R"doc(Fit Blender F-curves through an animator's keys along `curve` (the method through them), in one
 call without the GIL: a KeyFit.
 
@@ -384,7 +393,11 @@ with); tolerance: radians, > 0. The channel values between keys follow the curve
 path needs it, beside a key at gimbal lock or nearest the lock, axis-angle by axis_angle_span with the axis length interpolated); fit_keys inserts
 as few BEZIER keys as 90% of `tolerance` needs, min_gap frames from the keys; then the playback is
 proved against the curve at every instant between the first and the last key (KeyFit.proof), and
-the times that fail become samples of another round.)doc");
+the times that fail become samples of another round.
+
+previous: the last KeyFit of the same target (a refit after an edit): the key segments whose keys
+and curve are unchanged keep its keys, handles and proof; only the others are fitted and proved
+(KeyFit.refitted counts them). Nothing is reused when mode, subframes, tolerance or min_gap differ.)doc");
 
     m.def(
         "prove_playback",

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <utility>
 #include <string>
 
 #include "curve_impl.hpp"
@@ -446,6 +448,55 @@ Curve::Curve(const Curve& o)
 Curve& Curve::operator=(const Curve& o) {
     if (this != &o) *this = Curve(o);
     return *this;
+}
+
+namespace {
+
+template <class T>
+bool same_bits(const T& a, const T& b) {
+    return std::memcmp(&a, &b, sizeof(T)) == 0;
+}
+
+// Element j of two per-knot-segment arrays, bit for bit (both empty: the family is not in use).
+template <class T>
+bool same_element(const std::vector<T>& a, std::size_t j, const std::vector<T>& b, std::size_t oj) {
+    if (a.empty() && b.empty()) return true;
+    return j < a.size() && oj < b.size() && same_bits(a[j], b[oj]);
+}
+
+// The knot segments [first, last) of key segment k (kseg is sorted).
+std::pair<std::size_t, std::size_t> knot_range(const std::vector<int>& kseg, std::size_t k) {
+    const auto range = std::equal_range(kseg.begin(), kseg.end(), static_cast<int>(k));
+    return {static_cast<std::size_t>(range.first - kseg.begin()), static_cast<std::size_t>(range.second - kseg.begin())};
+}
+
+}  // namespace
+
+bool Curve::same_key_segment(std::size_t k, const Curve& other, std::size_t other_k) const {
+    if (k + 1 >= times_.size() || other_k + 1 >= other.times_.size() || !impl_ || !other.impl_) return false;
+    const Impl& a = *impl_;
+    const Impl& b = *other.impl_;
+    if (method_ != other.method_ || times_[k] != other.times_[other_k] || times_[k + 1] != other.times_[other_k + 1] ||
+        has_euler_keys() != other.has_euler_keys() || order_ != other.order_)
+        return false;
+    if (a.cyclic != b.cyclic || a.eased != b.eased) return false;
+    if (a.cyclic && !(a.period == b.period && a.period_sign == b.period_sign && same_bits(a.kq.front(), b.kq.front())))
+        return false;
+    if (a.eased && !(a.ease_a[k] == b.ease_a[other_k] && a.ease_b[k] == b.ease_b[other_k])) return false;
+    const auto [first, last] = knot_range(a.kseg, k);
+    const auto [ofirst, olast] = knot_range(b.kseg, other_k);
+    if (last - first != olast - ofirst || first == last) return false;
+    for (std::size_t j = first, oj = ofirst; j < last; ++j, ++oj) {
+        if (a.kt[j] != b.kt[oj] || a.kt[j + 1] != b.kt[oj + 1] || !same_bits(a.kq[j], b.kq[oj]) ||
+            !same_bits(a.kq[j + 1], b.kq[oj + 1]) || !same_bits(a.kr[j], b.kr[oj]))
+            return false;
+        if (!same_element(a.lerp, j, b.lerp, oj) || !same_element(a.slerp, j, b.slerp, oj) ||
+            !same_element(a.squad, j, b.squad, oj) || !same_element(a.bezier, j, b.bezier, oj) ||
+            !same_element(a.spline, j, b.spline, oj) || !same_element(a.euler, j, b.euler, oj) ||
+            !same_element(a.kspeed, j, b.kspeed, oj) || !same_element(a.kaccel, j, b.kaccel, oj))
+            return false;
+    }
+    return true;
 }
 
 // Validates the options, computes the sign-continuous key rotations and segment rotation vectors,

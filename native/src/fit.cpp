@@ -148,17 +148,45 @@ std::vector<double> euler_span_values(const std::vector<Quat>& q, const Rotation
     return V;
 }
 
-}  // namespace
+// Adds a key segment's proof to the whole range's (fit.proof): the larger bound and where it is
+// reached, every violation and unproven interval, the evaluations.
+void merge_proof(PlaybackBound& into, const PlaybackBound& part) {
+    if (part.bound > into.bound || into.evaluations == 0) {
+        into.bound = part.bound;
+        into.worst_time = part.worst_time;
+    }
+    into.max_evaluated = std::fmax(into.max_evaluated, part.max_evaluated);
+    into.violations.insert(into.violations.end(), part.violations.begin(), part.violations.end());
+    into.unproven.insert(into.unproven.end(), part.unproven.begin(), part.unproven.end());
+    into.evaluations += part.evaluations;
+}
 
-KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
-                        const std::vector<double>& key_values, const RotationMode& mode, int subframes,
-                        double tolerance, double min_gap) {
+void sort_proof(PlaybackBound& proof) {
+    std::sort(proof.violations.begin(), proof.violations.end());
+    proof.violations.erase(std::unique(proof.violations.begin(), proof.violations.end()), proof.violations.end());
+    std::sort(proof.unproven.begin(), proof.unproven.end());
+}
+
+// prove_within of the playback against the method on each key segment (the samples from its first
+// key to its second): fit.segment_proofs, and their union in fit.proof.
+void prove_segments(const Motion& playback, const Motion& method, double tolerance, KeyFit& fit) {
+    const std::size_t S = fit.forced.size() - 1;
+    fit.segment_proofs.assign(S, {});
+    fit.proof = {};
+    for (std::size_t j = 0; j < S; ++j) {
+        const std::vector<double> span(fit.times.begin() + static_cast<std::ptrdiff_t>(fit.forced[j]),
+                                       fit.times.begin() + static_cast<std::ptrdiff_t>(fit.forced[j + 1]) + 1);
+        fit.segment_proofs[j] = prove_within(playback, method, span, tolerance, kProofMinStep);
+        merge_proof(fit.proof, fit.segment_proofs[j]);
+    }
+    sort_proof(fit.proof);
+}
+
+// The fit of the keys (all of fit_through_keys' keys, or a run of them) without reuse: samples,
+// rounds of fit_round and the proof of every key segment.
+KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
+                const RotationMode& mode, int subframes, double tolerance, double min_gap) {
     const std::size_t K = key_frames.size(), C = channel_count(mode);
-    if (K < 2) throw InvalidArgument("key_frames: at least two keys to fit through");
-    if (key_values.size() != K * C)
-        throw InvalidArgument("key_values: " + std::to_string(key_values.size()) + " values for " +
-                              std::to_string(K) + " keys of " + std::to_string(C) + " channels");
-    if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and > 0");
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
     if (mode.kind != RotationMode::Kind::quaternion) {
@@ -186,12 +214,13 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
             fit.times.erase(std::unique(fit.times.begin(), fit.times.end()), fit.times.end());
         }
     }
-    const CurveMotion method(curve);
+    const CurveMotion curve_motion(curve);
+    const KeptBreaks method(curve_motion);
     for (int round = 0;; ++round) {
         fit_round(curve, key_frames, key_values, mode, tolerance * kFitShare, min_gap, fit);
         std::vector<FCurveKeys> channels(fit.keys.channels.begin(), fit.keys.channels.end());
         const PlaybackMotion playback(std::move(channels), fit.keys.interpolation, mode);
-        fit.proof = prove_within(playback, method, fit.times, tolerance, kProofMinStep);
+        prove_segments(KeptBreaks(playback), method, tolerance, fit);
         if (fit.proof.proven() || round + 1 >= kProofRounds) break;
         // The times that failed (and the middle of each interval left unproven) become samples.
         std::vector<double> add = fit.proof.violations;
@@ -220,6 +249,142 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
         if (added == 0) break;
         fit.times.swap(merged);
     }
+    fit.refitted = K - 1;
+    return fit;
+}
+
+// Whether a fit made with these settings can lend its key segments to this one.
+bool reusable(const KeyFit& previous, const RotationMode& mode, int subframes, double tolerance, double min_gap) {
+    return previous.curve && previous.mode.kind == mode.kind &&
+           (mode.kind != RotationMode::Kind::euler || previous.mode.order == mode.order) &&
+           previous.subframes == subframes && previous.tolerance == tolerance && previous.min_gap == min_gap &&
+           previous.segment_proofs.size() + 1 == previous.key_frames.size() &&
+           previous.forced.size() == previous.key_frames.size();
+}
+
+// Where key segment k comes from in the assembled fit: segment `segment` of `fit`.
+struct Source {
+    const KeyFit* fit;
+    std::size_t segment;
+};
+
+// The fit of key segments from their sources (a reused segment of the previous fit, or a segment of
+// a run fitted now), joined at the keys: each segment's samples, keys and handles as its source has
+// them; a key between two segments takes its left handle from the segment before it.
+void assemble(const std::vector<Source>& sources, std::size_t C, KeyFit& out) {
+    const std::size_t S = sources.size();
+    out.times.clear();
+    out.forced.assign(S + 1, 0);
+    out.switches.clear();
+    out.segment_proofs.assign(S, {});
+    out.proof = {};
+    out.keys = ReducedKeys{};
+    out.keys.interpolation = KeyInterpolation::BEZIER;
+    out.keys.synchronized = true;
+    out.keys.channels.assign(C, {});
+    for (std::size_t k = 0; k < S; ++k) {
+        const KeyFit& f = *sources[k].fit;
+        const std::size_t s = sources[k].segment, lo = f.forced[s], hi = f.forced[s + 1];
+        const std::size_t offset = out.times.size();
+        out.forced[k] = offset;
+        const bool last = k + 1 == S;
+        out.times.insert(out.times.end(), f.times.begin() + static_cast<std::ptrdiff_t>(lo),
+                         f.times.begin() + static_cast<std::ptrdiff_t>(last ? hi + 1 : hi));
+        if (last) out.forced[S] = out.times.size() - 1;
+        for (const EulerSwitch& w : f.switches)
+            if (w.segment == s) out.switches.push_back({k, w.frame});
+        out.segment_proofs[k] = f.segment_proofs[s];
+        merge_proof(out.proof, f.segment_proofs[s]);
+        out.keys.max_error = std::fmax(out.keys.max_error, f.keys.max_error);
+        out.keys.synchronized = out.keys.synchronized && f.keys.synchronized;
+        for (std::size_t c = 0; c < C; ++c) {
+            const ReducedChannel& from = f.keys.channels[c];
+            ReducedChannel& to = out.keys.channels[c];
+            auto first = std::lower_bound(from.indices.begin(), from.indices.end(), lo);
+            auto end = std::upper_bound(from.indices.begin(), from.indices.end(), last ? hi : hi - 1);
+            for (auto it = first; it != end; ++it) {
+                const std::size_t i = static_cast<std::size_t>(it - from.indices.begin());
+                const bool joined = it == first && k > 0;  // its left handle is the segment before's
+                to.indices.push_back(offset + (*it - lo));
+                to.frames.push_back(from.frames[i]);
+                to.values.push_back(from.values[i]);
+                if (!joined) to.handle_left.insert(to.handle_left.end(), {from.handle_left[2 * i], from.handle_left[2 * i + 1]});
+                to.handle_right.insert(to.handle_right.end(), {from.handle_right[2 * i], from.handle_right[2 * i + 1]});
+            }
+            if (!last) {  // the left handle of the key that ends this segment
+                const auto at = std::lower_bound(from.indices.begin(), from.indices.end(), hi);
+                const std::size_t i = static_cast<std::size_t>(at - from.indices.begin());
+                to.handle_left.insert(to.handle_left.end(), {from.handle_left[2 * i], from.handle_left[2 * i + 1]});
+            }
+        }
+    }
+    sort_proof(out.proof);
+}
+
+}  // namespace
+
+KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
+                        const std::vector<double>& key_values, const RotationMode& mode, int subframes,
+                        double tolerance, double min_gap, const KeyFit* previous) {
+    const std::size_t K = key_frames.size(), C = channel_count(mode);
+    if (K < 2) throw InvalidArgument("key_frames: at least two keys to fit through");
+    if (key_values.size() != K * C)
+        throw InvalidArgument("key_values: " + std::to_string(key_values.size()) + " values for " +
+                              std::to_string(K) + " keys of " + std::to_string(C) + " channels");
+    if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw InvalidArgument("tolerance: must be finite and > 0");
+    // The previous fit's key segment that each key segment can keep (none: −1).
+    const std::size_t S = K - 1;
+    std::vector<std::ptrdiff_t> kept(S, -1);
+    std::size_t kept_count = 0;
+    if (previous != nullptr && reusable(*previous, mode, subframes, tolerance, min_gap)) {
+        const std::vector<double>& pf = previous->key_frames;
+        const double* pv = previous->key_values.data();
+        for (std::size_t k = 0; k < S; ++k) {
+            const auto at = std::lower_bound(pf.begin(), pf.end(), key_frames[k]);
+            if (at == pf.end() || *at != key_frames[k] || at + 1 == pf.end() || at[1] != key_frames[k + 1]) continue;
+            const std::size_t o = static_cast<std::size_t>(at - pf.begin());
+            if (!std::equal(key_values.begin() + static_cast<std::ptrdiff_t>(C * k),
+                            key_values.begin() + static_cast<std::ptrdiff_t>(C * (k + 2)), pv + C * o))
+                continue;
+            if (!curve.same_key_segment(k, *previous->curve, o)) continue;
+            kept[k] = static_cast<std::ptrdiff_t>(o);
+            ++kept_count;
+        }
+    }
+    KeyFit fit;
+    if (kept_count == 0) {
+        fit = fit_span(curve, key_frames, key_values, mode, subframes, tolerance, min_gap);
+    } else {
+        // Runs of segments that changed, each fitted and proved on its own keys.
+        std::vector<KeyFit> runs;
+        runs.reserve(S - kept_count);
+        std::vector<Source> sources(S);
+        for (std::size_t k = 0; k < S;) {
+            if (kept[k] >= 0) {
+                sources[k] = {previous, static_cast<std::size_t>(kept[k])};
+                ++k;
+                continue;
+            }
+            std::size_t end = k + 1;
+            while (end < S && kept[end] < 0) ++end;
+            const std::vector<double> frames(key_frames.begin() + static_cast<std::ptrdiff_t>(k),
+                                             key_frames.begin() + static_cast<std::ptrdiff_t>(end) + 1);
+            const std::vector<double> values(key_values.begin() + static_cast<std::ptrdiff_t>(C * k),
+                                             key_values.begin() + static_cast<std::ptrdiff_t>(C * (end + 1)));
+            runs.push_back(fit_span(curve, frames, values, mode, subframes, tolerance, min_gap));
+            for (std::size_t j = k; j < end; ++j) sources[j] = {&runs.back(), j - k};
+            k = end;
+        }
+        assemble(sources, C, fit);
+        fit.refitted = S - kept_count;
+    }
+    fit.curve = std::make_shared<const Curve>(curve);
+    fit.key_frames = key_frames;
+    fit.key_values = key_values;
+    fit.mode = mode;
+    fit.subframes = subframes;
+    fit.tolerance = tolerance;
+    fit.min_gap = min_gap;
     return fit;
 }
 

@@ -130,21 +130,6 @@ FCurveKeys slice_keys(const FCurveKeys& ch, double t0, double t1) {
     return out;
 }
 
-// A motion whose breaks are computed once (prove_within asks every piece's proof for all of them).
-class KeptBreaks : public Motion {
-public:
-    explicit KeptBreaks(const Motion& m) : m_(m), breaks_(m.breaks()) {}
-    Quat at(double t) const override { return m_.at(t); }
-    void bounds(double t0, double t1, double& speed, double& accel) const override { m_.bounds(t0, t1, speed, accel); }
-    double jump_bound(double t0, double t1, double speed) const override { return m_.jump_bound(t0, t1, speed); }
-    bool float32_frames() const override { return m_.float32_frames(); }
-    std::vector<double> breaks() const override { return breaks_; }
-
-private:
-    const Motion& m_;
-    std::vector<double> breaks_;
-};
-
 // The reference on one piece: the original keys sliced to it (a PlaybackMotion of a few keys), or the
 // whole reference (a curve).
 using ReferenceOn = std::function<std::unique_ptr<Motion>(double t0, double t1)>;

@@ -17,8 +17,12 @@ quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapp
   ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_live.py
 
 `--smoke` (tests/bench/smoke.py): each case once, the big action cut to 3 bones x 100 frames.
+`--profile`: the last run of each case under cProfile (its time counts with the profiler's cost), its
+top functions by own time.
 """
+import cProfile
 import os
+import pstats
 import statistics
 import sys
 import time
@@ -35,6 +39,7 @@ import smoke  # noqa: E402
 from quatcurve_blender import fcurves, fit, live, native, targets  # noqa: E402
 
 REPEAT = 1 if smoke.SMOKE else 7
+PROFILE = "--profile" in sys.argv
 BIG_BONES, BIG_FRAMES = (3, 100) if smoke.SMOKE else (100, 1000)
 NATIVE = [0.0]
 
@@ -111,9 +116,15 @@ def measure(label, rig, bone_names, change=True, expect=None):
             rig.keyframe_insert("location", frame=r + 1)
         live.STATS.reset()
         NATIVE[0] = 0.0
+        profile = cProfile.Profile() if PROFILE and r == REPEAT - 1 else None
+        if profile is not None:
+            profile.enable()
         t = time.perf_counter()
         bpy.context.view_layer.update()
         total = time.perf_counter() - t
+        if profile is not None:
+            profile.disable()
+            pstats.Stats(profile).sort_stats("tottime").print_stats(22)
         assert not live.STATS.errors, (label, live.STATS)
         if expect is not None:
             assert live.STATS.refits == expect, (label, live.STATS)

@@ -395,3 +395,139 @@ TEST(ProveWithin, BadArgumentsAreNamed) {
     std::vector<FCurveKeys> three(3);
     EXPECT_THROW(PlaybackMotion(three, KeyInterpolation::LINEAR, parse_rotation_mode("QUATERNION")), InvalidArgument);
 }
+
+namespace {
+
+// Keys of `mode` for a smooth random walk (quaternions with the sign the curve reaches them with).
+std::vector<double> walk_values(std::mt19937& rng, std::size_t k, const RotationMode& mode) {
+    std::normal_distribution<double> n(0.0, 0.3);
+    std::vector<double> v;
+    double a[4] = {1.0, 0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < k; ++i) {
+        if (mode.kind == RotationMode::Kind::quaternion) {
+            for (double& x : a) x += n(rng);
+            const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]);
+            for (double x : a) v.push_back(static_cast<float>(x / len));
+        } else if (mode.kind == RotationMode::Kind::euler) {
+            for (int c = 0; c < 3; ++c) v.push_back(static_cast<float>(n(rng) + (c == 1 ? 0.0 : 0.5 * double(i))));
+        } else {
+            v.insert(v.end(), {static_cast<float>(1.0 + 0.2 * double(i % 3) + n(rng)), static_cast<float>(0.3 + n(rng)),
+                               static_cast<float>(n(rng)), 1.0f});
+        }
+    }
+    return v;
+}
+
+void follow_curve_signs(const Curve& curve, const std::vector<double>& t, const RotationMode& mode,
+                        std::vector<double>& values) {
+    if (mode.kind != RotationMode::Kind::quaternion) return;
+    const std::vector<Quat> at = curve.sample(t);
+    for (std::size_t i = 0; i < t.size(); ++i)
+        if (glm::dot(at[i], from_wxyz(&values[4 * i])) < 0)
+            for (std::size_t c = 0; c < 4; ++c) values[4 * i + c] = -values[4 * i + c];
+}
+
+// The keys of channel c with frames in [lo, hi], with their handles, as one comparable row each.
+std::vector<std::vector<double>> keys_between(const ReducedKeys& keys, std::size_t c, double lo, double hi) {
+    std::vector<std::vector<double>> out;
+    const ReducedChannel& ch = keys.channels[c];
+    for (std::size_t i = 0; i < ch.frames.size(); ++i)
+        if (ch.frames[i] >= lo && ch.frames[i] <= hi)
+            out.push_back({ch.frames[i], ch.values[i], ch.handle_left[2 * i], ch.handle_left[2 * i + 1],
+                           ch.handle_right[2 * i], ch.handle_right[2 * i + 1]});
+    return out;
+}
+
+}  // namespace
+
+// A refit after one key moved (fit_through_keys' previous): the local methods fit again only the
+// key segments the key shapes (two on either side for SQUAD, TCB and CATMULL_ROM, one for SLERP and
+// NLERP), keep every key and handle elsewhere bit for bit, and the whole result is proved: its
+// bound holds at 64 points per frame and as many random times. Nothing changed: nothing refitted;
+// other settings: everything refitted. A key inserted or removed: only the segments beside it.
+TEST(FitProof, RefitKeepsUnchangedSegmentsAndProvesTheRest) {
+    std::mt19937 rng(21);
+    const double tol = 0.05 * kDeg;
+    const RotationMode modes[] = {parse_rotation_mode("QUATERNION"), parse_rotation_mode("XYZ"),
+                                  parse_rotation_mode("AXIS_ANGLE")};
+    for (Method method : kFitMethods) {
+        for (const RotationMode& mode : modes) {
+            const std::size_t k = 14, C = channel_count(mode);
+            const std::string what = std::string(method_name(method)) + " mode " + std::to_string(int(mode.kind));
+            const std::vector<double> t = random_frames(rng, k, 3.0, 9.0);
+            std::vector<double> v = walk_values(rng, k, mode);
+            const Curve curve = curve_from_channels(t, v, mode, method, {});
+            follow_curve_signs(curve, t, mode, v);
+            const KeyFit first = fit_through_keys(curve, t, v, mode, 4, tol);
+            EXPECT_EQ(first.refitted, k - 1) << what;
+
+            const KeyFit same = fit_through_keys(curve, t, v, mode, 4, tol, 0.01, &first);
+            EXPECT_EQ(same.refitted, 0u) << what;
+            EXPECT_EQ(same.times, first.times) << what;
+            for (std::size_t c = 0; c < C; ++c)
+                EXPECT_EQ(keys_between(same.keys, c, t.front(), t.back()), keys_between(first.keys, c, t.front(), t.back()))
+                    << what;
+            EXPECT_EQ(fit_through_keys(curve, t, v, mode, 4, 0.9 * tol, 0.01, &first).refitted, k - 1) << what;
+
+            // One key moved: key 7.
+            std::vector<double> moved = v;
+            const std::size_t m = 7;
+            for (std::size_t c = 0; c < C; ++c) moved[C * m + c] = static_cast<float>(moved[C * m + c] + 0.05);
+            const Curve curve2 = curve_from_channels(t, moved, mode, method, {});
+            follow_curve_signs(curve2, t, mode, moved);
+            const KeyFit refit = fit_through_keys(curve2, t, moved, mode, 4, tol, 0.01, &first);
+            const std::size_t reach = method == Method::SLERP || method == Method::NLERP ? 1 : 2;
+            if (method != Method::SPLINE_C2) {
+                EXPECT_LE(refit.refitted, 2 * reach) << what;  // fewer where a clamped tangent holds still
+                EXPECT_GE(refit.refitted, 2u) << what;
+                for (std::size_t c = 0; c < C; ++c) {
+                    EXPECT_EQ(keys_between(refit.keys, c, t.front(), t[m - reach] - 1e-3),
+                              keys_between(first.keys, c, t.front(), t[m - reach] - 1e-3))
+                        << what;
+                    EXPECT_EQ(keys_between(refit.keys, c, t[m + reach] + 1e-3, t.back()),
+                              keys_between(first.keys, c, t[m + reach] + 1e-3, t.back()))
+                        << what;
+                }
+            } else {
+                EXPECT_GE(refit.refitted, 2 * reach) << what;
+            }
+            const KeyFit full = fit_through_keys(curve2, t, moved, mode, 4, tol);
+            EXPECT_EQ(refit.proof.proven(), full.proof.proven()) << what;
+            if (full.proof.proven()) EXPECT_LE(refit.proof.bound, tol) << what;
+            double where = 0.0;
+            const std::size_t n = static_cast<std::size_t>((t.back() - t.front()) * 64);
+            EXPECT_LE(dense_max(curve2, refit.keys, mode, t.front(), t.back(), n, rng, &where), refit.proof.bound + 1e-6)
+                << what << " at frame " << where;
+            // The keys as the fit writes them: every key keeps its value.
+            for (std::size_t c = 0; c < C; ++c)
+                for (std::size_t i = 0; i < k; ++i) {
+                    const auto& ch = refit.keys.channels[c];
+                    const auto at = std::find(ch.frames.begin(), ch.frames.end(), t[i]);
+                    ASSERT_NE(at, ch.frames.end()) << what;
+                    EXPECT_EQ(ch.values[static_cast<std::size_t>(at - ch.frames.begin())], static_cast<float>(moved[C * i + c]))
+                        << what;
+                }
+
+            // A key inserted between keys 3 and 4 (on the curve, so the path hardly changes).
+            std::vector<double> t3 = t;
+            std::vector<double> v3 = moved;
+            const double mid = static_cast<float>(0.5 * (t[3] + t[4]));
+            t3.insert(t3.begin() + 4, mid);
+            const std::vector<Quat> q_mid = curve2.sample(std::vector<double>{mid});
+            const double* before = &moved[C * 3];
+            const std::vector<double> row = quats_to_channels(q_mid, mode, before, 1);
+            std::vector<double> rowf(row.begin(), row.begin() + static_cast<std::ptrdiff_t>(C));
+            for (double& x : rowf) x = static_cast<float>(x);
+            v3.insert(v3.begin() + static_cast<std::ptrdiff_t>(C * 4), rowf.begin(), rowf.end());
+            const Curve curve3 = curve_from_channels(t3, v3, mode, method, {});
+            follow_curve_signs(curve3, t3, mode, v3);
+            const KeyFit inserted = fit_through_keys(curve3, t3, v3, mode, 4, tol, 0.01, &refit);
+            if (method != Method::SPLINE_C2) EXPECT_LE(inserted.refitted, 2 * reach + 2) << what;
+            EXPECT_LE(dense_max(curve3, inserted.keys, mode, t3.front(), t3.back(), n, rng, &where),
+                      inserted.proof.bound + 1e-6)
+                << what << " at frame " << where;
+            const KeyFit full3 = fit_through_keys(curve3, t3, v3, mode, 4, tol);
+            EXPECT_EQ(inserted.proof.proven(), full3.proof.proven()) << what;
+        }
+    }
+}

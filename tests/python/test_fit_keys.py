@@ -142,3 +142,45 @@ def test_axis_angle_span_arrives_at_the_keyed_representation():
     assert len(jumps) <= 1
     for j in jumps:
         assert min(abs(np.sin(span[j, 0] / 2)), abs(np.sin(span[j + 1, 0] / 2))) < 0.2
+
+
+@pytest.mark.parametrize("method", ["SLERP", "SQUAD", "TCB", "SPLINE_C2"])
+def test_refit_reuses_unchanged_segments(method):
+    """fit_through_keys(previous=...): after one key moved, only the key segments it shapes are fitted
+    again (KeyFit.refitted); keys and handles elsewhere are the previous fit's, and prove_playback of
+    the whole result against the new curve, an independent proof over every sample, is within the
+    tolerance."""
+    rng = np.random.default_rng(5)
+    kf = np.arange(1.0, 400.0, 10.0)
+    q = np.cumsum(rng.normal(scale=0.15, size=(len(kf), 4)), axis=0) + [1, 0, 0, 0]
+    q = (q / np.linalg.norm(q, axis=1, keepdims=True)).astype(np.float32).astype(float)
+    tol = 0.05 * DEG
+
+    def fit(values, previous=None):
+        curve = qc.Curve(kf, values, method=method)
+        values = values * np.where(np.sum(curve.sample(kf) * values, axis=1) < 0, -1.0, 1.0)[:, None]
+        return curve, qc.fit_through_keys(curve, kf, values, "QUATERNION", subframes=4, tolerance=tol,
+                                          previous=previous)
+
+    _, first = fit(q)
+    assert first.refitted == len(kf) - 1
+    assert len(first.segment_bounds) == len(kf) - 1
+    assert first.proof.bound == pytest.approx(first.segment_bounds.max())
+    moved = q.copy()
+    moved[20, 1] += 0.03
+    moved[20] = (moved[20] / np.linalg.norm(moved[20])).astype(np.float32)
+    curve, refit = fit(moved, previous=first)
+    assert 2 <= refit.refitted <= (len(kf) - 1 if method == "SPLINE_C2" else 4)
+    proof = qc.prove_playback(curve, list(refit.keys.channels), "BEZIER", "QUATERNION", refit.times, tol,
+                              min_step=1 / 65536)
+    assert proof.proven and refit.proof.proven
+    assert proof.bound <= tol
+    if method != "SPLINE_C2":
+        far = kf[:17]  # segments 0..15 end before key 18, which a SQUAD or TCB change at key 20 leaves alone
+        for new, old in zip(refit.keys.channels, first.keys.channels):
+            a, b = np.isin(new.frames, far), np.isin(old.frames, far)
+            np.testing.assert_array_equal(new.values[a], old.values[b])
+            np.testing.assert_array_equal(new.handle_right[a], old.handle_right[b])
+            np.testing.assert_array_equal(new.handle_left[a], old.handle_left[b])
+    with pytest.raises(TypeError):
+        qc.fit_through_keys(curve, kf, moved, "QUATERNION", subframes=4, tolerance=tol, previous="first")

@@ -33,6 +33,7 @@
 // key reducer's verification margin, reduce.hpp).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <utility>
 #include <vector>
@@ -97,6 +98,25 @@ public:
 private:
     Curve curve_;
     CurveMotion motion_;
+};
+
+// A motion whose breaks are computed once and found by binary search (proofs of many pieces of one
+// motion: prove_within asks each piece's proof for the breaks within it).
+class KeptBreaks : public Motion {
+public:
+    explicit KeptBreaks(const Motion& m) : m_(m), breaks_(m.breaks()) {}
+    Quat at(double t) const override { return m_.at(t); }
+    void bounds(double t0, double t1, double& speed, double& accel) const override { m_.bounds(t0, t1, speed, accel); }
+    double jump_bound(double t0, double t1, double speed) const override { return m_.jump_bound(t0, t1, speed); }
+    bool float32_frames() const override { return m_.float32_frames(); }
+    std::vector<double> breaks() const override { return breaks_; }
+    std::vector<double> breaks_within(double t0, double t1) const override {
+        return {std::lower_bound(breaks_.begin(), breaks_.end(), t0), std::upper_bound(breaks_.begin(), breaks_.end(), t1)};
+    }
+
+private:
+    const Motion& m_;
+    std::vector<double> breaks_;
 };
 
 // The rotation Blender plays from the keys of a rotation's F-curves (channel_count(mode) of them,

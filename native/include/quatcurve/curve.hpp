@@ -223,6 +223,11 @@ public:
     // Relative rotation vector of each key segment (local frame of its first key), size keys - 1;
     // with turns, the turned one (q[i+1] = ±q[i]·exp(r[i]/2)).
     const std::vector<Vec3>& segment_rotvecs() const { return rotvecs_; }
+    // Whether key segment k of this curve is key segment other_k of `other` bit for bit: the same
+    // method, key times, knots, the method's data of each knot segment and its bounds, and ease (a
+    // loop: also the same period and seam). Such a segment samples the same at every time. False for
+    // an index beyond either curve's segments.
+    bool same_key_segment(std::size_t k, const Curve& other, std::size_t other_k) const;
 
     // Implementation data, defined in native/src/curve_impl.hpp.
     struct Impl;

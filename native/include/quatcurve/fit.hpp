@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "quatcurve/bound.hpp"
@@ -34,6 +35,15 @@ struct KeyFit {
     ReducedKeys keys;                 // the fitted keys (fit_keys*); max_error is at `times` only
     std::vector<EulerSwitch> switches;   // Euler branch / axis-angle turn changes between keys
     PlaybackBound proof;              // Blender's playback of `keys` against the curve at every instant
+    // Each key segment's own proof (proof is their union), and what the fit was made from: a later
+    // fit of the same target reuses the key segments that did not change (fit_through_keys' previous).
+    std::vector<PlaybackBound> segment_proofs;
+    std::shared_ptr<const Curve> curve;
+    std::vector<double> key_frames, key_values;
+    RotationMode mode;
+    int subframes = 0;
+    double tolerance = 0.0, min_gap = 0.0;
+    std::size_t refitted = 0;  // key segments this call fitted (the others were the previous fit's)
 };
 
 // The fit of `curve` (through the keys at key_frames) in rotation mode `mode`: key_values holds K
@@ -67,12 +77,22 @@ struct KeyFit {
 // every axis is the same rotation); a change at a sample further than 5° from the rest pose, or
 // one that would play a whole turn between two samples, is refused naming the keys' frames. A key
 // at the rest pose (angle a multiple of 2π: any axis) gets the sample beside it, as a key at gimbal
-// lock does, where its axis turns to the path's. Keys
-// keep their values: the curve is made from them, so a refit sees the same path. Throws
-// InvalidArgument for fewer than two keys, mismatched sizes, a tolerance that is not above 0, and
-// whatever the steps throw.
+// lock does, where its axis turns to the path's. Keys keep their values: the curve is made from
+// them, so a refit sees the same path.
+//
+// A refit (`previous`: the last fit of the same target, after an edit of its keys): every channel's
+// playback on a key segment depends only on the keys and handles inside it, so a key segment whose
+// two keys (frames and values) and whose curve (Curve::same_key_segment: the method's data of the
+// segment, bit for bit) are the previous fit's keeps the previous fit's keys, handles, samples and
+// proof there; the others are fitted and proved as above, run by run of changed segments (a run's
+// end keys keep their outer handles). SQUAD, TCB and CATMULL_ROM change at most the two segments
+// on either side of a moved key, SLERP and NLERP the two beside it; SPLINE_C2 changes every
+// segment up to where the change falls below the last bit. Nothing is reused when the mode,
+// subframes, tolerance or min_gap differ. The result is what a fit of the whole range proves: its
+// bound holds at every instant from the first key to the last. Throws InvalidArgument for fewer
+// than two keys, mismatched sizes, a tolerance that is not above 0, and whatever the steps throw.
 KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
                         const std::vector<double>& key_values, const RotationMode& mode, int subframes,
-                        double tolerance, double min_gap = 0.01);
+                        double tolerance, double min_gap = 0.01, const KeyFit* previous = nullptr);
 
 }  // namespace quatcurve
