@@ -253,11 +253,14 @@ KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const
     return fit;
 }
 
-// Whether a fit made with these settings can lend its key segments to this one.
+// Whether a fit made with these settings can lend its key segments to this one. The tolerance may
+// differ by float32 rounding (a setting stored in a Blender property); a reused segment then still
+// needs a proved bound within the new tolerance (fit_through_keys).
 bool reusable(const KeyFit& previous, const RotationMode& mode, int subframes, double tolerance, double min_gap) {
     return previous.curve && previous.mode.kind == mode.kind &&
            (mode.kind != RotationMode::Kind::euler || previous.mode.order == mode.order) &&
-           previous.subframes == subframes && previous.tolerance == tolerance && previous.min_gap == min_gap &&
+           previous.subframes == subframes && std::fabs(previous.tolerance - tolerance) <= 1e-6 * tolerance &&
+           previous.min_gap == min_gap &&
            previous.segment_proofs.size() + 1 == previous.key_frames.size() &&
            previous.forced.size() == previous.key_frames.size();
 }
@@ -347,6 +350,9 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
                             key_values.begin() + static_cast<std::ptrdiff_t>(C * (k + 2)), pv + C * o))
                 continue;
             if (!curve.same_key_segment(k, *previous->curve, o)) continue;
+            // Proved within this tolerance, or as far above it as a fit could be (the same tolerance).
+            const PlaybackBound& proof = previous->segment_proofs[o];
+            if (previous->tolerance != tolerance && !(proof.proven() && proof.bound <= tolerance)) continue;
             kept[k] = static_cast<std::ptrdiff_t>(o);
             ++kept_count;
         }

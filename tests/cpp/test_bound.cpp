@@ -468,6 +468,11 @@ TEST(FitProof, RefitKeepsUnchangedSegmentsAndProvesTheRest) {
                 EXPECT_EQ(keys_between(same.keys, c, t.front(), t.back()), keys_between(first.keys, c, t.front(), t.back()))
                     << what;
             EXPECT_EQ(fit_through_keys(curve, t, v, mode, 4, 0.9 * tol, 0.01, &first).refitted, k - 1) << what;
+            // The tolerance rounded to float32 (a Blender property): the segments proved within it are kept.
+            const double rounded = static_cast<float>(tol);
+            std::size_t above = 0;
+            for (const PlaybackBound& p : first.segment_proofs) above += p.proven() && p.bound <= rounded ? 0 : 1;
+            EXPECT_EQ(fit_through_keys(curve, t, v, mode, 4, rounded, 0.01, &first).refitted, above) << what;
 
             // One key moved: key 7.
             std::vector<double> moved = v;

@@ -88,7 +88,7 @@ struct KeyFit {
 // end keys keep their outer handles). SQUAD, TCB and CATMULL_ROM change at most the two segments
 // on either side of a moved key, SLERP and NLERP the two beside it; SPLINE_C2 changes every
 // segment up to where the change falls below the last bit. Nothing is reused when the mode,
-// subframes, tolerance or min_gap differ. The result is what a fit of the whole range proves: its
+// subframes, tolerance (beyond a float32 rounding of it) or min_gap differ. The result is what a fit of the whole range proves: its
 // bound holds at every instant from the first key to the last. Throws InvalidArgument for fewer
 // than two keys, mismatched sizes, a tolerance that is not above 0, and whatever the steps throw.
 KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frames,
