@@ -238,6 +238,127 @@ double max_abs_half_sine(double lo, double hi) {
 
 }  // namespace
 
+namespace {
+
+// Blender's is_eqt(frame, key, 1e-4) in float32 (blender_eval.cpp): the frame is taken as the key.
+bool snaps(float frame, float key) {
+    return frame > key ? (frame - key) <= float(kKeySnap) : (key - frame) <= float(kKeySnap);
+}
+
+// The float32 frames where the snap zone of `key` begins and ends, and the frames just outside it:
+// from float(key ∓ 1e-4), a few float32 steps to the exact edge of Blender's comparison. With `zone`:
+// its first and last frames alone, there (nothing added to `out`).
+void snap_edges(float key, std::vector<double>& out, double* zone = nullptr) {
+    auto edge = [&](float start, float outward) {
+        float f = start;
+        for (int i = 0; i < 64 && !snaps(f, key); ++i) f = std::nextafter(f, key);  // inside
+        for (int i = 0; i < 64; ++i) {
+            const float next = std::nextafter(f, outward);
+            if (!snaps(next, key)) break;
+            f = next;
+        }
+        return f;
+    };
+    const float lo = edge(static_cast<float>(double(key) - kKeySnap), -HUGE_VALF);
+    const float hi = edge(static_cast<float>(double(key) + kKeySnap), HUGE_VALF);
+    if (zone) {
+        zone[0] = lo;
+        zone[1] = hi;
+        return;
+    }
+    out.push_back(std::nextafter(lo, -HUGE_VALF));
+    out.push_back(lo);
+    out.push_back(key);
+    out.push_back(hi);
+    out.push_back(std::nextafter(hi, HUGE_VALF));
+}
+
+}  // namespace
+
+bool PlaybackMotion::raw_channels(double t, double* a) const {
+    if (mode_.kind != RotationMode::Kind::quaternion) return false;
+    values(t, a);
+    return true;
+}
+
+namespace {
+
+// How [t0, t1] (float32 frames) meets the snap zone of `key` (the frames Blender shows as the key):
+// 0 apart, 1 inside it, 2 partly. The zone reaches 1e-4 from the key up to float32 rounding: frames
+// clearly nearer or farther are decided at once, the few in between by the zone's exact edges.
+int snap_overlap(double key, double t0, double t1) {
+    constexpr double kSure = 0.99 * kKeySnap, kBeyond = 1.01 * kKeySnap;
+    if (t1 < key - kBeyond || t0 > key + kBeyond) return 0;
+    if (t0 >= key - kSure && t1 <= key + kSure) return 1;
+    auto unsure = [&](double t) {
+        const double d = std::fabs(t - key);
+        return d > kSure && d < kBeyond;
+    };
+    if (!unsure(t0) && !unsure(t1)) return 2;
+    std::vector<double> none;
+    double zone[2];
+    snap_edges(static_cast<float>(key), none, zone);
+    if (t1 < zone[0] || t0 > zone[1]) return 0;
+    return t0 >= zone[0] && t1 <= zone[1] ? 1 : 2;
+}
+
+}  // namespace
+
+bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curvature, double* step) const {
+    if (mode_.kind != RotationMode::Kind::quaternion) return false;
+    // A frame in the snap zone of a key shows the key's value: the piece's value at the key, off its
+    // value at the frame by at most the rate times the zone's reach (with room for float32). An
+    // interval partly in a zone takes that step; a key beyond an end whose zone reaches into the
+    // interval widens the interval the rates cover (the piece between the key and the end).
+    const double reach = 1.01 * kKeySnap;
+    double v0[4], v1[4];
+    values(t0, v0);
+    values(t1, v1);
+    for (std::size_t c = 0; c < 4; ++c) {
+        const std::vector<double>& f = channels_[c].frames;
+        double lo = t0, hi = t1;
+        bool partly = false;
+        const auto first = std::lower_bound(f.begin(), f.end(), t0 - reach);
+        for (auto k = first; k != f.end() && *k <= t1 + reach; ++k) {
+            if (snap_overlap(*k, t0, t1) != 2) continue;
+            partly = true;
+            lo = std::fmin(lo, *k);
+            hi = std::fmax(hi, *k);
+        }
+        channel_bounds(c, lo, hi, rate[c], curvature[c]);
+        // A flat segment plays its first value up to the next key, whose value may differ by the
+        // flatness threshold (3 × FLT_EPSILON, segment_controls); float32 values: 4 ulps of the
+        // largest magnitude around cover it.
+        const double magnitude = std::fmax(1.0, std::fmax(std::fabs(v0[c]), std::fabs(v1[c])));
+        step[c] = (partly ? reach * rate[c] : 0.0) + 4.0 * FLT_EPSILON * magnitude;
+    }
+    return true;
+}
+
+void PlaybackMotion::raw_snap_edges(double t0, double t1, std::vector<double>& out) const {
+    if (mode_.kind != RotationMode::Kind::quaternion) return;
+    const double reach = 1.01 * kKeySnap;
+    for (const FCurveKeys& ch : channels_) {
+        const auto first = std::lower_bound(ch.frames.begin(), ch.frames.end(), t0 - reach);
+        for (auto k = first; k != ch.frames.end() && *k <= t1 + reach; ++k) {
+            if (snap_overlap(*k, t0, t1) != 2) continue;
+            std::vector<double> edges;
+            snap_edges(static_cast<float>(*k), edges);
+            for (double e : edges)
+                if (e > t0 && e < t1) out.push_back(e);
+        }
+    }
+}
+
+std::vector<double> PlaybackMotion::raw_keys() const {
+    if (mode_.kind != RotationMode::Kind::quaternion) return {};
+    std::vector<double> out;
+    for (const FCurveKeys& ch : channels_) out.insert(out.end(), ch.frames.begin(), ch.frames.end());
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
 void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) const {
     double r[4] = {0.0, 0.0, 0.0, 0.0}, k[4] = {0.0, 0.0, 0.0, 0.0};
     for (std::size_t c = 0; c < channels_.size(); ++c) channel_bounds(c, t0, t1, r[c], k[c]);
@@ -299,36 +420,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
     speed = accel = HUGE_VAL;
 }
 
-namespace {
 
-// Blender's is_eqt(frame, key, 1e-4) in float32 (blender_eval.cpp): the frame is taken as the key.
-bool snaps(float frame, float key) {
-    return frame > key ? (frame - key) <= float(kKeySnap) : (key - frame) <= float(kKeySnap);
-}
-
-// The float32 frames where the snap zone of `key` begins and ends, and the frames just outside it:
-// from float(key ∓ 1e-4), a few float32 steps to the exact edge of Blender's comparison.
-void snap_edges(float key, std::vector<double>& out) {
-    auto edge = [&](float start, float outward) {
-        float f = start;
-        for (int i = 0; i < 64 && !snaps(f, key); ++i) f = std::nextafter(f, key);  // inside
-        for (int i = 0; i < 64; ++i) {
-            const float next = std::nextafter(f, outward);
-            if (!snaps(next, key)) break;
-            f = next;
-        }
-        return f;
-    };
-    const float lo = edge(static_cast<float>(double(key) - kKeySnap), -HUGE_VALF);
-    const float hi = edge(static_cast<float>(double(key) + kKeySnap), HUGE_VALF);
-    out.push_back(std::nextafter(lo, -HUGE_VALF));
-    out.push_back(lo);
-    out.push_back(key);
-    out.push_back(hi);
-    out.push_back(std::nextafter(hi, HUGE_VALF));
-}
-
-}  // namespace
 
 // Near gimbal lock the first and last angles (a, c) turn about nearly the same axis: with κ = e_a·e_c
 // (world axes) = σ·sin b, |ω|² = b'² + a'² + c'² + 2κ·a'c' = b'² + (a' + κc')² + (1 − κ²)·c'², and
@@ -399,8 +491,13 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
     times.reserve(given.size());
     for (double t : given) times.push_back(static_cast<float>(t));
     const double first = times.front(), last = times.back();
+    // Two float32 playbacks of quaternion channels take the channels bound alone (bound.hpp), which
+    // covers the snap to a key as a step: their corners are the key frames, without the snap edges.
+    double probe[4];
+    const bool raw = a.float32_frames() && b.float32_frames() && a.raw_channels(first, probe) &&
+                     b.raw_channels(first, probe);
     for (const Motion* m : {&a, &b})
-        for (double t : m->breaks_within(first, last))
+        for (double t : raw ? m->raw_keys() : m->breaks_within(first, last))
             if (t > first && t < last) times.push_back(t);
     std::sort(times.begin(), times.end());
     times.erase(std::unique(times.begin(), times.end()), times.end());
@@ -423,12 +520,56 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             r.worst_time = t;
         }
     };
+    // The channels bound (bound.hpp) of two quaternion playbacks on [p0.t, p1.t], or +∞. With the
+    // steps (ε_A, ε_B: |a(t) − its piece|): |D(t)| ≤ max |D(ends)| + K·h²/8 + 2(ε_A + λε_B) (the ends
+    // and t each off the pieces' D), |a_A(t)| ≥ min |a_A(ends)| − max|a_A'|·h/2 − 2ε_A.
+    auto channels_bound = [&](const Point& p0, const Point& p1) {
+        double a0[4], a1[4], b0[4], b1[4], ra[4], ka[4], sa_[4], rb[4], kb[4], sb_[4];
+        a.raw_channels(p0.t, a0);
+        a.raw_channels(p1.t, a1);
+        b.raw_channels(p0.t, b0);
+        b.raw_channels(p1.t, b1);
+        if (!a.raw_bounds(p0.t, p1.t, ra, ka, sa_) || !b.raw_bounds(p0.t, p1.t, rb, kb, sb_)) return HUGE_VAL;
+        auto dot = [](const double* u, const double* v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2] + u[3] * v[3]; };
+        const double sigma = dot(a0, b0) < 0.0 ? -1.0 : 1.0;
+        const double nb0 = dot(b0, b0), nb1 = dot(b1, b1);
+        if (!(nb0 > 0.0) || !(nb1 > 0.0)) return HUGE_VAL;
+        // λ(t) linear from each end's projection: D at the ends is the perpendicular part alone.
+        const double l0 = sigma * dot(a0, b0) / nb0, l1 = sigma * dot(a1, b1) / nb1;
+        if (!(l0 > 0.0) || !(l1 > 0.0) || !std::isfinite(l0) || !std::isfinite(l1)) return HUGE_VAL;
+        const double h = p1.t - p0.t, lmax = std::fmax(l0, l1), lmin = std::fmin(l0, l1);
+        const double slope = std::fabs(l1 - l0) / h;
+        double d0 = 0.0, d1 = 0.0, K = 0.0, sa = 0.0, sb = 0.0, ea = 0.0, eb = 0.0;
+        for (int c = 0; c < 4; ++c) {
+            const double e0 = a0[c] - l0 * sigma * b0[c], e1 = a1[c] - l1 * sigma * b1[c];
+            const double k = ka[c] + lmax * kb[c] + 2.0 * slope * rb[c];
+            d0 += e0 * e0;
+            d1 += e1 * e1;
+            K += k * k;
+            sa += ra[c] * ra[c];
+            sb += rb[c] * rb[c];
+            ea += sa_[c] * sa_[c];
+            eb += sb_[c] * sb_[c];
+        }
+        ea = std::sqrt(ea);
+        eb = std::sqrt(eb);
+        const double D = std::sqrt(std::fmax(d0, d1)) + std::sqrt(K) * h * h / 8.0 + 2.0 * (ea + lmax * eb);
+        const double low_a = std::sqrt(std::fmin(dot(a0, a0), dot(a1, a1))) - std::sqrt(sa) * 0.5 * h - 2.0 * ea;
+        const double low_b = lmin * (std::sqrt(std::fmin(nb0, nb1)) - std::sqrt(sb) * 0.5 * h - 2.0 * eb);
+        const double low = std::fmax(low_a, low_b);
+        if (!(D < low)) return HUGE_VAL;  // (NaN bounds included)
+        return 2.0 * std::asin(D / low);
+    };
     auto interval_bound = [&](const Point& p0, const Point& p1) {
         const double h = p1.t - p0.t;
+        const bool neighbours = std::nextafter(static_cast<float>(p0.t), HUGE_VALF) >= static_cast<float>(p1.t);
+        // Two float32 playbacks of quaternion channels: the channels bound, which usually suffices
+        // alone (the motions' own bounds below then need not be computed).
+        if (raw) return neighbours ? std::fmax(p0.d, p1.d) + kArithmeticSlack : channels_bound(p0, p1) + kArithmeticSlack;
         double va, aa, vb, ab;
         a.bounds(p0.t, p1.t, va, aa);
         b.bounds(p0.t, p1.t, vb, ab);
-        if (std::nextafter(static_cast<float>(p0.t), HUGE_VALF) >= static_cast<float>(p1.t)) {
+        if (neighbours) {
             // Neighbouring float32 frames: a float32 motion shows one of its two ends in between (a
             // step there, such as the snap to a key, included), the other moves by at most its speed;
             // two float32 motions show the same end (Blender evaluates both at the same frame).
@@ -469,6 +610,26 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             if (bound <= tolerance || p0.d > tolerance || p1.d > tolerance) {
                 reach(bound, mid);  // proved, or a violation at an end, known already
                 continue;
+            }
+            if (raw && r.evaluations < max_evaluations) {
+                // Two playbacks: an interval partly in a key's snap zone is split at the zone's edges
+                // (the step it takes there does not shrink with the interval).
+                std::vector<double> edges;
+                a.raw_snap_edges(p0.t, p1.t, edges);
+                b.raw_snap_edges(p0.t, p1.t, edges);
+                if (!edges.empty()) {
+                    std::sort(edges.begin(), edges.end());
+                    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+                    std::vector<Point> points{p0};
+                    for (double t : edges) {
+                        points.push_back(evaluate(t));
+                        reach(points.back().d, t);
+                        if (points.back().d > tolerance) r.violations.push_back(t);
+                    }
+                    points.push_back(p1);
+                    for (std::size_t k = points.size() - 1; k > 0; --k) stack.emplace_back(points[k - 1], points[k]);
+                    continue;
+                }
             }
             if (p1.t - p0.t < min_step || r.evaluations >= max_evaluations || !(mid > p0.t && mid < p1.t)) {
                 r.unproven.emplace_back(p0.t, p1.t);

@@ -1,9 +1,14 @@
-"""Key reduction against Blender's Decimate on real motion capture (one run, prints a table).
+"""Key reduction against Blender's Decimate on real motion capture (one run, prints a table per clip).
 
-Imports ../shared/data/mocap/mocapbank.bvh with Blender's own BVH importer as quaternion bones, then
-at 0.1°:
-- ours: quatcurve.reduce_keys per bone (BEZIER per-channel, and the other variants for reference),
-  written with the add-on's F-curve adapter into a copy of the action;
+Imports each shared clip (../shared/data/mocap: mocapbank.bvh, freebvh.bvh) with Blender's own BVH
+importer as quaternion bones, then at 0.1°:
+- the add-on: reduce.reduce(error='ANGLE'), BEZIER per channel — reduce_keys_proved against the
+  imported keys' playback, the bound proved at every instant between frames — on one worker thread;
+  its native seconds (reduce.reduce_values on every bone, one after the other, on this thread: the
+  same calls the add-on's workers make; best of 5) give the throughput in MB/s of rotation channels per core
+  (frames × rotation channels × 4 bytes, float32 as Blender stores them);
+- quatcurve.reduce_keys per bone (BEZIER and LINEAR, per channel and synchronized; proved at the
+  frames only, for reference), written with the add-on's F-curve adapter into a copy of the action;
 - Blender's graph.decimate in ERROR mode on another copy, its margin searched for the fewest keys
   whose max angular error is at most 0.1°.
 Every error is measured with Blender's own evaluation of the rotation F-curves at every frame (then
@@ -11,9 +16,11 @@ normalized), against the imported keys. Keys are counted as Blender counts them:
 the rotation_quaternion F-curves.
 
 Run with any Blender:
-  ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_reduce_blender.py
-  blender -b --factory-startup --python tests/bench/bench_reduce_blender.py
-`--smoke` (tests/bench/smoke.py): the clip's first 60 frames, Decimate at 4 margins.
+  ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_reduce_blender.py [--module PATH]
+  blender -b --factory-startup --python tests/bench/bench_reduce_blender.py -- [--module PATH]
+`--module PATH`: another build's compiled quatcurve module (e.g. one built from an earlier commit) in
+place of addon/quatcurve_blender's, to measure it with the same script.
+`--smoke` (tests/bench/smoke.py): mocapbank's first 60 frames, Decimate at 4 margins.
 """
 import builtins
 import math
@@ -32,11 +39,31 @@ sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, HERE)
 
 import smoke  # noqa: E402
-from quatcurve_blender import fcurves, native  # noqa: E402
 
-CLIP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap", "mocapbank.bvh"))
+
+def load_module(path):
+    """The compiled quatcurve module at `path` as the add-on's own (before the add-on is imported)."""
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.ExtensionFileLoader("quatcurve_blender.quatcurve", path)
+    spec = importlib.util.spec_from_file_location("quatcurve_blender.quatcurve", path, loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    sys.modules["quatcurve_blender.quatcurve"] = module
+
+
+_args = smoke.script_args()
+if "--module" in _args:
+    load_module(os.path.abspath(_args[_args.index("--module") + 1]))
+
+from quatcurve_blender import fcurves, native, reduce, targets, workers  # noqa: E402
+
+MOCAP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap"))
+CLIPS = ("mocapbank.bvh",) if smoke.SMOKE else ("mocapbank.bvh", "freebvh.bvh")
 TOL_DEG = 0.1
 SMOKE_FRAMES = 60
+# The add-on's native reduction is timed this many times, the best kept (the machine may be shared).
+REPEAT = 5
 # The margin search: bisection steps, then points scanned around the margin found.
 SEARCH_STEPS, SCAN_POINTS = (1, 2) if smoke.SMOKE else (16, 13)
 
@@ -170,36 +197,80 @@ def search_decimate(arm, original, frames, reference):
     return keys, err, seconds, margin, len(tried)
 
 
-def main():
-    if not os.path.exists(CLIP):
-        print("skipped: %s is absent (the shared mocap clips)" % os.path.relpath(CLIP, ROOT))
-        return
-    qc = native.require()
+def addon_reduce(arm, original, frames, reference, bones):
+    """(keys, max error in degrees, native seconds, MB of rotation channels, proved everywhere) of the
+    add-on's reduction (0.1°, BEZIER per channel) on one thread."""
+    threads = workers.THREADS
+    workers.THREADS = 1
+    try:
+        action = fresh_copy(arm, original, "addon")
+        found = [targets.Target(arm, b) for b in bones]
+        # The native work alone, one bone after the other: the add-on's calls on the add-on's input.
+        items = [reduce.read_target(t) for t in found]
+        seconds = math.inf
+        for _ in range(1 if smoke.SMOKE else REPEAT):
+            t0 = time.perf_counter()
+            for item in items:
+                reduce.reduce_values(item.frames, item.values, item.mode, math.radians(TOL_DEG), "BEZIER", False,
+                                     original=item.original)
+            seconds = min(seconds, time.perf_counter() - t0)
+        megabytes = sum(len(item.frames) * item.values.shape[1] * 4 for item in items) / 1e6
+        result = reduce.reduce(found, reduce.ReduceSettings(error="ANGLE", tolerance=TOL_DEG,
+                                                            interpolation="BEZIER", synchronized=False))
+        proved = all(t.proven for t in result.targets)
+        written = fcurves.active_action(arm)
+        keys, err = measure(arm, written, frames, reference)
+        fcurves.assign_action(arm, original)
+        fcurves.remove_action(written)
+        fcurves.remove_action(action)
+    finally:
+        workers.THREADS = threads
+    return keys, err, seconds, megabytes, proved
+
+
+def clip_table(clip, qc):
     with tempfile.TemporaryDirectory() as folder:
-        arm, original = import_clip(first_frames(CLIP, SMOKE_FRAMES, folder) if smoke.SMOKE else CLIP)
+        arm, original = import_clip(first_frames(clip, SMOKE_FRAMES, folder) if smoke.SMOKE else clip)
     original.use_fake_user = True
     curves = rotation_curves(arm, original)
     frames = fcurves.key_frames(curves[next(iter(curves))])
     reference = {name: np.stack([fcurves.read_keys(f)[1] for f in fc], axis=1)
                  for name, fc in curves.items()}
     total = sum(fcurves.key_count(f) for fc in curves.values() for f in fc)
-    print("Blender %s, %s: %d frames, %d bones, %d rotation keys; tolerance %.2f deg"
-          % (bpy.app.version_string, os.path.basename(CLIP), len(frames), len(curves), total, TOL_DEG))
-    rows = []
+    print("Blender %s, %s: %d frames, %d bones, %d rotation keys; tolerance %.2f deg; load average %s"
+          % (bpy.app.version_string, os.path.basename(clip), len(frames), len(curves), total, TOL_DEG,
+             "%.2f %.2f %.2f" % os.getloadavg()))
+    ak, ae, aseconds, megabytes, proved = addon_reduce(arm, original, frames, reference, list(curves))
+    rows = [("add-on (proved between frames)", ak, ae, aseconds)]
     for interpolation, synchronized in (("BEZIER", False), ("BEZIER", True), ("LINEAR", True),
                                         ("LINEAR", False)):
         k, e, s = ours(arm, original, frames, reference, interpolation, synchronized, qc)
-        rows.append(("quatcurve %s %s" % (interpolation, "synchronized" if synchronized
-                                          else "per-channel"), k, e, s))
+        rows.append(("reduce_keys %s %s" % (interpolation, "synchronized" if synchronized
+                                            else "per-channel"), k, e, s))
     dk, de, ds, margin, trials = search_decimate(arm, original, frames, reference)
     rows.append(("Decimate (ERROR, margin %.3g)" % margin, dk, de, ds))
-    print("  %-36s %7s %8s %16s %8s" % ("method", "keys", "%", "max error (deg)", "seconds"))
+    print("  %-36s %7s %8s %9s %16s %8s" % ("method", "keys", "%", "/Decimate", "max error (deg)", "seconds"))
     for name, k, e, s in rows:
-        print("  %-36s %7d %7.2f%% %16.5f %8.3f" % (name, k, 100.0 * k / total, e, s))
-    best = rows[0]
-    print("  ratio ours (%s) / Decimate: %.3f (target <= 0.70); bound %s at every frame; "
-          "Decimate margin search: %d runs" % (best[0], best[1] / dk, "holds" if best[2] <= TOL_DEG
-                                               else "FAILS", trials))
+        print("  %-36s %7d %7.2f%% %9.3f %16.5f %8.3f" % (name, k, 100.0 * k / total, k / dk, e, s))
+    print("  add-on: %.3f x Decimate's keys (target <= 0.30); bound %s at every frame, proved between "
+          "frames: %s; %.3f MB of rotation channels in %.3f s of native reduction on one core = %.2f MB/s "
+          "(target >= 3); Decimate margin search: %d runs"
+          % (ak / dk, "holds" if ae <= TOL_DEG else "FAILS", "yes" if proved else "NO", megabytes, aseconds,
+             megabytes / aseconds, trials))
+    return ak, dk, megabytes, aseconds
+
+
+def main():
+    clips = [os.path.join(MOCAP, c) for c in CLIPS]
+    if not all(os.path.exists(c) for c in clips):
+        print("skipped: %s is absent (the shared mocap clips)" % os.path.relpath(MOCAP, ROOT))
+        return
+    qc = native.require()
+    print("module: %s" % qc.__file__)
+    totals = [clip_table(clip, qc) for clip in clips]
+    ak, dk, mb, seconds = (sum(t[i] for t in totals) for i in range(4))
+    print("all clips: add-on %d keys = %.3f x Decimate's %d; %.3f MB in %.3f s = %.2f MB/s per core"
+          % (ak, ak / dk, dk, mb, seconds, mb / seconds))
 
 
 if __name__ == "__main__":

@@ -536,3 +536,70 @@ TEST(FitProof, RefitKeepsUnchangedSegmentsAndProvesTheRest) {
         }
     }
 }
+
+// Two quaternion playbacks take the channels bound (bound.hpp): Bezier keys with random handles and
+// non-unit values against LINEAR keys on other frames near them, at tolerances that make the proof
+// split or fail. The bound holds against Blender's evaluation at 64 frames per frame and at every
+// snap edge of every key (frames within 1e-4 of a key show the key's value), whatever the verdict.
+TEST(ProveWithin, QuaternionPlaybacksBoundHoldsAtEveryFrameAndSnap) {
+    std::mt19937 rng(20261127);
+    std::normal_distribution<double> n;
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const RotationMode mode = parse_rotation_mode("QUATERNION");
+    for (int trial = 0; trial < 40; ++trial) {
+        // A smooth path: a rotation turning about a drifting axis, `speed` radians per frame.
+        const double speed = 0.01 + 0.1 * u(rng);
+        const Quat base = random_quat(rng);
+        auto path = [&](double t) {
+            const Vec3 axis = glm::normalize(Vec3(1.0, 0.3 * std::sin(0.2 * t), 0.3 * std::cos(0.15 * t)));
+            return multiply(base, Quat(std::cos(0.5 * speed * t), std::sin(0.5 * speed * t) * axis.x,
+                                       std::sin(0.5 * speed * t) * axis.y, std::sin(0.5 * speed * t) * axis.z));
+        };
+        const double noise = 1e-4 + 2e-3 * u(rng);
+        auto channels_of = [&](const std::vector<double>& frames, bool bezier, double scale) {
+            std::vector<FCurveKeys> ch(4);
+            for (std::size_t k = 0; k < frames.size(); ++k) {
+                const Quat q = path(frames[k]) * (scale * (1.0 + noise * n(rng)));
+                const double v[4] = {q.w, q.x, q.y, q.z};
+                for (std::size_t c = 0; c < 4; ++c) {
+                    ch[c].frames.push_back(frames[k]);
+                    ch[c].values.push_back(static_cast<float>(v[c] + noise * n(rng)));
+                }
+            }
+            if (bezier)
+                for (std::size_t c = 0; c < 4; ++c)
+                    for (std::size_t k = 0; k < frames.size(); ++k) {
+                        const double left = k > 0 ? frames[k] - frames[k - 1] : 1.0;
+                        const double right = k + 1 < frames.size() ? frames[k + 1] - frames[k] : 1.0;
+                        const double slope = 0.5 * speed * n(rng);
+                        const float y = static_cast<float>(ch[c].values[k]);
+                        ch[c].handle_left.push_back(static_cast<float>(frames[k] - left / 3.0));
+                        ch[c].handle_left.push_back(static_cast<float>(y - slope * left / 3.0));
+                        ch[c].handle_right.push_back(static_cast<float>(frames[k] + right / 3.0));
+                        ch[c].handle_right.push_back(static_cast<float>(y + slope * right / 3.0));
+                    }
+            return ch;
+        };
+        const std::vector<double> dense = random_frames(rng, 40, 1.0, 1.0);    // every frame from 1
+        const std::vector<double> sparse = random_frames(rng, 8, 2.0, 9.0);    // uneven, from 1
+        const PlaybackMotion a(channels_of(sparse, true, 1.0 + 0.01 * n(rng)), KeyInterpolation::BEZIER, mode);
+        const PlaybackMotion b(channels_of(dense, false, 1.0), KeyInterpolation::LINEAR, mode);
+        const double t0 = 1.0, t1 = std::min(sparse.back(), dense.back());
+        std::vector<double> at;
+        for (double t = t0; t <= t1; t += 1.0 / 64.0) at.push_back(t);
+        for (const std::vector<double>* keys : {&sparse, &dense})
+            for (double k : *keys)
+                for (int s = -12; s <= 12; ++s) at.push_back(k + s * 1e-5);
+        double worst = 0.0;
+        for (double t : at)
+            if (t >= t0 && t <= t1) worst = std::max(worst, angle_between(a.at(t), b.at(t)));
+        std::vector<double> given;
+        for (double t = t0; t < t1; t += 1.0) given.push_back(t);
+        given.push_back(t1);
+        for (double share : {0.5, 1.05, 1.5, 3.0}) {
+            const PlaybackBound r = prove_within(a, b, given, share * worst, 1.0 / 16384.0);
+            EXPECT_GE(r.bound, worst) << "trial " << trial << " share " << share;
+            if (r.proven()) EXPECT_LE(r.bound, share * worst);
+        }
+    }
+}

@@ -13,7 +13,24 @@
 //                 |ë| ≤ S = |q̈_A| + |q̈_B| bounds, so |e(t)| ≤ max(|e(t0)|, |e(t1)|) + S·h²/8
 //                 (linear interpolation's error), and an angle is 4·asin(|e|/2) at most.
 //
-// The smaller of the two is the interval's bound. Where it is above the tolerance the interval is
+//   channels:     two quaternion playbacks (Motion::raw_channels, both at float32 frames) are
+//                 q = a/|a| with a(t) the four channel values, polynomial pieces between keys. For
+//                 λ(t) > 0 linear on the interval (λ_i = a_A·σa_B/|a_B|² at each end, so that D
+//                 there is the perpendicular part alone) and σ = ±1 fixed, D(t) = a_A(t) − λ(t)σ·a_B(t)
+//                 has |D̈_c| ≤ k_A,c + max λ·k_B,c + 2|λ'|·r_B,c from the channels' own first and
+//                 second derivative bounds (the DIFFERENCE of the two motions: their normalizations'
+//                 terms never enter), so |D(t)| ≤ max(|D(t0)|, |D(t1)|) + |D̈|·h²/8; the angle θ
+//                 between the 4-vectors a_A and σ·a_B has sin θ ≤ |D|/|a_A| and sin θ ≤ |D|/(λ|a_B|)
+//                 (the distance from either point to the other's ray), with |a(t)| ≥ min(|a(t0)|,
+//                 |a(t1)|) − max|a'|·h/2; the rotation angle is at most 2θ. Blender's snap to a key
+//                 (a frame within 1e-4 of it shows the key's value) is a step off the polynomial of at
+//                 most the rate × 1e-4, added where an interval meets a key's snap zone in part (twice:
+//                 at the ends and inside); such an interval that fails is split at the zone's edges,
+//                 where the step does not shrink with the interval. Two such playbacks take this bound
+//                 alone, their keys as the only breaks (no snap edges to evaluate).
+//
+// The smallest of them is the interval's bound (the channels bound alone between two quaternion
+// playbacks). Where it is above the tolerance the interval is
 // halved (its midpoint evaluated) until it passes, an evaluated time is above the tolerance (a
 // violation: reported, not refined further), or it is shorter than `min_step` (unproven: reported).
 // Every interval's bound is a true upper bound of d on it, so PlaybackBound::bound is an upper bound
@@ -61,6 +78,21 @@ public:
     // The breaks within [t0, t1], sorted: those of breaks() there, unless the motion has breaks
     // beyond any finite list (a loop, Curve "Loops", repeats its corners every period).
     virtual std::vector<double> breaks_within(double t0, double t1) const;
+    // Quaternion channels (bound.hpp, "channels"): the four values a at t that at(t) normalizes;
+    // bounds over [t0, t1] (no key strictly inside) of each channel's |a_c'| and |a_c''| (its
+    // polynomial pieces there, and to any key within the snap distance of an end) and of the steps
+    // off them (|a_c(t) − the piece at t|: the snap to a key, float32 flat segments); and the key
+    // frames (the corners of a). False / empty: not such a playback (the other two bounds apply).
+    virtual bool raw_channels(double /*t*/, double* /*a*/) const { return false; }
+    virtual bool raw_bounds(double /*t0*/, double /*t1*/, double* /*rate*/, double* /*curvature*/,
+                            double* /*step*/) const {
+        return false;
+    }
+    virtual std::vector<double> raw_keys() const { return {}; }
+    // The frames strictly inside (t0, t1) where the snap zone of a key that [t0, t1] meets in part
+    // begins or ends, and the frames just outside it (where the channels bound splits such an
+    // interval: its step there does not shrink with the interval).
+    virtual void raw_snap_edges(double /*t0*/, double /*t1*/, std::vector<double>& /*out*/) const {}
     // Whether the motion is evaluated at float32 frames (Blender's playback): at(t) is at(float(t)).
     // Two such motions show the same float32 frame at any time, so between neighbouring float32
     // frames their angle is the angle at one of them.
@@ -132,6 +164,10 @@ public:
     double jump_bound(double t0, double t1, double speed) const override;
     std::vector<double> breaks() const override;  // every channel's key frames
     bool float32_frames() const override { return true; }
+    bool raw_channels(double t, double* a) const override;                        // quaternion mode
+    bool raw_bounds(double t0, double t1, double* rate, double* curvature, double* step) const override;
+    std::vector<double> raw_keys() const override;  // quaternion mode: every channel's key frames
+    void raw_snap_edges(double t0, double t1, std::vector<double>& out) const override;
     // The channel values Blender shows at t (channel_count(mode) of them).
     void values(double t, double* out) const;
     // Upper bounds of |d value/d frame| and |d² value/d frame²| of channel c at every frame in
