@@ -95,15 +95,20 @@ QUATCURVE_INLINE void estrin(const double* c, const V4& y, const V4& y2, const V
     if constexpr (N == 10) r += y8 * (c[8] + c[9] * y);
     if constexpr (N == 12) r += y8 * ((c[8] + c[9] * y) + y2 * (c[10] + c[11] * y));
 }
+// kTaylorSinc/4: the series of sin x/θ = (sin x/x)/4 (θ = 4x). A power of two scales every rounding
+// of the sum alike, so this gives the bits of summing kTaylorSinc and multiplying by 0.25.
+inline constexpr double kTaylorSincQuarter[12] = {
+    kTaylorSinc[0] / 4, kTaylorSinc[1] / 4, kTaylorSinc[2] / 4, kTaylorSinc[3] / 4,
+    kTaylorSinc[4] / 4, kTaylorSinc[5] / 4, kTaylorSinc[6] / 4, kTaylorSinc[7] / 4,
+    kTaylorSinc[8] / 4, kTaylorSinc[9] / 4, kTaylorSinc[10] / 4, kTaylorSinc[11] / 4};
 template <int N>
 QUATCURVE_INLINE void exp_coeffs4(const V4& theta2, V4& c, V4& k) {
     static_assert(N == 8 || N == 10 || N == 12, "exp_coeffs4: 8, 10 or 12 terms");
     const V4 y = theta2 * (1.0 / 16.0);
     const V4 y2 = y * y, y4 = y2 * y2, y8 = y4 * y4;
     V4 cq, sq;
-    estrin<N>(kTaylorCos, y, y2, y4, y8, cq);  // cos x
-    estrin<N>(kTaylorSinc, y, y2, y4, y8, sq);
-    sq *= 0.25;  // sin x/θ
+    estrin<N>(kTaylorCos, y, y2, y4, y8, cq);          // cos x
+    estrin<N>(kTaylorSincQuarter, y, y2, y4, y8, sq);  // sin x/θ
     c = cq * cq - theta2 * sq * sq;
     k = 2.0 * cq * sq;
 }
