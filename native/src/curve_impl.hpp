@@ -51,11 +51,14 @@ struct BezierSeg {
     Q4 b0;
     Vec3 d01, d12, d23;
 };
-// q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2).
+// q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2). Since exp(ρ/2) = (c, k·ρ) is linear
+// in ρ, q = Q·c + k·v with v(s) = Q·(0, ρ(s)) = p1 s + p2 s² + p3 s³, p_i = Q·(0, c_i), and
+// |v| = |ρ| (Q is a unit quaternion): the sampler needs no quaternion product.
 struct SplineSeg {
     double t0, inv_h;
     Q4 Q;
     Vec3 c1, c2, c3;
+    Q4 p1, p2, p3;
     double bound2;  // (|c1| + |c2| + |c3|)² ≥ |ρ(s)|² on [0, 1]: picks the exp series (exp_terms)
 };
 // Euler angles a0 + s·da (EULER).
