@@ -97,7 +97,8 @@ inline double per_key(const std::vector<double>& v, int key) {
 }
 
 // Calls inside(i, j, t) for every time inside [knots.front(), knots.back()] (j its segment) and
-// outside(i, before) for the others; non-finite times throw.
+// outside(i, before) for the others; non-finite times throw. (The four-wide samplers' driver,
+// drive_runs, is in curve_simd.hpp.)
 template <class Inside, class Outside>
 inline void drive(const std::vector<double>& knots, const double* times, std::size_t n, Inside&& inside,
                   Outside&& outside) {
@@ -111,37 +112,6 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
         } else {
             if (!std::isfinite(t)) bad_time(i);
             outside(i, t < first);
-        }
-    }
-}
-
-// Calls run(j, i0, i1) for every run of consecutive times [i0, i1) that lie in one knot segment j
-// (knots[j] ≤ t < knots[j+1], the last segment up to knots.back() inclusive) and outside(i, before)
-// for the times outside [knots.front(), knots.back()]; non-finite times throw. Sorted times give one
-// run per segment (one locate each); a run's loop needs no per-sample checks.
-template <class Run, class Outside>
-QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
-                       Outside&& outside) {
-    const std::size_t segments = knots.size() - 1;
-    const double first = knots.front(), last = knots.back();
-    std::size_t hint = 0;
-    for (std::size_t i = 0; i < n;) {
-        const double t = times[i];
-        if (t >= first && t <= last) {
-            const std::size_t j = locate(knots.data(), segments, t, hint);
-            const double lo = knots[j], hi = knots[j + 1];
-            std::size_t end = i + 1;
-            if (j + 1 < segments) {  // NaN ends a run
-                while (end < n && times[end] >= lo && times[end] < hi) ++end;
-            } else {
-                while (end < n && times[end] >= lo && times[end] <= hi) ++end;
-            }
-            run(j, i, end);
-            i = end;
-        } else {
-            if (!std::isfinite(t)) bad_time(i);
-            outside(i, t < first);
-            ++i;
         }
     }
 }

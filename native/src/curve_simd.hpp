@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstring>
 
+#include "curve_impl.hpp"
 #include "curve_math.hpp"
 
 #if defined(__GNUC__) && !defined(__clang__)
@@ -139,6 +140,43 @@ QUATCURVE_INLINE V4 atan2_over_n_any4(const V4& n, const V4& w) {
     const M4 by_w = small & pos;
     const V4 r = select(by_w, ratio, select(pos, phi, kPi - phi)) / select(by_w, aw, n);
     return select(~pos & (n == zero), zero, r);
+}
+
+// Calls run(j, i0, i1) for every run of consecutive times [i0, i1) that lie in one knot segment j
+// (knots[j] ≤ t < knots[j+1], the last segment up to knots.back() inclusive) and outside(i, before)
+// for the times outside [knots.front(), knots.back()]; non-finite times throw. Sorted times give one
+// run per segment (one locate each); a run's loop needs no per-sample checks. A run's end is found
+// four times at a time, then time by time within the first four that leave it.
+template <class Run, class Outside>
+QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
+                                 Outside&& outside) {
+    const std::size_t segments = knots.size() - 1;
+    const double first = knots.front(), last = knots.back();
+    std::size_t hint = 0;
+    for (std::size_t i = 0; i < n;) {
+        const double t = times[i];
+        if (t >= first && t <= last) {
+            const std::size_t j = locate(knots.data(), segments, t, hint);
+            const double lo = knots[j], hi = knots[j + 1];
+            std::size_t end = i + 1;
+            if (j + 1 < segments) {  // NaN ends a run
+                for (; end + 4 <= n; end += 4) {
+                    const V4 v = load4(times + end);
+                    const M4 in = (v >= lo) & (v < hi);
+                    if (!(in[0] & in[1] & in[2] & in[3])) break;
+                }
+                while (end < n && times[end] >= lo && times[end] < hi) ++end;
+            } else {
+                while (end < n && times[end] >= lo && times[end] <= hi) ++end;
+            }
+            run(j, i, end);
+            i = end;
+        } else {
+            if (!std::isfinite(t)) bad_time(i);
+            outside(i, t < first);
+            ++i;
+        }
+    }
 }
 
 // Calls f(t, q) for the times [0, n), n ≥ 4, four at a time and stores q by component: w at out[i],
