@@ -59,7 +59,7 @@ struct SplineSeg {
     Q4 Q;
     Vec3 c1, c2, c3;
     Q4 p1, p2, p3;
-    double bound2;  // (|c1| + |c2| + |c3|)² ≥ |ρ(s)|² on [0, 1]: picks the exp series (exp_terms)
+    double bound2;  // ≥ |ρ(s)|² on [0, 1] (from ρ's Bernstein control points): picks the exp series (exp_terms)
 };
 // Euler angles a0 + s·da (EULER).
 struct EulerSeg {

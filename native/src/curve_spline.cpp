@@ -86,7 +86,10 @@ void make_spline_segments(Curve::Impl& m, const std::vector<double>& h, const st
         const Vec3& r = m.kr[i];
         const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[i + 1]);
         const Vec3 c2 = 3.0 * r - 2.0 * a - b, c3 = a + b - 2.0 * r;
-        const double bound = glm::length(a) + glm::length(c2) + glm::length(c3);
+        // ρ's Bernstein control points on [0, 1] are 0, a/3, (2a + c2)/3 and ρ(1) = r; ρ(s) is a convex
+        // combination of them, so |ρ(s)| ≤ the largest of their lengths (1e-12 more for rounding).
+        const double b1 = glm::length(a) / 3.0, b2 = glm::length(2.0 * a + c2) / 3.0, b3 = glm::length(a + c2 + c3);
+        const double bound = (1.0 + 1e-12) * std::fmax(std::fmax(b1, b2), b3);
         const Q4 Q = q4(m.kq[i]);
         m.spline[i] = {m.kt[i], 1.0 / h[i], Q, a, c2, c3, mul(Q, {0.0, a.x, a.y, a.z}), mul(Q, {0.0, c2.x, c2.y, c2.z}),
                        mul(Q, {0.0, c3.x, c3.y, c3.z}), bound * bound};
