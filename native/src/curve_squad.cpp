@@ -80,7 +80,8 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
 // lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
-// |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
+// |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 10 terms (g ≤ 1/2 and
+// |χ| ≤ 2π, so g·|χ| ≤ π).
 namespace {
 
 // Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
@@ -102,22 +103,23 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
             const V4 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);  // χ = f·vec(X)
             const V4 gf = 2.0 * s * (1.0 - s) * f;
             V4 c3, k3;
-            exp_coeffs4<12>(gf * gf * n2, c3, k3);
+            exp_coeffs4<10>(gf * gf * n2, c3, k3);  // g·|χ| ≤ π: θ² ≤ π² < 10
             k3 *= gf;
             mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
         });
     };
-    using T8 = std::integral_constant<int, 8>;
-    using T12 = std::integral_constant<int, 12>;
-    const bool a8 = exp_terms(g.r2) == 8, b8 = exp_terms(g.psi2) == 8;
-    if (a8 && b8) {
-        eval(T8(), T8());
-    } else if (a8) {
-        eval(T8(), T12());
-    } else if (b8) {
-        eval(T12(), T8());
+    // A: |r| ≤ π, so 8 or 10 terms; B: |ψ| < 2π, so 8, 10 or 12 (exp_terms).
+    auto with_b = [&](auto terms_a) QUATCURVE_LAMBDA_INLINE {
+        switch (exp_terms(g.psi2)) {
+            case 8: eval(terms_a, std::integral_constant<int, 8>()); break;
+            case 10: eval(terms_a, std::integral_constant<int, 10>()); break;
+            default: eval(terms_a, std::integral_constant<int, 12>()); break;
+        }
+    };
+    if (exp_terms(g.r2) == 8) {
+        with_b(std::integral_constant<int, 8>());
     } else {
-        eval(T12(), T12());
+        with_b(std::integral_constant<int, 10>());
     }
 }
 
