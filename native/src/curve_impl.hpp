@@ -41,6 +41,9 @@ struct SquadSeg {
     Vec3 r, psi;
     double speed;  // upper bounds on [0, 1] of the angular speed per unit s and of |d²q/ds²|
     double accel;  // (curve_bounds.cpp)
+    // |r| + |α| + |ψ| ≤ 1 (α: a = Q·exp(α/2)): X = exp(−s r/2)·exp(α/2)·exp(s ψ/2) turns at most 1 rad,
+    // so its log needs only atan's small-angle range (half angle ≤ 1/2, |vec X| ≤ 0.55·X.w).
+    bool small_log;
 };
 // Spherical cubic Bezier with control rotations b0..b3 in the cumulative form (Kim, Kim & Shin):
 // q(s) = sign·b0·exp(β1 d01/2)·exp(β2 d12/2)·exp(β3 d23/2), β1 = 1 − (1−s)³, β2 = 3s² − 2s³,

@@ -118,6 +118,20 @@ QUATCURVE_INLINE int exp_terms(double bound2) {
     return bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
 }
 
+// atan_over_x_small (curve_math.hpp) lane by lane: atan(x)/x for 0 ≤ x ≤ 0.66.
+QUATCURVE_INLINE V4 atan_over_x_small4(const V4& x) {
+    const V4 z = x * x;
+    const V4 p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
+                  1.228866684490136173410e2) * z - 6.485021904942025371773e1;
+    const V4 q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
+                  4.853903996359136964868e2) * z + 1.945506571482613964425e2;
+    return 1.0 + z * p / q;
+}
+
+// atan2_over_n (curve_math.hpp) on its small-angle range alone, lane by lane: φ/n = atan(n/w)/n for
+// n ≤ 0.66·w, w > 0 in every lane (the same bits as atan2_over_n_any4 gives such lanes).
+QUATCURVE_INLINE V4 atan2_over_n_small4(const V4& n, const V4& w) { return atan_over_x_small4(n / w) / w; }
+
 // atan2_over_n_any (curve_math.hpp) lane by lane, without branches: each lane takes the same one of
 // the three atan ranges as the scalar version, the selects pick its argument and offset.
 // Preconditions: n ≥ 0, n² + w² ≈ 1.
@@ -128,12 +142,7 @@ QUATCURVE_INLINE V4 atan2_over_n_any4(const V4& n, const V4& w) {
     const V4 num = select(small, n, select(big, aw, n - aw));
     const V4 den = select(small, aw, select(big, n, n + aw));
     const V4 x = num / den;
-    const V4 z = x * x;
-    const V4 p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
-                  1.228866684490136173410e2) * z - 6.485021904942025371773e1;
-    const V4 q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
-                  4.853903996359136964868e2) * z + 1.945506571482613964425e2;
-    const V4 ratio = 1.0 + z * p / q;  // atan(x)/x
+    const V4 ratio = atan_over_x_small4(x);  // atan(x)/x
     const V4 at = x * ratio;
     const V4 phi = select(small, at, select(big, 0.5 * kPi - at, 0.25 * kPi + at));  // atan2(n, |w|)
     // w ≥ 0: φ/n (on the small range P/|w|, finite at n = 0); w < 0: (π − φ)/n, 0 at n = 0 (q = −1).
