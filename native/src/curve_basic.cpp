@@ -165,8 +165,8 @@ void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, dou
 }
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): q = A·C + B·K with
-// (C, K) = exp_coeffs(s²θ²) (K·s); eight series terms for a segment of θ ≤ 1.6, else ten (θ ≤ π:
-// the segments are split at π; exp_terms). Every sample is evaluated on its own (no recurrence, no
+// (C, K) = exp_coeffs(s²θ²) (K·s); six series terms for a segment of θ ≤ 0.5, eight for θ ≤ 1.6,
+// else ten (θ ≤ π: the segments are split at π; exp_terms). Every sample is evaluated on its own (no recurrence, no
 // drift).
 QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SlerpSeg* seg = m.slerp.data();
@@ -183,10 +183,10 @@ QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::
                     combine(g.a, g.b, c, k * s, q);
                 });
             };
-            if (exp_terms(g.r2) == 8) {
-                eval(std::integral_constant<int, 8>());
-            } else {
-                eval(std::integral_constant<int, 10>());
+            switch (exp_terms(g.r2)) {
+                case 6: eval(std::integral_constant<int, 6>()); break;
+                case 8: eval(std::integral_constant<int, 8>()); break;
+                default: eval(std::integral_constant<int, 10>()); break;
             }
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });

@@ -84,14 +84,19 @@ QUATCURVE_INLINE void combine(const Q4& a, const Q4& b, const V4& c, const V4& k
     r.z = a.z * c + b.z * k;
 }
 
-// exp_coeffs (curve_math.hpp) with N = 8, 10 or 12 series terms for every lane: c = cos(θ/2),
+// exp_coeffs (curve_math.hpp) with N = 6, 8, 10 or 12 series terms for every lane: c = cos(θ/2),
 // k = sin(θ/2)/θ from θ², the series of the quarter angle x = θ/4 in x² summed by Estrin's scheme
 // (pairs, then pairs of pairs: a quarter of Horner's dependency chain, so the groups of a short run
 // overlap in the pipeline). Preconditions: θ² ≤ (2π)² in every lane (N = 12; below 1e-19), ≤ 10
-// for N = 10 (θ ≤ 3.16, x ≤ 0.79: below 4e-21), ≤ 2.56 for N = 8 (below 3e-20).
+// for N = 10 (θ ≤ 3.16, x ≤ 0.79: below 4e-21), ≤ 2.56 for N = 8 (below 3e-20), ≤ 0.25 for N = 6
+// (θ ≤ 0.5, x ≤ 0.125: below 4e-20).
 // Σ c[i]·y^i, i < N, by Estrin's scheme (y2 = y², y4 = y⁴, y8 = y⁸).
 template <int N>
 QUATCURVE_INLINE void estrin(const double* c, const V4& y, const V4& y2, const V4& y4, const V4& y8, V4& r) {
+    if constexpr (N == 6) {
+        r = (c[0] + c[1] * y) + y2 * (c[2] + c[3] * y) + y4 * (c[4] + c[5] * y);
+        return;
+    }
     r = (c[0] + c[1] * y) + y2 * (c[2] + c[3] * y) + y4 * ((c[4] + c[5] * y) + y2 * (c[6] + c[7] * y));
     if constexpr (N == 10) r += y8 * (c[8] + c[9] * y);
     if constexpr (N == 12) r += y8 * ((c[8] + c[9] * y) + y2 * (c[10] + c[11] * y));
@@ -104,7 +109,7 @@ inline constexpr double kTaylorSincQuarter[12] = {
     kTaylorSinc[8] / 4, kTaylorSinc[9] / 4, kTaylorSinc[10] / 4, kTaylorSinc[11] / 4};
 template <int N>
 QUATCURVE_INLINE void exp_coeffs4(const V4& theta2, V4& c, V4& k) {
-    static_assert(N == 8 || N == 10 || N == 12, "exp_coeffs4: 8, 10 or 12 terms");
+    static_assert(N == 6 || N == 8 || N == 10 || N == 12, "exp_coeffs4: 6, 8, 10 or 12 terms");
     const V4 y = theta2 * (1.0 / 16.0);
     const V4 y2 = y * y, y4 = y2 * y2, y8 = y4 * y4;
     V4 cq, sq;
@@ -115,7 +120,7 @@ QUATCURVE_INLINE void exp_coeffs4(const V4& theta2, V4& c, V4& k) {
 }
 // The term count exp_coeffs4 needs for angles up to √bound2; 0 beyond 2π (no polynomial).
 QUATCURVE_INLINE int exp_terms(double bound2) {
-    return bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
+    return bound2 <= 0.25 ? 6 : bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
 }
 
 // atan_over_x_small (curve_math.hpp) lane by lane: atan(x)/x for 0 ≤ x ≤ 0.66.

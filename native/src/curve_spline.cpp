@@ -275,7 +275,7 @@ void build_spline(Curve::Impl& m) {
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): v(s) = Q·(0, ρ(s)) by
 // Horner, θ² = |v|², q = Q·c + k·v (SplineSeg); the exp series' length chosen once per segment from
-// the bound of |ρ| on [0, 1] (exp_terms: 8, 10 or 12 terms). A segment whose bound passes 2π (a cubic
+// the bound of |ρ| on [0, 1] (exp_terms: 6, 8, 10 or 12 terms). A segment whose bound passes 2π (a cubic
 // that may overshoot far beyond its end rotation; rare) takes 12 terms, and a lane whose |ρ| does
 // pass 2π takes libm's cos and sin, as exp_coeffs does.
 QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
@@ -314,6 +314,7 @@ QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std:
             };
             using No = std::false_type;
             switch (exp_terms(g.bound2)) {
+                case 6: eval(std::integral_constant<int, 6>(), No()); break;
                 case 8: eval(std::integral_constant<int, 8>(), No()); break;
                 case 10: eval(std::integral_constant<int, 10>(), No()); break;
                 case 12: eval(std::integral_constant<int, 12>(), No()); break;

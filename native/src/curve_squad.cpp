@@ -82,7 +82,7 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
 // lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
 // |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 10 terms (g ≤ 1/2 and
-// |χ| ≤ 2π, so g·|χ| ≤ π).
+// |χ| ≤ 2π, so g·|χ| ≤ π; 6 terms for a small log, |χ| ≤ 1).
 namespace {
 
 // Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
@@ -109,13 +109,15 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
             }
             const V4 gf = 2.0 * s * (1.0 - s) * f;
             V4 c3, k3;
-            exp_coeffs4<10>(gf * gf * n2, c3, k3);  // g·|χ| ≤ π: θ² ≤ π² < 10
+            // g·|χ| ≤ π: θ² ≤ π² < 10; a small log: |χ| ≤ 1, θ² ≤ 1/4
+            exp_coeffs4<decltype(small_log)::value ? 6 : 10>(gf * gf * n2, c3, k3);
             k3 *= gf;
             mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
         });
     };
     // A: |r| ≤ π, so 8 or 10 terms; B: |ψ| < 2π, so 8, 10 or 12 (exp_terms). A small log (|r| ≤ 1 and
-    // |ψ| ≤ 1) takes 8 terms for both.
+    // |ψ| ≤ 1) takes 6 or 8 terms for both, as the larger needs.
+    using T6 = std::integral_constant<int, 6>;
     using T8 = std::integral_constant<int, 8>;
     using Any = std::false_type;
     auto with_b = [&](auto terms_a) QUATCURVE_LAMBDA_INLINE {
@@ -126,7 +128,11 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
         }
     };
     if (g.small_log) {
-        eval(T8(), T8(), std::true_type());
+        if (exp_terms(std::fmax(g.r2, g.psi2)) == 6) {
+            eval(T6(), T6(), std::true_type());
+        } else {
+            eval(T8(), T8(), std::true_type());
+        }
     } else if (exp_terms(g.r2) == 8) {
         with_b(T8());
     } else {
