@@ -2,6 +2,7 @@
 // linear, then normalized), SLERP (constant angular speed).
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "curve_impl.hpp"
 #include "curve_simd.hpp"
@@ -164,8 +165,8 @@ void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, dou
 }
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): q = A·C + B·K with
-// (C, K) = exp_coeffs(s²θ²) (K·s), ten series terms for every segment (θ ≤ π: the segments are split
-// at π), so no branch depends on the keys. Every sample is evaluated on its own (no recurrence, no
+// (C, K) = exp_coeffs(s²θ²) (K·s); six series terms for a segment of θ ≤ 0.5, eight for θ ≤ 1.6,
+// else ten (θ ≤ π: the segments are split at π; exp_terms). Every sample is evaluated on its own (no recurrence, no
 // drift).
 QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SlerpSeg* seg = m.slerp.data();
@@ -174,12 +175,19 @@ QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::
         [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
             const SlerpSeg& g = seg[j];
             QUATCURVE_EXPECTS(g.r2 <= 10.0, "sample_slerp: segments turn at most π");
-            for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
-                const V4 s = (t - g.t0) * g.inv_h;
-                V4 c, k;
-                exp_coeffs4<10>(s * s * g.r2, c, k);
-                combine(g.a, g.b, c, k * s, q);
-            });
+            auto eval = [&](auto terms) QUATCURVE_LAMBDA_INLINE {
+                for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
+                    const V4 s = (t - g.t0) * g.inv_h;
+                    V4 c, k;
+                    exp_coeffs4<decltype(terms)::value>(s * s * g.r2, c, k);
+                    combine(g.a, g.b, c, k * s, q);
+                });
+            };
+            switch (exp_terms(g.r2)) {
+                case 6: eval(std::integral_constant<int, 6>()); break;
+                case 8: eval(std::integral_constant<int, 8>()); break;
+                default: eval(std::integral_constant<int, 10>()); break;
+            }
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }

@@ -41,6 +41,9 @@ struct SquadSeg {
     Vec3 r, psi;
     double speed;  // upper bounds on [0, 1] of the angular speed per unit s and of |d²q/ds²|
     double accel;  // (curve_bounds.cpp)
+    // |r| + |α| + |ψ| ≤ 1 (α: a = Q·exp(α/2)): X = exp(−s r/2)·exp(α/2)·exp(s ψ/2) turns at most 1 rad,
+    // so its log needs only atan's small-angle range (half angle ≤ 1/2, |vec X| ≤ 0.55·X.w).
+    bool small_log;
 };
 // Spherical cubic Bezier with control rotations b0..b3 in the cumulative form (Kim, Kim & Shin):
 // q(s) = sign·b0·exp(β1 d01/2)·exp(β2 d12/2)·exp(β3 d23/2), β1 = 1 − (1−s)³, β2 = 3s² − 2s³,
@@ -51,12 +54,15 @@ struct BezierSeg {
     Q4 b0;
     Vec3 d01, d12, d23;
 };
-// q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2).
+// q(s) = Q·exp(ρ(s)/2), ρ(s) = c1 s + c2 s² + c3 s³ (SPLINE_C2). Since exp(ρ/2) = (c, k·ρ) is linear
+// in ρ, q = Q·c + k·v with v(s) = Q·(0, ρ(s)) = p1 s + p2 s² + p3 s³, p_i = Q·(0, c_i), and
+// |v| = |ρ| (Q is a unit quaternion): the sampler needs no quaternion product.
 struct SplineSeg {
     double t0, inv_h;
     Q4 Q;
     Vec3 c1, c2, c3;
-    double bound2;  // (|c1| + |c2| + |c3|)² ≥ |ρ(s)|² on [0, 1]: picks the exp series (exp_terms)
+    Q4 p1, p2, p3;
+    double bound2;  // ≥ |ρ(s)|² on [0, 1] (from ρ's Bernstein control points): picks the exp series (exp_terms)
 };
 // Euler angles a0 + s·da (EULER).
 struct EulerSeg {
@@ -94,7 +100,8 @@ inline double per_key(const std::vector<double>& v, int key) {
 }
 
 // Calls inside(i, j, t) for every time inside [knots.front(), knots.back()] (j its segment) and
-// outside(i, before) for the others; non-finite times throw.
+// outside(i, before) for the others; non-finite times throw. (The four-wide samplers' driver,
+// drive_runs, is in curve_simd.hpp.)
 template <class Inside, class Outside>
 inline void drive(const std::vector<double>& knots, const double* times, std::size_t n, Inside&& inside,
                   Outside&& outside) {
@@ -108,37 +115,6 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
         } else {
             if (!std::isfinite(t)) bad_time(i);
             outside(i, t < first);
-        }
-    }
-}
-
-// Calls run(j, i0, i1) for every run of consecutive times [i0, i1) that lie in one knot segment j
-// (knots[j] ≤ t < knots[j+1], the last segment up to knots.back() inclusive) and outside(i, before)
-// for the times outside [knots.front(), knots.back()]; non-finite times throw. Sorted times give one
-// run per segment (one locate each); a run's loop needs no per-sample checks.
-template <class Run, class Outside>
-QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
-                       Outside&& outside) {
-    const std::size_t segments = knots.size() - 1;
-    const double first = knots.front(), last = knots.back();
-    std::size_t hint = 0;
-    for (std::size_t i = 0; i < n;) {
-        const double t = times[i];
-        if (t >= first && t <= last) {
-            const std::size_t j = locate(knots.data(), segments, t, hint);
-            const double lo = knots[j], hi = knots[j + 1];
-            std::size_t end = i + 1;
-            if (j + 1 < segments) {  // NaN ends a run
-                while (end < n && times[end] >= lo && times[end] < hi) ++end;
-            } else {
-                while (end < n && times[end] >= lo && times[end] <= hi) ++end;
-            }
-            run(j, i, end);
-            i = end;
-        } else {
-            if (!std::isfinite(t)) bad_time(i);
-            outside(i, t < first);
-            ++i;
         }
     }
 }

@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstring>
 
+#include "curve_impl.hpp"
 #include "curve_math.hpp"
 
 #if defined(__GNUC__) && !defined(__clang__)
@@ -83,34 +84,58 @@ QUATCURVE_INLINE void combine(const Q4& a, const Q4& b, const V4& c, const V4& k
     r.z = a.z * c + b.z * k;
 }
 
-// exp_coeffs (curve_math.hpp) with N = 8, 10 or 12 series terms for every lane: c = cos(θ/2),
+// exp_coeffs (curve_math.hpp) with N = 6, 8, 10 or 12 series terms for every lane: c = cos(θ/2),
 // k = sin(θ/2)/θ from θ², the series of the quarter angle x = θ/4 in x² summed by Estrin's scheme
 // (pairs, then pairs of pairs: a quarter of Horner's dependency chain, so the groups of a short run
 // overlap in the pipeline). Preconditions: θ² ≤ (2π)² in every lane (N = 12; below 1e-19), ≤ 10
-// for N = 10 (θ ≤ 3.16, x ≤ 0.79: below 4e-21), ≤ 2.56 for N = 8 (below 3e-20).
+// for N = 10 (θ ≤ 3.16, x ≤ 0.79: below 4e-21), ≤ 2.56 for N = 8 (below 3e-20), ≤ 0.25 for N = 6
+// (θ ≤ 0.5, x ≤ 0.125: below 4e-20).
 // Σ c[i]·y^i, i < N, by Estrin's scheme (y2 = y², y4 = y⁴, y8 = y⁸).
 template <int N>
 QUATCURVE_INLINE void estrin(const double* c, const V4& y, const V4& y2, const V4& y4, const V4& y8, V4& r) {
+    if constexpr (N == 6) {
+        r = (c[0] + c[1] * y) + y2 * (c[2] + c[3] * y) + y4 * (c[4] + c[5] * y);
+        return;
+    }
     r = (c[0] + c[1] * y) + y2 * (c[2] + c[3] * y) + y4 * ((c[4] + c[5] * y) + y2 * (c[6] + c[7] * y));
     if constexpr (N == 10) r += y8 * (c[8] + c[9] * y);
     if constexpr (N == 12) r += y8 * ((c[8] + c[9] * y) + y2 * (c[10] + c[11] * y));
 }
+// kTaylorSinc/4: the series of sin x/θ = (sin x/x)/4 (θ = 4x). A power of two scales every rounding
+// of the sum alike, so this gives the bits of summing kTaylorSinc and multiplying by 0.25.
+inline constexpr double kTaylorSincQuarter[12] = {
+    kTaylorSinc[0] / 4, kTaylorSinc[1] / 4, kTaylorSinc[2] / 4, kTaylorSinc[3] / 4,
+    kTaylorSinc[4] / 4, kTaylorSinc[5] / 4, kTaylorSinc[6] / 4, kTaylorSinc[7] / 4,
+    kTaylorSinc[8] / 4, kTaylorSinc[9] / 4, kTaylorSinc[10] / 4, kTaylorSinc[11] / 4};
 template <int N>
 QUATCURVE_INLINE void exp_coeffs4(const V4& theta2, V4& c, V4& k) {
-    static_assert(N == 8 || N == 10 || N == 12, "exp_coeffs4: 8, 10 or 12 terms");
+    static_assert(N == 6 || N == 8 || N == 10 || N == 12, "exp_coeffs4: 6, 8, 10 or 12 terms");
     const V4 y = theta2 * (1.0 / 16.0);
     const V4 y2 = y * y, y4 = y2 * y2, y8 = y4 * y4;
     V4 cq, sq;
-    estrin<N>(kTaylorCos, y, y2, y4, y8, cq);  // cos x
-    estrin<N>(kTaylorSinc, y, y2, y4, y8, sq);
-    sq *= 0.25;  // sin x/θ
+    estrin<N>(kTaylorCos, y, y2, y4, y8, cq);          // cos x
+    estrin<N>(kTaylorSincQuarter, y, y2, y4, y8, sq);  // sin x/θ
     c = cq * cq - theta2 * sq * sq;
     k = 2.0 * cq * sq;
 }
 // The term count exp_coeffs4 needs for angles up to √bound2; 0 beyond 2π (no polynomial).
 QUATCURVE_INLINE int exp_terms(double bound2) {
-    return bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
+    return bound2 <= 0.25 ? 6 : bound2 <= 2.56 ? 8 : bound2 <= 10.0 ? 10 : bound2 <= kTwoPi * kTwoPi ? 12 : 0;
 }
+
+// atan_over_x_small (curve_math.hpp) lane by lane: atan(x)/x for 0 ≤ x ≤ 0.66.
+QUATCURVE_INLINE V4 atan_over_x_small4(const V4& x) {
+    const V4 z = x * x;
+    const V4 p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
+                  1.228866684490136173410e2) * z - 6.485021904942025371773e1;
+    const V4 q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
+                  4.853903996359136964868e2) * z + 1.945506571482613964425e2;
+    return 1.0 + z * p / q;
+}
+
+// atan2_over_n (curve_math.hpp) on its small-angle range alone, lane by lane: φ/n = atan(n/w)/n for
+// n ≤ 0.66·w, w > 0 in every lane (the same bits as atan2_over_n_any4 gives such lanes).
+QUATCURVE_INLINE V4 atan2_over_n_small4(const V4& n, const V4& w) { return atan_over_x_small4(n / w) / w; }
 
 // atan2_over_n_any (curve_math.hpp) lane by lane, without branches: each lane takes the same one of
 // the three atan ranges as the scalar version, the selects pick its argument and offset.
@@ -122,18 +147,50 @@ QUATCURVE_INLINE V4 atan2_over_n_any4(const V4& n, const V4& w) {
     const V4 num = select(small, n, select(big, aw, n - aw));
     const V4 den = select(small, aw, select(big, n, n + aw));
     const V4 x = num / den;
-    const V4 z = x * x;
-    const V4 p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
-                  1.228866684490136173410e2) * z - 6.485021904942025371773e1;
-    const V4 q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
-                  4.853903996359136964868e2) * z + 1.945506571482613964425e2;
-    const V4 ratio = 1.0 + z * p / q;  // atan(x)/x
+    const V4 ratio = atan_over_x_small4(x);  // atan(x)/x
     const V4 at = x * ratio;
     const V4 phi = select(small, at, select(big, 0.5 * kPi - at, 0.25 * kPi + at));  // atan2(n, |w|)
     // w ≥ 0: φ/n (on the small range P/|w|, finite at n = 0); w < 0: (π − φ)/n, 0 at n = 0 (q = −1).
     const M4 by_w = small & pos;
     const V4 r = select(by_w, ratio, select(pos, phi, kPi - phi)) / select(by_w, aw, n);
     return select(~pos & (n == zero), zero, r);
+}
+
+// Calls run(j, i0, i1) for every run of consecutive times [i0, i1) that lie in one knot segment j
+// (knots[j] ≤ t < knots[j+1], the last segment up to knots.back() inclusive) and outside(i, before)
+// for the times outside [knots.front(), knots.back()]; non-finite times throw. Sorted times give one
+// run per segment (one locate each); a run's loop needs no per-sample checks. A run's end is found
+// four times at a time, then time by time within the first four that leave it.
+template <class Run, class Outside>
+QUATCURVE_INLINE void drive_runs(const std::vector<double>& knots, const double* times, std::size_t n, Run&& run,
+                                 Outside&& outside) {
+    const std::size_t segments = knots.size() - 1;
+    const double first = knots.front(), last = knots.back();
+    std::size_t hint = 0;
+    for (std::size_t i = 0; i < n;) {
+        const double t = times[i];
+        if (t >= first && t <= last) {
+            const std::size_t j = locate(knots.data(), segments, t, hint);
+            const double lo = knots[j], hi = knots[j + 1];
+            std::size_t end = i + 1;
+            if (j + 1 < segments) {  // NaN ends a run
+                for (; end + 4 <= n; end += 4) {
+                    const V4 v = load4(times + end);
+                    const M4 in = (v >= lo) & (v < hi);
+                    if (!(in[0] & in[1] & in[2] & in[3])) break;
+                }
+                while (end < n && times[end] >= lo && times[end] < hi) ++end;
+            } else {
+                while (end < n && times[end] >= lo && times[end] <= hi) ++end;
+            }
+            run(j, i, end);
+            i = end;
+        } else {
+            if (!std::isfinite(t)) bad_time(i);
+            outside(i, t < first);
+            ++i;
+        }
+    }
 }
 
 // Calls f(t, q) for the times [0, n), n ≥ 4, four at a time and stores q by component: w at out[i],

@@ -86,8 +86,13 @@ void make_spline_segments(Curve::Impl& m, const std::vector<double>& h, const st
         const Vec3& r = m.kr[i];
         const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[i + 1]);
         const Vec3 c2 = 3.0 * r - 2.0 * a - b, c3 = a + b - 2.0 * r;
-        const double bound = glm::length(a) + glm::length(c2) + glm::length(c3);
-        m.spline[i] = {m.kt[i], 1.0 / h[i], q4(m.kq[i]), a, c2, c3, bound * bound};
+        // ρ's Bernstein control points on [0, 1] are 0, a/3, (2a + c2)/3 and ρ(1) = r; ρ(s) is a convex
+        // combination of them, so |ρ(s)| ≤ the largest of their lengths (1e-12 more for rounding).
+        const double b1 = glm::length(a) / 3.0, b2 = glm::length(2.0 * a + c2) / 3.0, b3 = glm::length(a + c2 + c3);
+        const double bound = (1.0 + 1e-12) * std::fmax(std::fmax(b1, b2), b3);
+        const Q4 Q = q4(m.kq[i]);
+        m.spline[i] = {m.kt[i], 1.0 / h[i], Q, a, c2, c3, mul(Q, {0.0, a.x, a.y, a.z}), mul(Q, {0.0, c2.x, c2.y, c2.z}),
+                       mul(Q, {0.0, c3.x, c3.y, c3.z}), bound * bound};
     }
 }
 
@@ -268,26 +273,28 @@ void build_spline(Curve::Impl& m) {
     make_spline_segments(m, h, E, w);
 }
 
-// Per run of times in one segment, four samples at a time (curve_simd.hpp): ρ(s) by Horner, then
-// q = Q·(c, k·ρ); the exp series' length chosen once per segment from the bound of |ρ| on [0, 1]
-// (8 terms below 1.6 rad, else 12). A lane whose |ρ| passes 2π (a cubic overshooting far beyond its
-// end rotation; rare) takes libm's cos and sin, as exp_coeffs does.
+// Per run of times in one segment, four samples at a time (curve_simd.hpp): v(s) = Q·(0, ρ(s)) by
+// Horner, θ² = |v|², q = Q·c + k·v (SplineSeg); the exp series' length chosen once per segment from
+// the bound of |ρ| on [0, 1] (exp_terms: 6, 8, 10 or 12 terms). A segment whose bound passes 2π (a cubic
+// that may overshoot far beyond its end rotation; rare) takes 12 terms, and a lane whose |ρ| does
+// pass 2π takes libm's cos and sin, as exp_coeffs does.
 QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SplineSeg* seg = m.spline.data();
     drive_runs(
         m.kt, times, n,
         [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
             const SplineSeg& g = seg[j];
-            auto eval = [&](auto terms) QUATCURVE_LAMBDA_INLINE {
+            auto eval = [&](auto terms, auto beyond) QUATCURVE_LAMBDA_INLINE {
                 for_groups(times, i0, i1, out, [&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
                     const V4 s = (t - g.t0) * g.inv_h;
-                    const V4 rx = ((g.c3.x * s + g.c2.x) * s + g.c1.x) * s;
-                    const V4 ry = ((g.c3.y * s + g.c2.y) * s + g.c1.y) * s;
-                    const V4 rz = ((g.c3.z * s + g.c2.z) * s + g.c1.z) * s;
-                    const V4 th2 = rx * rx + ry * ry + rz * rz;
+                    const V4 vw = ((g.p3.w * s + g.p2.w) * s + g.p1.w) * s;
+                    const V4 vx = ((g.p3.x * s + g.p2.x) * s + g.p1.x) * s;
+                    const V4 vy = ((g.p3.y * s + g.p2.y) * s + g.p1.y) * s;
+                    const V4 vz = ((g.p3.z * s + g.p2.z) * s + g.p1.z) * s;
+                    const V4 th2 = vw * vw + vx * vx + vy * vy + vz * vz;
                     V4 c, k;
                     exp_coeffs4<decltype(terms)::value>(th2, c, k);
-                    if constexpr (decltype(terms)::value == 12) {
+                    if constexpr (decltype(beyond)::value) {
                         for (int l = 0; l < 4; ++l) {
                             if (th2[l] > kTwoPi * kTwoPi) {
                                 // Through scalars: Clang binds no reference to a vector lane.
@@ -299,17 +306,19 @@ QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std:
                         }
                     }
                     const Q4& Q = g.Q;
-                    const V4 x = k * rx, y = k * ry, z = k * rz;
-                    q.w = Q.w * c - Q.x * x - Q.y * y - Q.z * z;
-                    q.x = Q.w * x + Q.x * c + Q.y * z - Q.z * y;
-                    q.y = Q.w * y - Q.x * z + Q.y * c + Q.z * x;
-                    q.z = Q.w * z + Q.x * y - Q.y * x + Q.z * c;
+                    q.w = Q.w * c + k * vw;
+                    q.x = Q.x * c + k * vx;
+                    q.y = Q.y * c + k * vy;
+                    q.z = Q.z * c + k * vz;
                 });
             };
-            if (g.bound2 <= 2.56) {
-                eval(std::integral_constant<int, 8>());
-            } else {
-                eval(std::integral_constant<int, 12>());
+            using No = std::false_type;
+            switch (exp_terms(g.bound2)) {
+                case 6: eval(std::integral_constant<int, 6>(), No()); break;
+                case 8: eval(std::integral_constant<int, 8>(), No()); break;
+                case 10: eval(std::integral_constant<int, 10>(), No()); break;
+                case 12: eval(std::integral_constant<int, 12>(), No()); break;
+                default: eval(std::integral_constant<int, 12>(), std::true_type()); break;
             }
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });

@@ -75,19 +75,21 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
     g.r = r;
     g.psi = psi;
     squad_bounds(r, glm::length(alpha), glm::length(beta), psi, g.speed, g.accel);
+    g.small_log = glm::length(r) + glm::length(alpha) + glm::length(psi) <= 1.0;
     return g;
 }
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
 // lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
-// |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 12 terms (g·|χ| ≤ π).
+// |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 10 terms (g ≤ 1/2 and
+// |χ| ≤ 2π, so g·|χ| ≤ π; 6 terms for a small log, |χ| ≤ 1).
 namespace {
 
 // Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
 // (for_groups or for_groups_columns, curve_simd.hpp).
 template <class Groups>
 QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
-    auto eval = [&](auto terms_a, auto terms_b) QUATCURVE_LAMBDA_INLINE {
+    auto eval = [&](auto terms_a, auto terms_b, auto small_log) QUATCURVE_LAMBDA_INLINE {
         groups([&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
             const V4 s = (t - g.t0) * g.inv_h;
             const V4 s2 = s * s;
@@ -99,25 +101,42 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
             combine(g.a, g.Ba, c2, k2 * s, B);
             cmul(A, B, X);
             const V4 n2 = X.x * X.x + X.y * X.y + X.z * X.z;
-            const V4 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);  // χ = f·vec(X)
+            V4 f;  // χ = f·vec(X)
+            if constexpr (decltype(small_log)::value) {
+                f = 2.0 * atan2_over_n_small4(sqrt4(n2), X.w);
+            } else {
+                f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);
+            }
             const V4 gf = 2.0 * s * (1.0 - s) * f;
             V4 c3, k3;
-            exp_coeffs4<12>(gf * gf * n2, c3, k3);
+            // g·|χ| ≤ π: θ² ≤ π² < 10; a small log: |χ| ≤ 1, θ² ≤ 1/4
+            exp_coeffs4<decltype(small_log)::value ? 6 : 10>(gf * gf * n2, c3, k3);
             k3 *= gf;
             mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
         });
     };
+    // A: |r| ≤ π, so 8 or 10 terms; B: |ψ| < 2π, so 8, 10 or 12 (exp_terms). A small log (|r| ≤ 1 and
+    // |ψ| ≤ 1) takes 6 or 8 terms for both, as the larger needs.
+    using T6 = std::integral_constant<int, 6>;
     using T8 = std::integral_constant<int, 8>;
-    using T12 = std::integral_constant<int, 12>;
-    const bool a8 = exp_terms(g.r2) == 8, b8 = exp_terms(g.psi2) == 8;
-    if (a8 && b8) {
-        eval(T8(), T8());
-    } else if (a8) {
-        eval(T8(), T12());
-    } else if (b8) {
-        eval(T12(), T8());
+    using Any = std::false_type;
+    auto with_b = [&](auto terms_a) QUATCURVE_LAMBDA_INLINE {
+        switch (exp_terms(g.psi2)) {
+            case 8: eval(terms_a, T8(), Any()); break;
+            case 10: eval(terms_a, std::integral_constant<int, 10>(), Any()); break;
+            default: eval(terms_a, std::integral_constant<int, 12>(), Any()); break;
+        }
+    };
+    if (g.small_log) {
+        if (exp_terms(std::fmax(g.r2, g.psi2)) == 6) {
+            eval(T6(), T6(), std::true_type());
+        } else {
+            eval(T8(), T8(), std::true_type());
+        }
+    } else if (exp_terms(g.r2) == 8) {
+        with_b(T8());
     } else {
-        eval(T12(), T12());
+        with_b(std::integral_constant<int, 10>());
     }
 }
 
