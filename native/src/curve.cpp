@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstddef>
 #include <cstring>
 #include <utility>
 #include <string>
@@ -457,7 +458,15 @@ bool same_bits(const T& a, const T& b) {
     return std::memcmp(&a, &b, sizeof(T)) == 0;
 }
 
-// Element j of two per-knot-segment arrays, bit for bit (both empty: the family is not in use).
+// A quadrangle segment's doubles bit for bit, and its flag (the bytes after the flag are padding,
+// which two segments built from the same keys need not share).
+bool same_bits(const detail::SquadSeg& a, const detail::SquadSeg& b) {
+    return std::memcmp(&a, &b, offsetof(detail::SquadSeg, small_log)) == 0 && a.small_log == b.small_log;
+}
+
+// Element j of two per-knot-segment arrays, bit for bit (both empty: the family is not in use). The
+// segment types hold doubles only (but SquadSeg, above): a padding byte would make equal segments
+// differ, which test_bound's refit test (two curves built from the same keys) would catch.
 template <class T>
 bool same_element(const std::vector<T>& a, std::size_t j, const std::vector<T>& b, std::size_t oj) {
     if (a.empty() && b.empty()) return true;
