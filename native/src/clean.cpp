@@ -354,10 +354,10 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
     for (std::size_t first = 0; first < n; ++first)
         for (std::size_t length = 1; length <= runs; ++length) rescore(first, length);
     while (!queue.empty()) {
-        const auto [value, first, length, s] = queue.top();
+        const Entry top = queue.top();
         queue.pop();
-        if (stamp[first * runs + length - 1] != s) continue;
-        (void)value;
+        const std::size_t first = std::get<1>(top), length = std::get<2>(top);
+        if (stamp[first * runs + length - 1] != std::get<3>(top)) continue;
         const std::size_t last = first + length - 1;
         for (std::size_t i = first; i <= last; ++i) marked[i] = 1;
         // Windows whose neighbours or run may include the marked frames: from max_run before the third
