@@ -170,6 +170,7 @@ def test_smooth_rotations_free_frames():
     q[200] = wxyz(rot(q[200]) * Rotation.from_rotvec([0.4, 0.0, 0.0]))
     s = qc.smooth_rotations(T[:400], q, 1.5 * DEG, free_frames=[200], smoothness=200.0)
     assert s.smoothness == 200.0
+    assert s.kept == 0
     bound = np.delete(np.arange(400), 200)
     assert angle(s.quats[bound], q[bound]).max() <= 1.5 * DEG * (1 + 1e-9)
     # The free frame is filled from its neighbours, not pulled to the spike.
@@ -204,3 +205,49 @@ def test_bad_input_raises_value_error_naming_it():
         qc.replace_spikes(t, q, [5, 5])
     with pytest.raises(ValueError, match=r"angles\[2\]"):
         qc.remove_euler_flips([[0, 0, 0], [0, 0, 0], [np.inf, 0, 0]])
+
+
+# ---- the add-on's bpy-free helper: addon/quatcurve_blender/clean.py ------------------------------------
+
+def addon_clean():
+    """addon/quatcurve_blender/clean.py and native.py, imported without the package's __init__ (which
+    needs bpy)."""
+    import importlib
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    name = "quatcurve_blender_plain"
+    if name + ".clean" in sys.modules:
+        return sys.modules[name + ".clean"]
+    here = Path(__file__).resolve().parents[2] / "addon" / "quatcurve_blender"
+    spec = importlib.util.spec_from_file_location(name, here / "__init__.py", submodule_search_locations=[str(here)])
+    sys.modules[name] = importlib.util.module_from_spec(spec)  # the package, its __init__ not run
+    return importlib.import_module(name + ".clean")
+
+
+@pytest.mark.parametrize("mode", ["QUATERNION", "XYZ", "ZYX", "AXIS_ANGLE"])
+def test_addon_clean_channels_keeps_the_mode(mode):
+    clean = addon_clean()
+    t = T[:600]
+    noisy, planted = plant_spikes(add_noise(TRUTH[:600], 0.5 * DEG, 6), 6, every=150)
+    values = qc.quats_to_channels(noisy, mode)
+    if mode == "QUATERNION":
+        values[200:] *= -1  # a sign flip
+    elif mode in ("XYZ", "ZYX"):
+        values[300:, 0] += 2 * np.pi  # a 360 degree jump
+    cleaned = clean.clean_channels(t, values, mode)
+    assert cleaned.values.shape == values.shape
+    np.testing.assert_array_equal(cleaned.result.spike_frames, planted)
+    assert cleaned.flips == (0 if mode == "AXIS_ANGLE" else 1)
+    quats = qc.channels_to_quats(cleaned.values, mode)
+    assert angle(quats, cleaned.result.quats).max() < 1e-9
+    keep = np.setdiff1d(np.arange(len(t)), planted)
+    assert angle(quats[keep], noisy[keep]).max() <= cleaned.result.deviation * (1 + 1e-9)
+    # continuous: no flip or jump left, steps as large as the truth's own channels take (near gimbal
+    # lock, Euler angles move fast) and no larger
+    truth_steps = np.abs(np.diff(qc.quats_to_channels(TRUTH[:600], mode), axis=0)).max(axis=1)
+    steps = np.abs(np.diff(cleaned.values, axis=0)).max(axis=1)
+    assert (steps < truth_steps + 0.1).all()
+    # the rows stay on the input's branch where it had none to fix: the first row's sign or turn
+    np.testing.assert_allclose(cleaned.values[0], values[0], atol=0.05)
