@@ -72,7 +72,10 @@ void bind_clean(py::module_& m) {
             if (b.batch_shape.size() != 1)
                 throw py::value_error("angles: expected shape (N, 3), got " + shape_string(b.array));
             std::vector<Vec3> a(b.count);
-            for (std::size_t k = 0; k < b.count; ++k) a[k] = Vec3(b.data()[3 * k], b.data()[3 * k + 1], b.data()[3 * k + 2]);
+            for (std::size_t k = 0; k < b.count; ++k) {
+                const double* p = b.data() + 3 * k;
+                a[k] = Vec3(p[0], p[1], p[2]);
+            }
             std::size_t flips;
             {
                 py::gil_scoped_release release;

@@ -79,7 +79,8 @@ Prepared prepare(const std::vector<double>& times, const std::vector<Quat>& q) {
 }
 
 void check_non_negative(double x, const char* what) {
-    if (!std::isfinite(x) || x < 0.0) throw InvalidArgument(std::string(what) + ": " + num(x) + " (expected a finite value >= 0)");
+    if (!std::isfinite(x) || x < 0.0)
+        throw InvalidArgument(std::string(what) + ": " + num(x) + " (expected a finite value >= 0)");
 }
 
 // Sample indices: increasing, each below n.
@@ -303,10 +304,10 @@ double estimate_rotation_noise(const std::vector<double>& times, const std::vect
         const Quat p = predict(in.tau, u, nodes, in.tau[i], gain);
         r[i - 1] = glm::length(rotvec_principal(qmul(qconj(p), u[i]))) / gain;
     }
-    const std::size_t mid = r.size() / 2;
-    std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(mid), r.end());
-    double median = r[mid];
-    if (r.size() % 2 == 0) median = 0.5 * (median + *std::max_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(mid)));
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    double median = *mid;
+    if (r.size() % 2 == 0) median = 0.5 * (median + *std::max_element(r.begin(), mid));
     return std::sqrt(3.0) * median / kChi3Median;
 }
 
@@ -394,8 +395,9 @@ std::vector<Quat> replace_spikes(const std::vector<double>& times, const std::ve
         while (end + 1 < frames.size() && frames[end + 1] == frames[end] + 1) ++end;
         Nodes nodes;
         if (!find_nodes(marked, frames[k], frames[end], kNone, nodes))
-            throw InvalidArgument("frames[" + std::to_string(k) + "]: the run of frames " + std::to_string(frames[k]) +
-                                  ".." + std::to_string(frames[end]) + " has fewer than two other frames to predict it");
+            throw InvalidArgument("frames[" + std::to_string(k) + "]: the run of frames " +
+                                  std::to_string(frames[k]) + ".." + std::to_string(frames[end]) +
+                                  " has fewer than two other frames to predict it");
         for (std::size_t i = frames[k]; i <= frames[end]; ++i) {
             double gain;
             out[i] = predict(in.tau, u, nodes, in.tau[i], gain);

@@ -55,7 +55,8 @@ std::vector<Quat> add_noise(const std::vector<Quat>& truth, double sigma, unsign
 }
 
 // Spikes of 10°–30° (or as given) about random axes: singles and runs of 2 and 3, 60–88 frames apart.
-std::set<std::size_t> plant_spikes(std::vector<Quat>& q, unsigned seed, double low = 10 * kDeg, double high = 30 * kDeg) {
+std::set<std::size_t> plant_spikes(std::vector<Quat>& q, unsigned seed, double low = 10 * kDeg,
+                                   double high = 30 * kDeg) {
     std::mt19937_64 gen(seed);
     std::uniform_real_distribution<double> angle(low, high);
     std::normal_distribution<double> axis(0.0, 1.0);
@@ -223,8 +224,10 @@ TEST(Clean, SmoothingStaysWithinDeviationAndHalvesTheError) {
             }
             EXPECT_NEAR(largest, r.max_deviation, 1e-12);
             const double before = rms_error(q, truth, planted), after = rms_error(r.q, truth, planted);
-            std::printf("[ figures  ] %.1f° noise%s: noise estimate %.3f°, deviation %.3f°, spikes %zu of %zu, pulled %zu, λ %.3g, RMS to the truth %.3f° -> %.3f°\n",
-                        sigma_deg, spiky ? " + spikes" : "", r.noise / kDeg, r.deviation / kDeg, r.spike_frames.size(), planted.size(), r.pulled, r.smoothness, before / kDeg, after / kDeg);
+            std::printf("[ figures  ] %.1f° noise%s: noise estimate %.3f°, deviation %.3f°, spikes %zu of %zu, "
+                        "pulled %zu, λ %.3g, RMS to the truth %.3f° -> %.3f°\n",
+                        sigma_deg, spiky ? " + spikes" : "", r.noise / kDeg, r.deviation / kDeg,
+                        r.spike_frames.size(), planted.size(), r.pulled, r.smoothness, before / kDeg, after / kDeg);
             EXPECT_LE(after, 0.5 * before) << sigma_deg << "°: RMS " << before / kDeg << "° -> " << after / kDeg << "°";
             // Every frame, spikes included, ends near the truth.
             EXPECT_LT(rms_error(r.q, truth), 0.5 * sigma_deg * kDeg);
@@ -259,7 +262,8 @@ TEST(Clean, NoiseFreeClipStaysWithinItsTinyDeviation) {
     const CleanResult u = clean_rotations(t, uniform);
     EXPECT_LT(u.noise, 1e-12);
     EXPECT_LE(u.max_deviation, u.deviation);
-    for (std::size_t i = 0; i < t.size(); ++i) EXPECT_LE(row_angle(u.q[i], uniform[i]), std::max(u.deviation, 1e-14)) << i;
+    for (std::size_t i = 0; i < t.size(); ++i)
+        EXPECT_LE(row_angle(u.q[i], uniform[i]), std::max(u.deviation, 1e-14)) << i;
 }
 
 TEST(Clean, FlipsCountedAndRemovedByCleanRotations) {

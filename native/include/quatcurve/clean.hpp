@@ -5,9 +5,9 @@
 // Input: n frames, times (frames, strictly increasing) and unit quaternions (w, x, y, z at the array
 // edges; normalized here, either sign). The formulas below use the times in units of their median
 // spacing (τ = 0, 1, 2, … for one sample a frame; h_i, the smoothness λ and accelerations are in
-// those units), and refuse a spacing beyond a factor 1e6 of the median one. Rotation vectors ρ map to rotations by
-// exp(ρ/2) (angle |ρ|); log(q) below is the rotation vector of q (2·the quaternion log, angle in
-// [0, π]). Angles are radians; the angle between two rotations is the geodesic angle
+// those units), and refuse a spacing beyond a factor 1e6 of the median one. Rotation vectors ρ map
+// to rotations by exp(ρ/2) (angle |ρ|); log(q) below is the rotation vector of q (2·the quaternion
+// log, angle in [0, π]). Angles are radians; the angle between two rotations is the geodesic angle
 // angle_between(a, b) = 4·atan2(|a − b|, |a + b|) (quat.hpp).
 //
 // The bound is at the frames: the smoothed rows are within `deviation` of the input at every frame
@@ -32,9 +32,9 @@ namespace quatcurve {
 // ---- 1. flips ------------------------------------------------------------------------------------
 // hemisphere_continuous (channels.hpp) over q[0..n): each quaternion negated where its dot with the
 // one before (already fixed) is negative — decided on the normalized rotations, so any finite
-// magnitude works; every rotation is unchanged. Returns the number of
-// consecutive pairs whose sign relation was repaired (input dot < 0). Quaternions are kept as given
-// (not normalized); a zero-length or non-finite one throws.
+// magnitude works; every rotation is unchanged. Returns the number of consecutive pairs whose sign
+// relation was repaired (input dot < 0). Quaternions are kept as given (not normalized); a
+// zero-length or non-finite one throws.
 std::size_t remove_quat_flips(Quat* q, std::size_t n);
 // euler_filter (euler.hpp) over n triples (angles about X, Y, Z; radians): each row moved to the
 // equivalent angles (same rotation) nearest the row before, which removes flips between the two
@@ -112,7 +112,8 @@ struct SmoothOptions {
     // λ of the smoother (below); none: chosen so that the mean squared deviation from the bound
     // frames equals noise² (Morozov's discrepancy principle), searched over [1e-3, 1e10].
     std::optional<double> smoothness;
-    // σ for the automatic λ (radians); none: estimate_rotation_noise of q (when smoothness is not given).
+    // σ for the automatic λ (radians); none: estimate_rotation_noise of q (when smoothness is not
+    // given).
     std::optional<double> noise;
     // Frames left free (spikes): no deviation bound, next to no weight (1e-8): the smoother fills them.
     std::vector<std::size_t> free_frames;
