@@ -8,6 +8,8 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <complex>
 #include <cstddef>
 #include <initializer_list>
@@ -184,6 +186,53 @@ inline std::string element_name(const char* name, const std::vector<py::ssize_t>
     Batch b;
     b.batch_shape = batch_shape;
     return element_name(name, b, flat);
+}
+
+// ---- rows of samples: times (N,), values (N, width), sample indices -----------------------------
+
+using IArray = py::array_t<std::int64_t>;
+
+inline std::vector<double> read_times(py::handle obj) {
+    const Batch b = as_batch(obj, {}, "times");
+    if (b.batch_shape.size() != 1)
+        throw py::value_error("times: expected a 1-D array, got shape " + shape_string(b.array));
+    return std::vector<double>(b.data(), b.data() + b.count);
+}
+
+// An (N, width) array as N rows; width 4 for quaternions, 3 for Euler angles.
+inline Batch read_rows(py::handle obj, py::ssize_t width, const char* name, std::size_t n) {
+    Batch b = as_batch(obj, {width}, name);
+    if (b.batch_shape.size() != 1)
+        throw py::value_error(std::string(name) + ": expected shape (N, " + std::to_string(width) +
+                              "), got " + shape_string(b.array));
+    if (b.count != n)
+        throw py::value_error(std::string(name) + ": " + std::to_string(b.count) +
+                              " rows for " + std::to_string(n) + " times");
+    return b;
+}
+
+inline IArray index_array(const std::vector<std::size_t>& indices) {
+    IArray out(static_cast<py::ssize_t>(indices.size()));
+    auto* p = out.mutable_data();
+    for (std::size_t a = 0; a < indices.size(); ++a) p[a] = static_cast<std::int64_t>(indices[a]);
+    return out;
+}
+
+// A 1-D array of sample indices (integers ≥ 0); order and range are checked by the native side.
+inline std::vector<std::size_t> read_indices(py::handle obj, const char* name) {
+    const Batch b = as_batch(obj, {}, name);
+    if (b.batch_shape.size() != 1)
+        throw py::value_error(std::string(name) + ": expected a 1-D array of sample indices, got shape " +
+                              shape_string(b.array));
+    std::vector<std::size_t> out(b.count);
+    for (std::size_t a = 0; a < b.count; ++a) {
+        const double v = b.data()[a];
+        if (!(v >= 0.0) || v != std::floor(v) || v > 9.007199254740992e15)
+            throw py::value_error(std::string(name) + "[" + std::to_string(a) + "]: not a sample index (" +
+                                  std::to_string(v) + ")");
+        out[a] = static_cast<std::size_t>(v);
+    }
+    return out;
 }
 
 }  // namespace quatcurve::bindings

@@ -12,4 +12,5 @@ void bind_metrics(pybind11::module_& m);  // bind_metrics.cpp: comparison metric
 void bind_blender_eval(pybind11::module_& m);  // bind_blender_eval.cpp: Blender's F-curve evaluation
 void bind_channels(pybind11::module_& m); // bind_channels.cpp: rotation channels, sampling policies
 void bind_skeleton(pybind11::module_& m); // bind_skeleton.cpp: skeletons, the distance bound
+void bind_clean(pybind11::module_& m);    // bind_clean.cpp: cleaning captured rotations
 }  // namespace quatcurve::bindings

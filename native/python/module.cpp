@@ -22,4 +22,5 @@ PYBIND11_MODULE(quatcurve, m) {
     quatcurve::bindings::bind_blender_eval(m);
     quatcurve::bindings::bind_channels(m);
     quatcurve::bindings::bind_skeleton(m);
+    quatcurve::bindings::bind_clean(m);
 }

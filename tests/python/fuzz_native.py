@@ -43,7 +43,8 @@ LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
                  "fit_through_keys": 0.5,
-                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5}  # slower targets: fewer examples
+                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5,
+                 "smooth_rotations": 0.5, "clean_rotations": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
 SHRINK = LONG or os.environ.get("QUATCURVE_FUZZ_SHRINK") == "1"
@@ -2197,6 +2198,234 @@ def build_frames_policy(fn, d: Draw, kind) -> Case:
     return Case(lambda: fn(*args), max(n, 1), check, "", 8 * 10 ** 8, args)
 
 
+# ==== cleaning captured rotations (clean.hpp) ====================================================
+
+def draw_clip(d: Draw):
+    """A clip for the cleaning functions: (times, quats, must_fail); draw_path's poisoned key times
+    are not an argument here. Fewer than 3 frames must be refused."""
+    p = draw_path(d, small=300, huge=20_000)
+    must_fail = "" if "keys" in p.must_fail else p.must_fail
+    if p.rows < 3:
+        must_fail = must_fail or "fewer than 3 frames"
+    if d.chance(0.15, "noisy_smooth") and p.rows and not must_fail:
+        # smooth motion with noise and a spike: the case the functions are for
+        rng = d.rng
+        steps = np.cumsum(rng.normal(0, 0.02, (p.rows, 3)), 0) + rng.normal(0, 0.01, (p.rows, 3))
+        steps[rng.integers(0, p.rows)] += rng.normal(0, 0.5, 3)
+        angle = np.linalg.norm(steps, axis=1, keepdims=True)
+        with np.errstate(all="ignore"):
+            axis = np.where(angle > 0, steps / np.where(angle > 0, angle, 1), [[1.0, 0, 0]])
+        q = np.concatenate([np.cos(angle / 2), np.sin(angle / 2) * axis], axis=1)
+        return p.times, np.ascontiguousarray(q * rng.choice([-1.0, 1.0], (p.rows, 1))), must_fail
+    return p.times, p.quats, must_fail
+
+
+def spike_indices(idx, n, what):
+    shape_is(idx, idx.shape, what)
+    expect(idx.dtype.kind == "i" and idx.ndim == 1, f"{what}: dtype {idx.dtype}, shape {idx.shape}")
+    expect(np.all((idx >= 0) & (idx < n)) and np.all(np.diff(idx) > 0), f"{what}: {idx!r} for {n} frames")
+
+
+def clean_checks(out_quats, q, n, deviation, free, what="quats"):
+    """Unit, sign-continuous rows; every frame not in `free` within `deviation` of the input."""
+    shape_is(out_quats, (n, 4), what)
+    unit(out_quats, what)
+    expect(np.all(np.sum(out_quats[1:] * out_quats[:-1], axis=1) >= -1e-12), f"{what}: not sign-continuous")
+    if n <= 5000 and np.all(np.abs(q) < 1e150) and np.all(np.linalg.norm(q, axis=1) > 1e-150):
+        bound = np.setdiff1d(np.arange(n), free)
+        if bound.size:
+            err = np_angle(out_quats[bound], q[bound]).max()
+            expect(err <= deviation * (1 + 1e-9) + 1e-12, f"{what}: a frame {err!r} rad off (deviation {deviation!r})")
+
+
+def build_remove_quat_flips(fn, d):
+    """remove_quat_flips(quats): the same rotations, sign-continuous, the repaired pairs counted."""
+    p = draw_path(d, small=300, huge=50_000)
+    q, n = p.quats, p.rows
+    must_fail = "" if "keys" in p.must_fail or "times" in p.must_fail else p.must_fail
+    args = [q]
+    must_fail = maybe_junk(d, args, [(4,)], ["quats"], must_fail)
+
+    def check(out):
+        quats, flips = out
+        if args[0] is not q:
+            return
+        shape_is(quats, (n, 4))
+        finite(quats)
+        expect(np.array_equal(np.abs(quats), np.abs(q)), "a component changed beyond its sign")
+        if n:
+            def scaled(a):  # each row over its largest component: the dots neither overflow nor underflow
+                return a / np.abs(a).max(axis=1, keepdims=True)
+            a, b = scaled(quats), scaled(q)
+            a, b = a / np.linalg.norm(a, axis=1, keepdims=True), b / np.linalg.norm(b, axis=1, keepdims=True)
+            # (dots within rounding of 0, orthogonal rotations, may go either way)
+            expect(np.all(np.sum(a[1:] * a[:-1], axis=1) >= -1e-12), "not sign-continuous")
+            dots = np.sum(b[1:] * b[:-1], axis=1)
+            expect(np.sum(dots < -1e-12) <= flips <= np.sum(dots < 1e-12), f"flips {flips}")
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 32, args)
+
+
+def build_remove_euler_flips(fn, d):
+    """remove_euler_flips(angles, order): every orientation kept."""
+    rng, level = d.rng, d.level()
+    n = d.count(small=300, huge=50_000)
+    a = angles(rng, (n,), "extreme" if level == "poison" else level)
+    if d.chance(0.4, "smooth") and n:
+        a = np.cumsum(rng.normal(0, 0.3, (n, 3)), axis=0)
+    must_fail = "non-finite" if level == "wild" and n and not np.all(np.isfinite(a)) else ""
+    if level == "poison" and n:
+        poison(rng, a, "angles", True)
+        must_fail = "poisoned"
+    order = d.pick(ORDERS, "order")
+    args = [a, order]
+    must_fail = maybe_junk(d, args, [(3,)], ["angles"], must_fail)
+
+    def check(out):
+        result, flips = out
+        if args[0] is not a:
+            return
+        shape_is(result, (n, 3))
+        finite(result)
+        expect(0 <= flips < max(n, 1), f"flips {flips}")
+        if n and np.all(np.abs(a) < 1e6):
+            err = np_angle(qc.euler_to_quat(result, order), qc.euler_to_quat(a, order)).max()
+            expect(err < 1e-6, f"an orientation changed by {err!r} rad")
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 24, args)
+
+
+def build_estimate_rotation_noise(fn, d):
+    t, q, must_fail = draw_clip(d)
+    args = [t, q]
+    if d.chance(0.05, "length_mismatch") and len(t):
+        args[1] = q[:-1]
+        must_fail = must_fail or "lengths differ"
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        finite(out, "noise")
+        expect(0 <= out <= 2 * np.pi, f"noise {out!r}")
+
+    return Case(lambda: fn(*args), max(len(t), 1), check, must_fail, 0, args)
+
+
+SPIKE_NOISE = (None, None, 0.0, 1e-3, 0.05, 1.0, 1e300, -1.0, NAN, INF)
+
+
+def build_find_spikes(fn, d):
+    t, q, must_fail = draw_clip(d)
+    n = len(t)
+    noise = d.pick(SPIKE_NOISE, "noise")
+    if noise is not None and not (np.isfinite(noise) and noise >= 0):
+        must_fail = must_fail or f"noise {noise!r}"
+    kwargs = {"max_run": d.pick((1, 2, 3, 5), "max_run")}
+    if d.chance(0.3, "threshold"):
+        kwargs["threshold"] = d.pick((0.0, 1.0, 4.0, 1e300), "threshold")
+    if d.chance(0.2, "min_angle"):
+        kwargs["min_angle"] = d.pick((0.0, 1e-9, 0.5, -0.1, NAN), "min_angle")
+        if not kwargs["min_angle"] >= 0:
+            must_fail = must_fail or "min_angle"
+    args = [t, q, noise]
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        frames, departures = out
+        spike_indices(frames, n, "frames")
+        shape_is(departures, frames.shape, "departures")
+        in_range(departures, 0.0, np.pi, "departures")
+
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, 0, (args, kwargs))
+
+
+def build_replace_spikes(fn, d):
+    t, q, must_fail = draw_clip(d)
+    n = len(t)
+    rng = d.rng
+    frames = np.unique(rng.integers(0, max(n, 1), rng.integers(0, 6))) if n else np.zeros(0, int)
+    if d.chance(0.1, "bad_frames") and frames.size:
+        frames = frames[::-1].copy() if frames.size > 1 else np.array([n + 3])
+        must_fail = must_fail or "frames not increasing or out of range"
+    args = [t, q, frames]
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        if args[1] is not q:
+            return
+        clean_checks(out, q, n, 0.0, frames)
+
+    return Case(lambda: fn(*args), max(n, 1), check, must_fail, n * 32, args)
+
+
+DEVIATIONS = (0.0, 1e-12, 1e-3, 0.02, 0.3, 4.0, 1e300, -1e-3, NAN, INF)
+
+
+def build_smooth_rotations(fn, d):
+    t, q, must_fail = draw_clip(d)
+    n = len(t)
+    deviation = d.pick(DEVIATIONS, "deviation")
+    if not (np.isfinite(deviation) and deviation >= 0):
+        must_fail = must_fail or f"deviation {deviation!r}"
+    kwargs = {}
+    if d.chance(0.3, "smoothness"):
+        kwargs["smoothness"] = d.pick((1e-3, 1.0, 1e4, 1e10, 0.0, -1.0, NAN), "smoothness")
+        if not (np.isfinite(kwargs["smoothness"]) and kwargs["smoothness"] > 0):
+            must_fail = must_fail or "smoothness"
+    if d.chance(0.3, "noise"):
+        kwargs["noise"] = d.pick((0.0, 0.01, 1.0, -1.0), "noise")
+        if kwargs["noise"] < 0:
+            must_fail = must_fail or "noise"
+    free = np.unique(d.rng.integers(0, max(n, 1), d.rng.integers(0, 4))) if n and d.chance(0.3, "free") else None
+    if free is not None:
+        kwargs["free_frames"] = free
+    args = [t, q, deviation]
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        expect(type(out).__name__ == "Smoothed", f"result {type(out).__name__}")
+        finite(out.max_deviation, "max_deviation")
+        expect(out.max_deviation <= deviation, f"max_deviation {out.max_deviation!r} above {deviation!r}")
+        finite(out.smoothness, "smoothness")
+        if args[1] is q:
+            clean_checks(out.quats, q, n, deviation, free if free is not None else [])
+
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, n * 32, (args, kwargs))
+
+
+def build_clean_rotations(fn, d):
+    t, q, must_fail = draw_clip(d)
+    n = len(t)
+    kwargs = {}
+    if d.chance(0.3, "deviation"):
+        kwargs["deviation"] = d.pick(DEVIATIONS, "deviation")
+        if not (np.isfinite(kwargs["deviation"]) and kwargs["deviation"] >= 0):
+            must_fail = must_fail or "deviation"
+    if d.chance(0.2, "noise"):
+        kwargs["noise"] = d.pick(SPIKE_NOISE[2:], "noise")
+        if not (np.isfinite(kwargs["noise"]) and kwargs["noise"] >= 0):
+            must_fail = must_fail or "noise"
+    if d.chance(0.2, "switches"):
+        kwargs["spikes"] = d.pick((True, False), "spikes")
+        kwargs["smooth"] = d.pick((True, False), "smooth")
+    if d.chance(0.1, "max_run"):
+        kwargs["spike_max_run"] = d.pick((1, 4), "spike_max_run")
+    args = [t, q]
+    must_fail = maybe_junk(d, args, [(), (4,)], ["times", "quats"], must_fail)
+
+    def check(out):
+        expect(type(out).__name__ == "CleanResult", f"result {type(out).__name__}")
+        for name in ("noise", "deviation", "max_deviation", "smoothness"):
+            finite(getattr(out, name), name)
+        expect(out.max_deviation <= out.deviation, f"max_deviation {out.max_deviation!r} above {out.deviation!r}")
+        spike_indices(out.spike_frames, n, "spike_frames")
+        in_range(out.spike_departures, 0.0, np.pi, "spike_departures")
+        if args[1] is q:
+            clean_checks(out.quats, q, n, out.deviation, out.spike_frames)
+        repr(out)
+
+    return Case(lambda: fn(*args, **kwargs), max(n, 1), check, must_fail, n * 32, (args, kwargs))
+
+
 # ==== the registry ===============================================================================
 
 def _elementwise(name):
@@ -2414,6 +2643,15 @@ REGISTRY.update({
     "SkeletonSlerpReduction": _not_constructible,
     "SlerpBone": build_slerp_bone,
     "play_slerp_keys": build_play_slerp_keys,
+    "remove_quat_flips": build_remove_quat_flips,
+    "remove_euler_flips": build_remove_euler_flips,
+    "estimate_rotation_noise": build_estimate_rotation_noise,
+    "find_spikes": build_find_spikes,
+    "replace_spikes": build_replace_spikes,
+    "smooth_rotations": build_smooth_rotations,
+    "clean_rotations": build_clean_rotations,
+    "Smoothed": _not_constructible,
+    "CleanResult": _not_constructible,
     # "Curve" itself is fuzzed per method: targets "Curve[<METHOD>]" (see targets()).
     "Curve": None,
 })
