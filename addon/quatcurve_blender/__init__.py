@@ -18,8 +18,8 @@ if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
     import importlib
 
     # Lowest layer first, so each module reloads against already-reloaded modules below it.
-    for _name in ("native", "opsutil", "fcurves", "targets", "write", "plot", "reduce", "bake", "compare", "fit", "live",
-                  "convert", "glb", "gltf", "bake_ops", "compare_ops", "reduce_ops", "fit_ops", "convert_ops", "gltf_ops",
+    for _name in ("native", "opsutil", "fcurves", "targets", "write", "plot", "reduce", "clean_arrays", "clean", "bake", "compare", "fit", "live",
+                  "convert", "glb", "gltf", "bake_ops", "compare_ops", "reduce_ops", "clean_ops", "fit_ops", "convert_ops", "gltf_ops",
                   "trails", "ui"):
         if _name in locals():
             importlib.reload(locals()[_name])
@@ -27,12 +27,12 @@ if "bpy" in locals():  # re-registration from Blender's "Reload Scripts"
 import bpy  # noqa: E402
 
 from . import native, fcurves, targets, write  # noqa: E402, F401  (reading and writing layers)
-from . import bake, compare, convert, fit, gltf, plot, reduce  # noqa: E402, F401   (tasks)
+from . import bake, clean, compare, convert, fit, gltf, plot, reduce  # noqa: E402, F401   (tasks)
 from . import live  # noqa: E402                                       (live fit: handlers)
-from . import bake_ops, compare_ops, convert_ops, fit_ops, gltf_ops, reduce_ops  # noqa: E402  (operators and settings)
+from . import bake_ops, clean_ops, compare_ops, convert_ops, fit_ops, gltf_ops, reduce_ops  # noqa: E402  (operators and settings)
 from . import trails, ui  # noqa: E402                                 (viewport drawing, panels)
 
-_modules = (bake_ops, compare_ops, reduce_ops, fit_ops, convert_ops, gltf_ops, live, trails, ui)
+_modules = (bake_ops, compare_ops, reduce_ops, clean_ops, fit_ops, convert_ops, gltf_ops, live, trails, ui)
 
 
 def register():

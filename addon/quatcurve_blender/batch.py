@@ -770,6 +770,8 @@ def work_on(plan, task, args, index):
                       keys_after=outcome.keys_after,
                       max_error_deg=None if outcome.max_error_deg is None else round(outcome.max_error_deg, 6),
                       max_distance=None if outcome.max_distance is None else float("%.9g" % outcome.max_distance))
+        if outcome.clean is not None:
+            record["clean"] = outcome.clean
     except (UsageError, targets.TargetError, RuntimeError, OSError, ValueError) as error:
         # Paths as the records name them: relative to the inputs' and the outputs' folders.
         reason = str(error).replace(entry["path"], entry["input"]).replace(output, entry["output"])

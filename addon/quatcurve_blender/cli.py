@@ -1,5 +1,5 @@
 """Baking, fitting, key reduction, rotation-mode conversion and glTF export from the command line:
-bake (and optionally compare), fit (`--fit`), reduce (`--reduce`), convert (`--convert MODE`) the
+bake (and optionally compare), fit (`--fit`), reduce (`--reduce`), clean (`--clean`), convert (`--convert MODE`) the
 rotations in a .blend file, or export it (`--gltf OUT.glb`), without Blender's UI. Many files at
 once: batch.py runs the same operations.
 
@@ -20,8 +20,8 @@ same folder and renamed over the target, so it is either complete or untouched.
 
 This module parses arguments and selects targets by name or glob pattern; the work is done by the
 functions the operators call (bake.bake, compare.compare / save_plots / write_report, fit.fit,
-reduce.reduce, convert.convert, gltf.export), each wrapped in a Task (BakeTask, FitTask, ReduceTask,
-ConvertTask, GltfTask) that batch.py reuses.
+reduce.reduce, clean.clean, convert.convert, gltf.export), each wrapped in a Task (BakeTask, FitTask,
+ReduceTask, CleanTask, ConvertTask, GltfTask) that batch.py reuses.
 
 When Blender runs this file as a script (`--python cli.py`) it is not inside its package: the
 add-on's parent folder is put on sys.path and the package is imported (and registered) by name.
@@ -41,8 +41,8 @@ import traceback
 import uuid
 
 if __package__:
-    from . import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, methods, native, reduce,
-                   targets)
+    from . import (bake, bake_ops, clean, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, methods, native,
+                   reduce, targets)
     addon = sys.modules[__package__]
 else:  # `blender --python cli.py` (or `python cli.py`): a script outside its package
     _here = os.path.dirname(os.path.abspath(__file__))
@@ -51,8 +51,8 @@ else:  # `blender --python cli.py` (or `python cli.py`): a script outside its pa
     sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
     sys.path.insert(0, os.path.dirname(_here))
     import quatcurve_blender as addon
-    from quatcurve_blender import (bake, bake_ops, compare, compare_ops, convert, fit, fit_ops, gltf, inputs, methods,
-                                   native, reduce, targets)
+    from quatcurve_blender import (bake, bake_ops, clean, compare, compare_ops, convert, fit, fit_ops, gltf, inputs,
+                                   methods, native, reduce, targets)
 
 import bpy
 
@@ -165,6 +165,22 @@ def add_task_arguments(p):
                    help="--error DISTANCE: the shell points' distance from each bone's head, in scene units "
                         "(default 0: 10 cm in real size)")
 
+    g = p.add_argument_group("clean", "Instead of baking (the quatcurve.clean operator): the targets' captured "
+                                      "rotations cleaned on the sphere of rotations — sign flips removed, spikes "
+                                      "replaced, jitter smoothed within --deviation of every other frame — into a "
+                                      "new action (docs/clean.md).")
+    g.add_argument("--clean", action="store_true",
+                   help="clean instead of bake; uses --deviation, --keep-spikes, --clean-reduce (with "
+                        "--tolerance, default 0.1°) and --no-new-action")
+    g.add_argument("--deviation", type=float, default=0.0, metavar="DEG",
+                   help="--clean: how far the cleaned rotation may stray from each frame that is not a spike, "
+                        "in degrees (default 0: 2.5 times the clip's estimated noise, target by target)")
+    g.add_argument("--keep-spikes", dest="clean_spikes", action="store_false",
+                   help="--clean: do not look for spikes (every frame keeps the deviation bound)")
+    g.add_argument("--clean-reduce", action="store_true",
+                   help="--clean: reduce the cleaned keys (Bezier) within --tolerance of them at every instant; "
+                        "default: one linear key per frame")
+
     g = p.add_argument_group("glTF", "Instead of baking (the quatcurve.export_gltf operator): the scene through "
                                      "Blender's glTF exporter, each rotation sampler replaced by few slerp "
                                      "keys within --tolerance (default 0.1°) of the target's curve at every "
@@ -245,11 +261,15 @@ def refuse_options(args, table, why):
 REDUCE_KEYS_ONLY = (("reduce_interpolation", "BEZIER", "--reduce-keys"), ("synchronized", False, "--synchronized"))
 DISTANCE_OPTIONS = (("reduce_error", "ANGLE", "--error"), ("distance", 0.0, "--distance"), ("shell", 0.0, "--shell"))
 REDUCE_ONLY = REDUCE_KEYS_ONLY + DISTANCE_OPTIONS
+# Options only --clean uses.
+CLEAN_ONLY = (("deviation", 0.0, "--deviation"), ("clean_spikes", True, "--keep-spikes"),
+              ("clean_reduce", False, "--clean-reduce"))
 
 
 def bake_settings(args):
     """BakeSettings through the operator's own function; settings no bake can use are a UsageError."""
     refuse_options(args, REDUCE_KEYS_ONLY, "not an option of a bake (they are --reduce's)")
+    refuse_options(args, CLEAN_ONLY, "not an option of a bake (they are --clean's)")
     if args.reduce_error == "DISTANCE" and args.tolerance is not None:
         raise UsageError("--tolerance: not an option of a bake with --error DISTANCE (its bound is --distance)")
     if args.reduce_error == "ANGLE" and (args.distance or args.shell):
@@ -272,7 +292,7 @@ def bake_settings(args):
 NOT_FOR_FIT = (("rotation_mode", "KEEP", "--rotation-mode"), ("frame_range", None, "--frame-range"),
                ("step", 1.0, "--step"), ("new_action", True, "--no-new-action"), ("compare", False, "--compare"),
                ("report", None, "--report"), ("all_euler_orders", False, "--all-euler-orders"),
-               ("key_interpolation", "BEZIER", "--compare-keys")) + REDUCE_ONLY
+               ("key_interpolation", "BEZIER", "--compare-keys")) + REDUCE_ONLY + CLEAN_ONLY
 
 
 def fit_settings(args):
@@ -307,7 +327,8 @@ NOT_FOR_REDUCE = (("method", "SLERP", "--method"), ("tension", 0.0, "--tension")
 def reduce_settings(args):
     """ReduceSettings from the arguments (the operator's defaults where not given), checked by reduce's
     own check; options of other operations are a UsageError."""
-    refuse_options(args, NOT_FOR_REDUCE, "not an option of --reduce (it reduces the keys as Blender plays them)")
+    refuse_options(args, NOT_FOR_REDUCE + CLEAN_ONLY,
+                   "not an option of --reduce (it reduces the keys as Blender plays them)")
     defaults = reduce.ReduceSettings()
     settings = reduce.ReduceSettings(
         tolerance=defaults.tolerance if args.tolerance is None else args.tolerance,
@@ -320,6 +341,24 @@ def reduce_settings(args):
     try:
         reduce.check_settings(settings)
     except reduce.ReduceError as error:
+        raise UsageError(str(error)) from None
+    return settings
+
+
+def clean_settings(args):
+    """CleanSettings from the arguments (the operator's defaults where not given), checked by clean's
+    own check; options of other operations are a UsageError."""
+    refuse_options(args, NOT_FOR_REDUCE + REDUCE_ONLY,
+                   "not an option of --clean (it cleans the keys as Blender plays them, in their own modes)")
+    if args.tolerance is not None and not args.clean_reduce:
+        raise UsageError("--tolerance: an option of --clean only with --clean-reduce (the reduction's bound)")
+    defaults = clean.CleanSettings()
+    settings = clean.CleanSettings(
+        deviation=args.deviation, spikes=args.clean_spikes, reduce=args.clean_reduce,
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance, new_action=args.new_action)
+    try:
+        clean.check_settings(settings)
+    except clean.CleanError as error:
         raise UsageError(str(error)) from None
     return settings
 
@@ -604,12 +643,13 @@ class Outcome:
     tolerance 0 writes the method's samples themselves). max_distance: a reduction under the distance
     bound's worst virtual-vertex distance in scene units (its bound is not an angle), else None."""
 
-    def __init__(self, targets, keys_before, keys_after, max_error_deg, max_distance=None):
+    def __init__(self, targets, keys_before, keys_after, max_error_deg, max_distance=None, clean=None):
         self.targets = list(targets)
         self.keys_before = int(keys_before)
         self.keys_after = int(keys_after)
         self.max_error_deg = None if max_error_deg is None else float(max_error_deg)
         self.max_distance = None if max_distance is None else float(max_distance)
+        self.clean = clean  # --clean: {spike_frames, flips, noise_deg} (batch's record "clean")
 
 
 class Task:
@@ -635,6 +675,23 @@ class Task:
 
     def outcome(self, result):
         raise NotImplementedError
+
+    def report(self, result, scene_attr, what, source, output):
+        """After the task's function ran: Blender re-evaluates the scene (as the operator does), the
+        panel's last result is stored in scene.<scene_attr>, and the result is printed: a header
+        naming `what` was done, one line per target, the total."""
+        scene = bpy.context.scene
+        scene.frame_set(scene.frame_current)
+        if hasattr(scene, scene_attr):
+            getattr(scene, scene_attr).last_summary = result.summary()
+            getattr(scene, scene_attr).last_lines = "\n".join(result.lines())
+        print("quatcurve %s (Blender %s): %s, %s → %s" % (
+            native.require().__version__, bpy.app.version_string, what, os.path.basename(source),
+            "in place" if source == output else output))
+        for line in result.lines():
+            print("  " + line)
+        print("total: " + result.summary())
+        return result
 
     def save(self, result, output):
         save_atomically(output)
@@ -700,20 +757,9 @@ class FitTask(Task):
         self.settings = fit_settings(args)
 
     def apply(self, chosen, source, output):
-        settings, scene = self.settings, bpy.context.scene
-        result = fit.fit(chosen, settings)
-        scene.frame_set(scene.frame_current)  # re-evaluate with the fitted curves, as the operator does
-        if hasattr(scene, "quatcurve_fit"):
-            scene.quatcurve_fit.last_summary = result.summary()
-            scene.quatcurve_fit.last_lines = "\n".join(result.lines())
-        print("quatcurve %s (Blender %s): fit %s, tolerance %g°, %d subframes, %s → %s" % (
-            native.require().__version__, bpy.app.version_string, methods.label_and_id(settings.method),
-            settings.tolerance, settings.subframes, os.path.basename(source),
-            "in place" if source == output else output))
-        for line in result.lines():
-            print("  " + line)
-        print("total: " + result.summary())
-        return result
+        settings = self.settings
+        return self.report(fit.fit(chosen, settings), "quatcurve_fit", "fit %s, tolerance %g°, %d subframes" % (
+            methods.label_and_id(settings.method), settings.tolerance, settings.subframes), source, output)
 
     def outcome(self, result):
         fitted = result.fitted
@@ -730,21 +776,12 @@ class ReduceTask(Task):
         self.settings = reduce_settings(args)
 
     def apply(self, chosen, source, output):
-        settings, scene = self.settings, bpy.context.scene
+        settings = self.settings
         result = reduce.reduce(chosen, settings)
-        scene.frame_set(scene.frame_current)
-        if hasattr(scene, "quatcurve_reduce"):
-            scene.quatcurve_reduce.last_summary = result.summary()
-            scene.quatcurve_reduce.last_lines = "\n".join(result.lines())
         bound = ("tolerance %g°" % settings.tolerance if settings.error == "ANGLE" else
                  "distance %s, shell %s" % (result.length(result.distance), result.length(result.shell)))
-        print("quatcurve %s (Blender %s): reduce, %s, %s keys, %s → %s" % (
-            native.require().__version__, bpy.app.version_string, bound, settings.interpolation,
-            os.path.basename(source), "in place" if source == output else output))
-        for line in result.lines():
-            print("  " + line)
-        print("total: " + result.summary())
-        return result
+        return self.report(result, "quatcurve_reduce", "reduce, %s, %s keys" % (bound, settings.interpolation),
+                           source, output)
 
     def outcome(self, result):
         if result.error == "DISTANCE":
@@ -752,6 +789,31 @@ class ReduceTask(Task):
                            max_distance=result.worst_distance)
         return Outcome([t.name for t in result.targets], result.keys_before, result.keys_after,
                        result.max_error_deg)
+
+
+class CleanTask(Task):
+    flag, verb = "clean", "clean"
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.settings = clean_settings(args)
+
+    def apply(self, chosen, source, output):
+        settings = self.settings
+        bound = "deviation %s" % ("%g°" % settings.deviation if settings.deviation else "2.5 × noise")
+        if settings.reduce:
+            bound += ", reduced within %g°" % settings.tolerance
+        return self.report(clean.clean(chosen, settings), "quatcurve_clean", "clean, " + bound, source, output)
+
+    def outcome(self, result):
+        # The error: the largest deviation from a frame that is not a spike (plus the reduction's bound).
+        worst = max([t.max_deviation_deg for t in result.targets] or [0.0])
+        if result.settings.reduce:
+            worst += result.settings.tolerance
+        return Outcome([t.name for t in result.targets], sum(t.keys_before for t in result.targets),
+                       sum(t.keys_after for t in result.targets), worst,
+                       clean={"spike_frames": result.spike_frames, "flips": sum(t.flips for t in result.targets),
+                              "noise_deg": round(max([t.noise_deg for t in result.targets] or [0.0]), 6)})
 
 
 class ConvertTask(Task):
@@ -823,7 +885,7 @@ class GltfTask(Task):
 
 
 # The operations, chosen by their option; BakeTask when none is given.
-TASKS = (GltfTask, ConvertTask, FitTask, ReduceTask)
+TASKS = (GltfTask, ConvertTask, FitTask, ReduceTask, CleanTask)
 
 
 def task_of(args):

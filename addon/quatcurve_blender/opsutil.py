@@ -34,6 +34,25 @@ def wrapped_labels(layout, text, width):
         layout.label(text=line)
 
 
+def last_result_properties(task, what):
+    """The panel's record of a task's last result, as property definitions: last_summary (`what`)
+    and last_lines (one line per target)."""
+    import bpy
+    return dict(last_summary=bpy.props.StringProperty(name="Last %s" % task, default="", description=what),
+                last_lines=bpy.props.StringProperty(name="Last %s Details" % task, default="",
+                                                    description="One line per target, newline-separated"))
+
+
+def draw_last_result(layout, settings, max_lines, width):
+    """The last result's summary and its first `max_lines` target lines, wrapped at `width` characters."""
+    if not settings.last_summary:
+        return
+    col = layout.column(align=True)
+    col.scale_y = 0.8
+    for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
+        wrapped_labels(col, line, width)
+
+
 def run_task(operator, context, scene_attr, names, make_settings, task, verb, report_prefix=""):
     """The body of a task operator (fit, reduce): the panel's settings for unset properties, the task
     on the selection, errors reported (CANCELLED, nothing changed), the summary and one line per

@@ -61,11 +61,8 @@ class QuatCurveReduceSettings(bpy.types.PropertyGroup):
     """scene.quatcurve_reduce: the panel's reduce settings and the last reduction's summary."""
     __annotations__ = dict(
         reduce_properties(),
-        last_summary=bpy.props.StringProperty(name="Last Reduce", default="",
-                                              description="Keys before and after, and the largest error, of the "
-                                                          "last reduction"),
-        last_lines=bpy.props.StringProperty(name="Last Reduce Details", default="",
-                                            description="One line per target, newline-separated"),
+        **opsutil.last_result_properties("Reduce", "Keys before and after, and the largest error, of the last "
+                                                   "reduction"),
     )
 
 
@@ -82,11 +79,7 @@ def draw_settings(layout, settings, max_lines=6, width=40):
     col.prop(settings, "synchronized")
     col.prop(settings, "new_action")
     layout.operator("quatcurve.reduce", text="Reduce Keys", icon="IPO_BEZIER")
-    if settings.last_summary:
-        col = layout.column(align=True)
-        col.scale_y = 0.8
-        for line in [settings.last_summary] + settings.last_lines.splitlines()[:max_lines]:
-            opsutil.wrapped_labels(col, line, width)
+    opsutil.draw_last_result(layout, settings, max_lines, width)
 
 
 class QUATCURVE_OT_reduce(bpy.types.Operator):

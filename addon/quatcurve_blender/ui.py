@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import compare, compare_ops, fit_ops, methods, native, opsutil, reduce_ops, trails
+from . import clean_ops, compare, compare_ops, fit_ops, methods, native, opsutil, reduce_ops, trails
 
 
 def draw_status(layout):
@@ -394,6 +394,16 @@ class ReducePanel(_TaskPanel):
         reduce_ops.draw_settings(self.layout, context.scene.quatcurve_reduce, width=label_width(context))
 
 
+class CleanPanel(_TaskPanel):
+    """Clean Capture: settings, button, last clean."""
+    task = "clean"
+    settings = "quatcurve_clean"
+    bl_label = "Clean Capture"
+
+    def draw(self, context):
+        clean_ops.draw_settings(self.layout, context.scene.quatcurve_clean, width=label_width(context))
+
+
 class ComparePanel(_TaskPanel):
     """Compare: settings, button, the recommendation in one sentence, Table (popup) and Plot buttons."""
     task = "compare"
@@ -456,7 +466,7 @@ def draw_trail_status(layout, context, settings):
 
 
 # The task panels in the order they are drawn (a new task: one class here).
-TASK_PANELS = (FitPanel, BakePanel, ReducePanel, ComparePanel, TrailsPanel)
+TASK_PANELS = (FitPanel, BakePanel, ReducePanel, CleanPanel, ComparePanel, TrailsPanel)
 
 
 def _task_panels():
@@ -486,6 +496,7 @@ def draw_bake_menu_item(self, context):
     self.layout.operator("quatcurve.bake", icon="ACTION")
     self.layout.operator("quatcurve.compare", icon="GRAPH")
     self.layout.operator("quatcurve.reduce", icon="IPO_BEZIER")
+    self.layout.operator("quatcurve.clean", icon="MOD_SMOOTH")
 
 
 def register():

@@ -157,16 +157,24 @@ def graph_editor_context():
                 space_data=area.spaces.active)
 
 
-def decimate(arm, original, frames, reference, margin):
-    action = fresh_copy(arm, original, "decimate")
+def graph_operator(arm, original, name, run):
+    """A copy of `original` assigned to `arm` (named `name`), every key of it selected in a Graph Editor
+    and run() called there (Blender's own key operators); returns (the copy, seconds run() took)."""
+    action = fresh_copy(arm, original, name)
     for obj in bpy.context.view_layer.objects:
         obj.select_set(obj is arm)
     bpy.context.view_layer.objects.active = arm
-    t0 = time.perf_counter()
     with bpy.context.temp_override(**graph_editor_context()):
         bpy.ops.graph.select_all(action="SELECT")
-        bpy.ops.graph.decimate(mode="ERROR", remove_error_margin=margin)
-    seconds = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        run()
+        seconds = time.perf_counter() - t0
+    return action, seconds
+
+
+def decimate(arm, original, frames, reference, margin):
+    action, seconds = graph_operator(arm, original, "decimate",
+                                     lambda: bpy.ops.graph.decimate(mode="ERROR", remove_error_margin=margin))
     keys, err = measure(arm, action, frames, reference)
     fcurves.remove_action(action)
     return keys, err, seconds

@@ -440,3 +440,20 @@ def test_convert_and_gltf_are_batch_operations(library, tmp_path):
     assert {k: (r["status"], r["output"]) for k, r in records.items()} == {
         "a.blend": ("done", "a.glb"), "b.blend": ("done", "b.glb")}
     assert (out / "a.glb").read_bytes()[:4] == b"glTF" and not (tmp_path / "unused.glb").exists()
+
+
+def test_clean_records_its_figures(library, tmp_path):
+    """--clean in a batch: each done file's record carries its clean figures (spike frames replaced,
+    flips removed, the noise estimate), valid against the schema; max_error_deg is the largest deviation."""
+    inputs = [library / "clips" / "walk.bvh", library / "shots" / "a.blend"]
+    out = tmp_path / "cleaned"
+    proc = run_batch(["--clean", "--jobs", "1", "--output", out] + inputs)
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, _ = read_results(out)
+    assert {k: (r["status"], r["operation"]) for k, r in records.items()} == {
+        "clips/walk.bvh": ("done", "clean"), "shots/a.blend": ("done", "clean")}
+    for record in records.values():
+        figures = record["clean"]
+        assert figures["spike_frames"] >= 0 and figures["flips"] >= 0 and figures["noise_deg"] >= 0, record
+        assert record["max_error_deg"] <= 2.5 * figures["noise_deg"] + 1e-5, record
+    assert records["shots/a.blend"]["clean"]["spike_frames"] == 0  # keyed straight segments: no spike

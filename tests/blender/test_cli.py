@@ -280,6 +280,21 @@ def test_reduce(addon, source_blend, tmp_path):
     assert digest(source_blend) == before and out.is_file()
 
 
+def test_clean(addon, source_blend, tmp_path):
+    """--clean on Turn: the clean operator's work and summary (21 frames, no spikes on a keyed path),
+    the input unchanged."""
+    before = digest(source_blend)
+    out = tmp_path / "cleaned.blend"
+    proc = run_cli(["--clean", "--objects", "Turn", "--output", out, source_blend])
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert any("clean, deviation 2.5 × noise" in line for line in lines), proc.stdout
+    assert any(line.strip().startswith("Turn (XYZ): 21 frames, noise ") and "no spikes" in line for line in lines), \
+        proc.stdout
+    assert any(line.startswith("total: 1 target: no spikes") for line in lines), proc.stdout
+    assert digest(source_blend) == before and out.is_file()
+
+
 @pytest.fixture(scope="module")
 def broken(addon, tmp_path_factory):
     return broken_files.make(str(tmp_path_factory.mktemp("broken")))
@@ -344,6 +359,13 @@ BAD_ARGUMENTS = [
     ("reduce-method", ["--reduce", "--method", "SQUAD", "--output", "{OUT}", "{IN}"], 2,
      "--method: not an option of --reduce"),
     ("bake-reduce-option", ["--synchronized", "--output", "{OUT}", "{IN}"], 2, "--synchronized: not an option of a bake"),
+    ("bake-clean-option", ["--deviation", "1", "--output", "{OUT}", "{IN}"], 2, "--deviation: not an option of a bake"),
+    ("reduce-and-clean", ["--reduce", "--clean", "--output", "{OUT}", "{IN}"], 2, "--reduce and --clean exclude each other"),
+    ("clean-reduce-option", ["--clean", "--synchronized", "--output", "{OUT}", "{IN}"], 2,
+     "--synchronized: not an option of --clean"),
+    ("clean-tolerance", ["--clean", "--tolerance", "0.1", "--output", "{OUT}", "{IN}"], 2,
+     "--tolerance: an option of --clean only with --clean-reduce"),
+    ("clean-deviation", ["--clean", "--deviation", "-1", "--output", "{OUT}", "{IN}"], 2, "deviation -1.0°"),
 ]
 
 

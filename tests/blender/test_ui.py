@@ -93,11 +93,11 @@ def test_fit_first_and_open_the_other_tasks_closed(addon):
     assert ui.TASK_PANELS[0] is ui.FitPanel and "DEFAULT_CLOSED" not in ui.FitPanel.bl_options
     for task in ui.TASK_PANELS[1:]:
         assert "DEFAULT_CLOSED" in task.bl_options, task.bl_label
-    assert [t.task for t in ui.TASK_PANELS] == ["fit", "bake", "reduce", "compare", "trails"]
+    assert [t.task for t in ui.TASK_PANELS] == ["fit", "bake", "reduce", "clean", "compare", "trails"]
     for parent in ("QUATCURVE_PT_view3d", "QUATCURVE_PT_graph"):
         children = [c for c in ui._classes if getattr(c, "bl_parent_id", "") == parent]
         tasks = [c.task for c in children]
-        assert tasks == ["fit", "bake", "reduce", "compare"] + (["trails"] if parent.endswith("view3d") else [])
+        assert tasks == ["fit", "bake", "reduce", "clean", "compare"] + (["trails"] if parent.endswith("view3d") else [])
         for cls in children:
             assert ("DEFAULT_CLOSED" in cls.bl_options) == (cls.task != "fit"), cls.bl_idname
             assert getattr(bpy.types, cls.bl_idname).bl_parent_id == parent

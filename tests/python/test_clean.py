@@ -207,10 +207,10 @@ def test_bad_input_raises_value_error_naming_it():
         qc.remove_euler_flips([[0, 0, 0], [0, 0, 0], [np.inf, 0, 0]])
 
 
-# ---- the add-on's bpy-free helper: addon/quatcurve_blender/clean.py ------------------------------------
+# ---- the add-on's bpy-free helper: addon/quatcurve_blender/clean_arrays.py -----------------------------
 
 def addon_clean():
-    """addon/quatcurve_blender/clean.py and native.py, imported without the package's __init__ (which
+    """addon/quatcurve_blender/clean_arrays.py and native.py, imported without the package's __init__ (which
     needs bpy)."""
     import importlib
     import importlib.util
@@ -218,12 +218,12 @@ def addon_clean():
     from pathlib import Path
 
     name = "quatcurve_blender_plain"
-    if name + ".clean" in sys.modules:
-        return sys.modules[name + ".clean"]
+    if name + ".clean_arrays" in sys.modules:
+        return sys.modules[name + ".clean_arrays"]
     here = Path(__file__).resolve().parents[2] / "addon" / "quatcurve_blender"
     spec = importlib.util.spec_from_file_location(name, here / "__init__.py", submodule_search_locations=[str(here)])
     sys.modules[name] = importlib.util.module_from_spec(spec)  # the package, its __init__ not run
-    return importlib.import_module(name + ".clean")
+    return importlib.import_module(name + ".clean_arrays")
 
 
 @pytest.mark.parametrize("mode", ["QUATERNION", "XYZ", "ZYX", "AXIS_ANGLE"])
