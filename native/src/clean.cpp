@@ -25,6 +25,11 @@ using detail::rotvec_principal;
 
 // Median of the chi distribution with 3 degrees of freedom: √(median of χ²₃) (χ²₃ median 2.365974…).
 constexpr double kChi3Median = 1.5381722544550522;
+// find_spikes' local noise: the scaled residuals of the frames kLocalGap … kLocalGap + kLocalSpan − 1
+// before and after a window (a spike moves the residuals of the two frames on each side of it).
+constexpr std::size_t kLocalGap = 3, kLocalSpan = 5;
+// A departure below this share of the local speed (angle per frame) is never a spike.
+constexpr double kSpeedShare = 1.0;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
 std::string num(double x) {
@@ -292,8 +297,11 @@ std::size_t remove_euler_flips(Vec3* angles, std::size_t n, EulerOrder order) {
 
 // ---- 2. noise ------------------------------------------------------------------------------------------------
 
-double estimate_rotation_noise(const std::vector<double>& times, const std::vector<Quat>& q) {
-    const Prepared in = prepare(times, q);
+namespace {
+
+// |r_i|/g_i of every inner frame i (index i − 1): its departure from the cubic through its neighbours,
+// over the prediction's noise gain (see estimate_rotation_noise).
+std::vector<double> scaled_residuals(const Prepared& in) {
     const std::vector<Quat>& u = in.u;
     const std::vector<char> none(u.size(), 0);
     std::vector<double> r(u.size() - 2);
@@ -304,11 +312,26 @@ double estimate_rotation_noise(const std::vector<double>& times, const std::vect
         const Quat p = predict(in.tau, u, nodes, in.tau[i], gain);
         r[i - 1] = glm::length(rotvec_principal(qmul(qconj(p), u[i]))) / gain;
     }
+    return r;
+}
+
+// The median of r; 0 for none.
+double median_of(std::vector<double> r) {
+    if (r.empty()) return 0.0;
     const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
     std::nth_element(r.begin(), mid, r.end());
     double median = *mid;
     if (r.size() % 2 == 0) median = 0.5 * (median + *std::max_element(r.begin(), mid));
-    return std::sqrt(3.0) * median / kChi3Median;
+    return median;
+}
+
+// σ from scaled residuals (estimate_rotation_noise): √3·median/m₃; 0 for none.
+double noise_of(std::vector<double> r) { return std::sqrt(3.0) * median_of(std::move(r)) / kChi3Median; }
+
+}  // namespace
+
+double estimate_rotation_noise(const std::vector<double>& times, const std::vector<Quat>& q) {
+    return noise_of(scaled_residuals(prepare(times, q)));
 }
 
 // ---- 3. spikes -------------------------------------------------------------------------------------------------
@@ -323,6 +346,28 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
     if (options.max_run < 1) throw InvalidArgument("max_run: 0 (expected at least 1)");
     const std::size_t n = u.size(), runs = std::min(options.max_run, n - 2);
     std::vector<char> marked(n, 0);
+    // The motion's own departures around a window (frames kLocalGap to kLocalGap + kLocalSpan − 1 away
+    // on each side, beyond the neighbours a spike in the window moves), as a noise σ: where the
+    // captured motion itself turns faster than a cubic follows, it raises the threshold there.
+    const std::vector<double> residuals = scaled_residuals(in);
+    // And the motion's own speed there: the median angle between consecutive frames over the same
+    // frames; a departure below kSpeedShare of it is the motion turning, not a spike.
+    auto local_scales = [&](std::size_t first, std::size_t last, double& sigma, double& speed) {
+        std::vector<double> around, steps;
+        for (std::size_t k = 0; k < kLocalSpan; ++k) {
+            const std::size_t before = kLocalGap + k, after = last + kLocalGap + k;
+            if (first >= before + 1) {
+                around.push_back(residuals[first - before - 1]);
+                steps.push_back(angle_between(u[first - before - 1], u[first - before]));
+            }
+            if (after + 1 < n) {
+                around.push_back(residuals[after - 1]);
+                steps.push_back(angle_between(u[after], u[after + 1]));
+            }
+        }
+        sigma = noise_of(std::move(around));
+        speed = median_of(std::move(steps));
+    };
 
     // The window's score: the smallest over its frames of departure / max(threshold·σ·g, min_angle);
     // negative when the window cannot be marked.
@@ -332,11 +377,15 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
             if (marked[i]) return -1.0;
         Nodes nodes;
         if (!find_nodes(marked, first, last, runs, nodes)) return -1.0;
+        double local = 0.0, speed = 0.0;
+        local_scales(first, last, local, speed);
         double s = std::numeric_limits<double>::infinity();
         for (std::size_t i = first; i <= last; ++i) {
             double gain;
             const Quat p = predict(in.tau, u, nodes, in.tau[i], gain);
-            const double limit = std::max({options.threshold * noise * gain, options.min_angle, 1e-300});
+            const double sigma = std::max(noise, local);
+            const double limit =
+                std::max({options.threshold * sigma * gain, options.min_angle, kSpeedShare * speed, 1e-300});
             s = std::min(s, angle_between(p, u[i]) / limit);
         }
         return s;

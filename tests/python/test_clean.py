@@ -129,6 +129,22 @@ def test_spikes_every_one_and_no_false_positives():
     np.testing.assert_allclose(departures, angle(spiky[frames], q[frames]), atol=3 * DEG)
 
 
+def test_abrupt_turns_of_the_motion_are_not_spikes():
+    """A swing that reverses at once every 12 frames at 8°/frame (a foot's plant, a hit): at each
+    reversal the cubic through the neighbours is 5.3° off, far above 4σ of 0.3° noise, but below the
+    motion's own speed there — not a spike. Spikes of 20°-30° planted on it are found, and only they."""
+    t = np.arange(1.0, 301.0)
+    phase = (t - 1) % 24
+    angle_deg = np.where(phase < 12, phase, 24 - phase) * 8.0
+    truth = wxyz(Rotation.from_rotvec(np.outer(np.radians(angle_deg), [0.0, 0.6, 0.8])))
+    q = add_noise(truth, 0.3 * DEG, 11)
+    frames, _ = qc.find_spikes(t, q)
+    assert frames.size == 0, frames
+    spiky, planted = plant_spikes(q, 11, every=70, low=20.0, high=30.0)
+    frames, _ = qc.find_spikes(t, spiky)
+    np.testing.assert_array_equal(frames, planted)
+
+
 @pytest.mark.parametrize("sigma_deg", [0.5, 2.0])
 def test_clean_within_deviation_and_closer_to_the_truth(sigma_deg):
     q = add_noise(TRUTH, sigma_deg * DEG, 3)

@@ -93,8 +93,15 @@ struct Spikes {
 // when extrapolating, so spikes at the clip's very ends must be larger to be found). On a uniform
 // rotation about a fixed axis the prediction is the slerp of the neighbours.
 //
+// Where the captured motion itself turns faster than a cubic through its neighbours follows (a
+// jerky stretch of a clip, a foot's plant), the motion raises the threshold there: σ is the larger
+// of the clip's noise and the local noise (the same estimate over the ten frames 3 to 7 frames
+// before and after the window, beyond the neighbours a spike in it moves), and a departure must also
+// exceed the motion's own speed there (the median angle between consecutive frames of those
+// frames): a reversal at 8°/frame departs 5.3° from the cubic and is not a spike.
+//
 // Search: every window of 1..max_run unmarked frames is scored by the smallest over its frames of
-// departure / max(threshold·σ·g, min_angle); the best window above 1 is marked, the windows near it
+// departure / max(threshold·σ·g, min_angle, local speed); the best window above 1 is marked, the windows near it
 // scored again (the spike no longer predicts its neighbours), until none is above 1. A window is
 // only marked if the run of marked frames it joins stays within max_run. The departures returned
 // are those from the final prediction (the curve replace_spikes puts there).
