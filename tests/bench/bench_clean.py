@@ -11,8 +11,8 @@ F-curve evaluation at every frame, normalized) and held against the truth:
 - noisy: the input itself;
 - quatcurve: clean.clean (the `quatcurve.clean` operator's function) with its defaults (deviation
   2.5 × the estimated noise);
-- Blender's Gaussian Smooth (graph.gaussian_smooth), Butterworth (graph.butterworth_smooth, 4.2+) and
-  classic Smooth (graph.smooth, repeated), each on every rotation F-curve, at the setting of a scan
+- Blender's Gaussian Smooth (graph.gaussian_smooth, 4.0+), Butterworth (graph.butterworth_smooth, 4.2+)
+  and classic Smooth (graph.smooth, repeated; the only one in 3.4), each on every rotation F-curve, at the setting of a scan
   that gives the lowest RMS error for that clip and noise (the best any user could pick).
 Columns: the angle to the truth over every bone and frame (RMS, 99th percentile, max), the frames
 further than 3 × the noise from the truth, jitter (the RMS of the angular acceleration, per frame²,
@@ -125,6 +125,15 @@ def figures(result, truth, noise_deg):
                 max=float(errors.max()), beyond=int((errors > 3 * noise_deg).sum()), jitter=math.degrees(jit))
 
 
+def has_graph_operator(name):
+    """Whether this Blender has bpy.ops.graph.<name> (bpy.ops answers any name until it is called)."""
+    try:
+        getattr(bpy.ops.graph, name).get_rna_type()
+    except (KeyError, AttributeError):
+        return False
+    return True
+
+
 def run_filter(arm, noisy_action, frames, names, operator, kwargs, passes=1):
     def run():
         for _ in range(passes):
@@ -175,10 +184,11 @@ def bench_clip(path, folder):
         found = {(name, int(round(f - frames[0]))) for name, t in zip(sorted(truth), result.targets) for f in t.spikes}
         planted = {(bone, frame) for bone, frame in spikes}
         fcurves.assign_action(arm, noisy_action)
-        rows.append(best_filter("Gaussian Smooth (sigma, width)", arm, noisy_action, frames, truth, noise_deg,
-                                "gaussian_smooth", GAUSS,
-                                lambda s: (dict(sigma=s[0], filter_width=s[1], factor=1.0), 1)))
-        if hasattr(bpy.ops.graph, "butterworth_smooth"):
+        if has_graph_operator("gaussian_smooth"):  # Blender 4.0+
+            rows.append(best_filter("Gaussian Smooth (sigma, width)", arm, noisy_action, frames, truth, noise_deg,
+                                    "gaussian_smooth", GAUSS,
+                                    lambda s: (dict(sigma=s[0], filter_width=s[1], factor=1.0), 1)))
+        if has_graph_operator("butterworth_smooth"):  # Blender 4.2+
             rows.append(best_filter("Butterworth (cutoff Hz, order)", arm, noisy_action, frames, truth, noise_deg,
                                     "butterworth_smooth", BUTTER,
                                     lambda s: (dict(cutoff_frequency=s[0], filter_order=s[1], blend=1.0), 1)))
