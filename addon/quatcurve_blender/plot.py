@@ -326,9 +326,13 @@ def _same_curves(a, b):
     return True
 
 
-def make_panels(canvas, series, key_frames=()):
+PANEL_TITLES = (("Angular speed", "speed (\u00b0/frame)"), ("Deviation from SLERP", "deviation (\u00b0)"))
+
+
+def make_panels(canvas, series, key_frames=(), titles=PANEL_TITLES):
     """(speed panel, deviation panel) of the figure for `series`: their pixel boxes and data ranges
-    (Panel.to_pixels maps frames and values to pixel coordinates; canvas may be None to ask only that)."""
+    (Panel.to_pixels maps frames and values to pixel coordinates; canvas may be None to ask only that).
+    titles: each panel's (title, y label)."""
     left, right = PLOT_LEFT, PLOT_RIGHT
     all_frames = [np.asarray(s["frames"], float) for s in series] + [np.asarray(key_frames, float)]
     finite_frames = np.concatenate([f[np.isfinite(f)] for f in all_frames] + [np.zeros(0)])
@@ -339,13 +343,13 @@ def make_panels(canvas, series, key_frames=()):
     deviation_max = _finite_max([np.asarray(s["deviation"], float) for s in series], 1e-3)
     return (
         Panel(canvas, (left, SPEED_ROWS[0], right, SPEED_ROWS[1]), x_range, (0.0, speed_max * 1.05),
-              "Angular speed", "frame", "speed (\u00b0/frame)"),
+              titles[0][0], "frame", titles[0][1]),
         Panel(canvas, (left, DEVIATION_ROWS[0], right, DEVIATION_ROWS[1]), x_range, (0.0, deviation_max * 1.05),
-              "Deviation from SLERP", "frame", "deviation (\u00b0)"),
+              titles[1][0], "frame", titles[1][1]),
     )
 
 
-def render_comparison(title, series, key_frames=(), subtitle=""):
+def render_comparison(title, series, key_frames=(), subtitle="", titles=PANEL_TITLES):
     """The comparison figure for one target as an RGBA uint8 array (HEIGHT, WIDTH, 4), rows top down.
 
     series: list of dicts, one per source, drawn in order with PALETTE colours unless "colour" is given:
@@ -355,13 +359,14 @@ def render_comparison(title, series, key_frames=(), subtitle=""):
       frames          (N,) sample frames
       deviation       (N,) angle from the SLERP path, degrees
     key_frames: frames of the keys, drawn as dashed vertical lines in both panels.
+    titles: each panel's (title, y label), the upper panel's first (other uses: another second panel).
     """
     canvas = Canvas()
     canvas.text(WIDTH / 2, 12, title, scale=2, align="center")
     if subtitle:
         canvas.text(WIDTH / 2, 44, subtitle, align="center")
     legend_left = LEGEND_LEFT
-    panels = make_panels(canvas, series, key_frames)
+    panels = make_panels(canvas, series, key_frames, titles)
     for panel in panels:
         panel.draw_frame(key_frames)
     colours = []

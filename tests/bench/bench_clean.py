@@ -21,6 +21,9 @@ input's and below the best filter's, no frame beyond 3 × the noise.
 
   ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_clean.py
   blender -b --factory-startup --python tests/bench/bench_clean.py
+`--picture PNG`: also draws, for the first clip at the last noise level, the bone with the largest
+planted spike: its angular speed and its angle to the truth over time — the noisy input, the best
+Blender filter and quatcurve (the add-on's own plotter, plot.py; README's picture).
 `--smoke` (tests/bench/smoke.py): the first clip's first 120 frames, one noise level, two settings per filter.
 """
 import math
@@ -39,7 +42,7 @@ sys.path.insert(0, HERE)
 
 import smoke  # noqa: E402
 from bench_reduce_blender import first_frames, fresh_copy, graph_operator, import_clip, rotation_curves  # noqa: E402
-from quatcurve_blender import clean, fcurves, native, targets  # noqa: E402
+from quatcurve_blender import clean, fcurves, native, plot, targets  # noqa: E402
 
 CLIPS = ("mocapbank.bvh", "freebvh.bvh")
 MOCAP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap"))
@@ -145,18 +148,41 @@ def run_filter(arm, noisy_action, frames, names, operator, kwargs, passes=1):
 
 
 def best_filter(label, arm, noisy_action, frames, truth, noise_deg, operator, settings, make_kwargs):
+    """(label % the best setting, its figures, seconds, its played rotations {bone: (N, 4)})."""
     best = None
     for setting in settings:
         kwargs, passes = make_kwargs(setting)
         result, seconds = run_filter(arm, noisy_action, frames, sorted(truth), operator, kwargs, passes)
         fig = figures(result, truth, noise_deg)
         if best is None or fig["rms"] < best[1]["rms"]:
-            best = (setting, fig, seconds)
-    setting, fig, seconds = best
-    return ("%s %s" % (label, setting), fig, seconds)
+            best = (setting, fig, seconds, result)
+    setting, fig, seconds, result = best
+    return (label % setting, fig, seconds, result)
 
 
-def bench_clip(path, folder):
+def draw_picture(path, clip, bone, frames, truth, noise_deg, played_by):
+    """The PNG at `path`: `bone`'s angular speed and angle to the truth over time for each of
+    played_by [(name, {bone: (N, 4)})] (plot.render_comparison, written by Blender's image save)."""
+    qc = native.require()
+    series = []
+    for name, quats in played_by:
+        q = quats[bone]
+        series.append(dict(name=name, frames=frames, deviation=np.degrees(qc.angle_between(q, truth[bone])),
+                           speed_frames=0.5 * (frames[1:] + frames[:-1]),
+                           speed=np.degrees(qc.angle_between(q[1:], q[:-1]))))
+    pixels = plot.render_comparison("%s, %s: %.1f° noise, spikes, sign flips" % (clip, bone, noise_deg), series,
+                                    subtitle="angle to the truth before and after cleaning",
+                                    titles=(("Angular speed", "speed (°/frame)"), ("Angle to the truth", "angle (°)")))
+    image = bpy.data.images.new("bench_clean", pixels.shape[1], pixels.shape[0], alpha=True)
+    image.pixels.foreach_set((pixels[::-1].astype(np.float32) / 255.0).ravel())
+    image.filepath_raw = os.path.abspath(path)
+    image.file_format = "PNG"
+    image.save()
+    bpy.data.images.remove(image)
+    print("wrote %s" % path)
+
+
+def bench_clip(path, folder, picture=None):
     clip = first_frames(path, SMOKE_FRAMES, folder) if smoke.SMOKE else path
     arm, original = import_clip(clip)
     original.use_fake_user = True
@@ -171,28 +197,29 @@ def bench_clip(path, folder):
         noisy_action = fresh_copy(arm, original, "noisy")
         noisy_action.use_fake_user = True
         write_quats(arm, noisy_action, quats, frames)
-        rows = [("noisy input", figures(played(arm, noisy_action, frames, sorted(truth)), truth, noise_deg), 0.0)]
+        noisy_played = played(arm, noisy_action, frames, sorted(truth))
+        rows = [("noisy input", figures(noisy_played, truth, noise_deg), 0.0, noisy_played)]
         # quatcurve: the operator's function on every rotating bone, into a new action
         fcurves.assign_action(arm, noisy_action)
         begin = time.perf_counter()
         result = clean.clean([targets.Target(arm, name) for name in sorted(truth)], clean.CleanSettings())
         seconds = time.perf_counter() - begin
         cleaned = fcurves.active_action(arm)
-        rows.append(("quatcurve clean", figures(played(arm, cleaned, frames, sorted(truth)), truth, noise_deg),
-                     seconds))
+        cleaned_played = played(arm, cleaned, frames, sorted(truth))
+        rows.append(("quatcurve clean", figures(cleaned_played, truth, noise_deg), seconds, cleaned_played))
         # result.targets follow the targets given, one per bone in sorted(truth)
         found = {(name, int(round(f - frames[0]))) for name, t in zip(sorted(truth), result.targets) for f in t.spikes}
         planted = {(bone, frame) for bone, frame in spikes}
         fcurves.assign_action(arm, noisy_action)
         if has_graph_operator("gaussian_smooth"):  # Blender 4.0+
-            rows.append(best_filter("Gaussian Smooth (sigma, width)", arm, noisy_action, frames, truth, noise_deg,
+            rows.append(best_filter("Gaussian Smooth s %g, width %d", arm, noisy_action, frames, truth, noise_deg,
                                     "gaussian_smooth", GAUSS,
                                     lambda s: (dict(sigma=s[0], filter_width=s[1], factor=1.0), 1)))
         if has_graph_operator("butterworth_smooth"):  # Blender 4.2+
-            rows.append(best_filter("Butterworth (cutoff Hz, order)", arm, noisy_action, frames, truth, noise_deg,
+            rows.append(best_filter("Butterworth %g Hz, order %d", arm, noisy_action, frames, truth, noise_deg,
                                     "butterworth_smooth", BUTTER,
                                     lambda s: (dict(cutoff_frequency=s[0], filter_order=s[1], blend=1.0), 1)))
-        rows.append(best_filter("Smooth (passes)", arm, noisy_action, frames, truth, noise_deg, "smooth",
+        rows.append(best_filter("Smooth x%d", arm, noisy_action, frames, truth, noise_deg, "smooth",
                                 SMOOTH_PASSES, lambda s: ({}, s)))
         truth_jitter = math.degrees(np.sqrt(np.mean(np.concatenate([jitter(truth[n]) ** 2 for n in truth]))))
         print("  noise %.1f° RMS, %d spikes planted (%d found by clean, %d of them planted), sign flips every %d "
@@ -200,13 +227,18 @@ def bench_clip(path, folder):
                                                             len(found & planted), FLIP_EVERY, truth_jitter))
         print("    %-40s %8s %8s %8s %8s %12s %8s" % ("method", "RMS °", "p99 °", "max °", ">3σ", "jitter °/f²",
                                                     "seconds"))
-        for name, fig, seconds in rows:
+        for name, fig, seconds, _ in rows:
             print("    %-40s %8.3f %8.3f %8.2f %8d %12.4f %8.2f" % (name, fig["rms"], fig["p99"], fig["max"],
                                                                   fig["beyond"], fig["jitter"], seconds))
         best_blender = min(r[1]["rms"] for r in rows[2:])
         ours = rows[1][1]
         print("    quatcurve / noisy RMS %.2f (goal <= 0.5), / best Blender filter %.2f (goal < 1); frames beyond 3σ: %d"
               % (ours["rms"] / rows[0][1]["rms"], ours["rms"] / best_blender, ours["beyond"]))
+        if picture and k == len(NOISE_DEG) - 1:
+            bone = max(spikes.items(), key=lambda item: item[1])[0][0]
+            best = min(rows[2:], key=lambda r: r[1]["rms"])
+            draw_picture(picture, os.path.basename(path), bone, frames, truth, noise_deg,
+                         [("noisy input", rows[0][3]), (best[0], best[3]), ("quatcurve clean", rows[1][3])])
         fcurves.assign_action(arm, original)
         for action in (noisy_action, cleaned):
             fcurves.remove_action(action)
@@ -217,9 +249,11 @@ def main():
     if not paths:
         print("skipped: the shared mocap clips are absent (%s)" % os.path.relpath(MOCAP, ROOT))
         return
+    args = smoke.script_args()
+    picture = args[args.index("--picture") + 1] if "--picture" in args else None
     with tempfile.TemporaryDirectory() as folder:
-        for path in paths[:1] if smoke.SMOKE else paths:
-            bench_clip(path, folder)
+        for k, path in enumerate(paths[:1] if smoke.SMOKE else paths):
+            bench_clip(path, folder, picture if k == 0 else None)
 
 
 smoke.run(main)
