@@ -118,7 +118,11 @@ _record_index = None
 # target reuses its unchanged key segments (native fit_through_keys' previous). Memory only, cleared
 # when a file loads; the native side checks every reused segment against the new keys and curve, so
 # an entry that no longer matches the F-curves (an undo, a renamed action) costs reuse, never truth.
+# The fits least recently written go first once they hold more than _LAST_FITS_SAMPLES samples (a fit
+# keeps ~16 bytes per sample: a 1,000-frame target at 4 subframes ~64 KB).
 _last_fits = {}
+_last_fit_samples = {}
+_LAST_FITS_SAMPLES = 4_000_000
 
 
 def last_fit(action, target):
@@ -128,6 +132,22 @@ def last_fit(action, target):
 
 def forget_fits():
     _last_fits.clear()
+    _last_fit_samples.clear()
+
+
+def _remember_fit(key, kf, samples):
+    """Keeps kf as the last fit of `key`, the newest; drops the oldest over _LAST_FITS_SAMPLES."""
+    _forget_fit(key)
+    _last_fits[key], _last_fit_samples[key] = kf, samples
+    _last_fit_samples[None] = _last_fit_samples.get(None, 0) + samples  # None: the total
+    while _last_fit_samples[None] > _LAST_FITS_SAMPLES and len(_last_fits) > 1:
+        _forget_fit(next(iter(_last_fits)))
+
+
+def _forget_fit(key):
+    _last_fits.pop(key, None)
+    if key in _last_fit_samples:
+        _last_fit_samples[None] -= _last_fit_samples.pop(key)
 
 
 @contextlib.contextmanager
@@ -639,7 +659,7 @@ def write_plan(plan, target):
         fcurves.write_key_selection(curve, chosen)
     store_record(keys, plan.settings, target, action)
     if plan.fit is not None:
-        _last_fits[(action.name,) + target_key(target)] = plan.fit
+        _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
     set_key_turns(action, target, keys.frames, plan.turns)
     target.id_data.update_tag(refresh={"TIME"})
@@ -785,7 +805,7 @@ def unfit(found):
         if record is None:
             continue
         action.quatcurve_fits.remove(list(action.quatcurve_fits).index(record))
-        _last_fits.pop((action.name,) + target_key(target), None)
+        _forget_fit((action.name,) + target_key(target))
         set_key_eases(action, target, [], [], [])
         set_key_turns(action, target, [], [])
         names.append(target.name)

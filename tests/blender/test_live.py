@@ -385,3 +385,31 @@ def test_a_channel_left_with_generated_keys_only_is_read_where_the_others_are_ke
     assert live.STATS.refits == 1 and not live.STATS.errors, live.STATS
     frames, _ = animator_keys(fitted)
     np.testing.assert_array_equal(frames, [f for f, _ in QUAT_KEYS])
+
+
+def test_a_refit_fits_only_the_segments_an_edit_changed(fitted, monkeypatch):
+    """The fit is kept (fit.last_fit) and lends the next refit its unchanged key segments: a value
+    changed at the last key refits the segments its SQUAD tangents reach, the result still plays the
+    method; the kept fits are bounded by their samples, the oldest dropped first."""
+    target = fit.targets.Target(fitted)
+    action = fcurves.active_action(fitted)
+    first = fit.last_fit(action, target)
+    assert first is not None and first.refitted == len(QUAT_KEYS) - 1
+    frames, values = animator_keys(fitted)
+    curve = fcurves.Channels.of(fitted).find("rotation_quaternion", 1)
+    last = int(np.flatnonzero(fcurves.read_keys(curve)[0] == frames[-1])[0])
+    curve.keyframe_points[last].co[1] += 0.05
+    update()
+    assert live.STATS.refits == 1, live.STATS
+    again = fit.last_fit(action, target)
+    assert again is not first and 1 <= again.refitted <= 2  # the last two segments at most
+    frames, values = animator_keys(fitted)
+    assert_plays_method(fitted, frames.astype(float), values)
+    # the kept fits' budget: with room for one target's samples only, a second target's fit evicts the first
+    monkeypatch.setattr(fit, "_LAST_FITS_SAMPLES", len(again.times))
+    other = add_empty("Other", "QUATERNION")
+    key(other, "rotation_quaternion", QUAT_KEYS, interpolation="BEZIER")
+    select_objects(other)
+    assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
+    assert fit.last_fit(fcurves.active_action(other), fit.targets.Target(other)) is not None
+    assert fit.last_fit(action, target) is None
