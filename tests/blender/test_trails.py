@@ -191,7 +191,7 @@ def test_unregister_removes_every_handler(addon):
 def test_subpanels_one_per_task_under_each_editor(addon):
     for parent in ("QUATCURVE_PT_view3d", "QUATCURVE_PT_graph"):
         children = {cls.bl_idname: cls for cls in ui._classes if getattr(cls, "bl_parent_id", "") == parent}
-        tasks = {"fit", "bake", "reduce", "compare"} | ({"trails"} if parent.endswith("view3d") else set())
+        tasks = {"fit", "bake", "reduce", "clean", "compare"} | ({"trails"} if parent.endswith("view3d") else set())
         assert set(children) == {"%s_%s" % (parent, t) for t in tasks}
         for idname in children:
             assert hasattr(bpy.types, idname)
