@@ -101,8 +101,8 @@ void bind_clean(py::module_& m) {
         py::arg("times"), py::arg("quats"),
         R"doc(The clip's per-frame rotation noise sigma (radians): the RMS angle by which a frame is off its
 true rotation, for white noise. Robust: sqrt(3) * median_i(|r_i| / g_i) / 1.53817, r_i the rotation
-vector from the slerp of frame i's two neighbours (at i's time) to frame i, g_i^2 = 1 + f^2 + (1-f)^2
-(3/2 on evenly spaced frames). times: (N,) increasing frames; quats: (N, 4) (w, x, y, z), N >= 3.)doc");
+vector from the cubic through frame i's two neighbours on each side (at i's time) to frame i, g_i the
+prediction's noise gain (sqrt(35/18) on evenly spaced frames). times: (N,) increasing frames; quats: (N, 4) (w, x, y, z), N >= 3.)doc");
     m.def(
         "find_spikes",
         [](py::handle times, py::handle quats, py::object noise, double threshold, std::size_t max_run,
@@ -126,8 +126,10 @@ vector from the slerp of frame i's two neighbours (at i's time) to frame i, g_i^
 the curve through its neighbours. A frame, or a run of up to max_run frames, is a spike when it departs
 from what its two nearest non-spike neighbours on each side predict (a cubic in the tangent space of
 the nearest; the slerp of the neighbours on a uniform rotation) by more than
-max(threshold * noise * g, min_angle), g the prediction's noise gain. noise: sigma (radians); None:
-estimate_rotation_noise. Best window first, its neighbours scored again, until none is beyond.)doc");
+max(threshold * noise * g, min_angle) and the motion's own scales there (local noise and speed, the
+clip's roughness, a run's inner steps; clean.hpp), g the prediction's noise gain. noise: sigma
+(radians); None: estimate_rotation_noise. Best window first, its neighbours scored again, until none
+is beyond.)doc");
     m.def(
         "replace_spikes",
         [](py::handle times, py::handle quats, py::handle frames) {
@@ -172,8 +174,9 @@ estimate_rotation_noise. Best window first, its neighbours scored again, until n
 free_frames. A Whittaker smoother on the rotation group (weighted squared deviations plus smoothness
 times the squared angular acceleration, Gauss-Newton in body-frame rotation vectors, one pentadiagonal
 system per step); frames beyond 0.98 * deviation get their weight raised until all are within, and a
-frame still beyond after 30 rounds keeps its input rotation. smoothness: lambda; None: the lambda whose
-mean squared deviation is noise^2 (noise None: estimate_rotation_noise). free_frames: sample indices
+frame still beyond after 30 rounds keeps its input rotation. smoothness: lambda; None: the lambda that
+minimizes Stein's unbiased estimate of the mean squared angle to the truth for white noise of RMS
+angle noise (noise None: estimate_rotation_noise). free_frames: sample indices
 (spikes) with no bound and next to no weight. The bound holds at the frames only. Returns a Smoothed.)doc");
 
     py::class_<CleanResult>(m, "CleanResult", "The result of clean_rotations.")

@@ -25,11 +25,23 @@ using detail::rotvec_principal;
 
 // Median of the chi distribution with 3 degrees of freedom: √(median of χ²₃) (χ²₃ median 2.365974…).
 constexpr double kChi3Median = 1.5381722544550522;
-// find_spikes' local noise: the scaled residuals of the frames kLocalGap … kLocalGap + kLocalSpan − 1
-// before and after a window (a spike moves the residuals of the two frames on each side of it).
+// find_spikes' local speed: over the frames kLocalGap … kLocalGap + kLocalSpan − 1 before and after a
+// window (beyond the two neighbours on each side that a spike in it moves).
 constexpr std::size_t kLocalGap = 3, kLocalSpan = 5;
 // A departure below this share of the local speed (angle per frame) is never a spike.
 constexpr double kSpeedShare = 1.0;
+// The motion's roughness over the whole clip: kRoughFactor times the kRoughQuantile quantile of the
+// frames' scaled residuals |r_i|/g_i (for white noise 2 × 1.44σ: above the threshold's 3σ only where
+// the motion itself departs from the cubic at more than a tenth of its frames).
+constexpr double kRoughQuantile = 0.9, kRoughFactor = 2.0;
+// A window of L frames needs 1 + kRunShare·(L − 1) times a single frame's departure: a run predicted
+// across a gap is less certain than one frame (a fast stretch of motion departs from the cubic across
+// it too).
+constexpr double kRunShare = 0.5;
+// The prediction's noise gain for one frame inside evenly spaced frames, √(1 + 2·(1/6)² + 2·(2/3)²):
+// min_angle applies where the cubic interpolates (two nodes on each side), and grows with the gain
+// where it extrapolates near the clip's ends (a spike among the nodes throws it far off there).
+const double kInteriorGain = std::sqrt(35.0 / 18.0);
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
 std::string num(double x) {
@@ -174,6 +186,21 @@ struct Pentadiagonal {
             if (i + 2 < n) e2[i] /= d[i];
         }
     }
+    // The diagonal of the inverse, from the factors (Takahashi's recurrence for a band of two: the
+    // inverse Z = L⁻ᵀ·D⁻¹·L⁻¹ within the band, from the last row up).
+    std::vector<double> inverse_diagonal() const {
+        const std::size_t n = d.size();
+        std::vector<double> z(n);
+        double z11 = 0.0, z12 = 0.0, z22 = 0.0;  // Z at (i+1, i+1), (i+1, i+2), (i+2, i+2)
+        for (std::size_t i = n; i-- > 0;) {
+            const double l1 = i + 1 < n ? e1[i] : 0.0, l2 = i + 2 < n ? e2[i] : 0.0;
+            const double z01 = -(l1 * z11 + l2 * z12), z02 = -(l1 * z12 + l2 * z22);
+            const double z00 = 1.0 / d[i] - (l1 * z01 + l2 * z02);
+            z[i] = z00;
+            z22 = z11, z12 = z01, z11 = z00;
+        }
+        return z;
+    }
     // Solves in place (x holds the right-hand side), stride 3 (one component of Vec3 rows).
     void solve(double* x, std::size_t stride) const {
         const std::size_t n = d.size();
@@ -247,6 +274,14 @@ struct Smoother {
             }
             if (largest < 1e-10) break;
         }
+    }
+
+    // tr(S) of the linearized smoother S = (W + λ·AᵀMA)⁻¹·W: its degrees of freedom.
+    double degrees_of_freedom(double lambda, const std::vector<double>& w) const {
+        const std::vector<double> z = matrix(lambda, w).inverse_diagonal();
+        double df = 0.0;
+        for (std::size_t i = 0; i < n; ++i) df += z[i] * w[i];
+        return df;
     }
 
     double mean_square_deviation(const std::vector<Quat>& p, const std::vector<char>& bound) const {
@@ -346,46 +381,48 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
     if (options.max_run < 1) throw InvalidArgument("max_run: 0 (expected at least 1)");
     const std::size_t n = u.size(), runs = std::min(options.max_run, n - 2);
     std::vector<char> marked(n, 0);
-    // The motion's own departures around a window (frames kLocalGap to kLocalGap + kLocalSpan − 1 away
-    // on each side, beyond the neighbours a spike in the window moves), as a noise σ: where the
-    // captured motion itself turns faster than a cubic follows, it raises the threshold there.
+    // The clip's roughness (kRoughQuantile of the frames' scaled residuals): where the captured motion
+    // itself departs from the cubic at many frames, it raises the limit.
     const std::vector<double> residuals = scaled_residuals(in);
-    // And the motion's own speed there: the median angle between consecutive frames over the same
-    // frames; a departure below kSpeedShare of it is the motion turning, not a spike.
-    auto local_scales = [&](std::size_t first, std::size_t last, double& sigma, double& speed) {
-        std::vector<double> around, steps;
+    double rough = 0.0;
+    {
+        std::vector<double> r = residuals;
+        const auto at = r.begin() + static_cast<std::ptrdiff_t>(kRoughQuantile * static_cast<double>(r.size() - 1));
+        std::nth_element(r.begin(), at, r.end());
+        rough = kRoughFactor * *at;
+    }
+    // The motion's own speed around a window: the median angle between consecutive frames there; a
+    // departure below kSpeedShare of it is the motion turning, not a spike.
+    auto local_speed = [&](std::size_t first, std::size_t last) {
+        std::vector<double> steps;
         for (std::size_t k = 0; k < kLocalSpan; ++k) {
             const std::size_t before = kLocalGap + k, after = last + kLocalGap + k;
-            if (first >= before + 1) {
-                around.push_back(residuals[first - before - 1]);
-                steps.push_back(angle_between(u[first - before - 1], u[first - before]));
-            }
-            if (after + 1 < n) {
-                around.push_back(residuals[after - 1]);
-                steps.push_back(angle_between(u[after], u[after + 1]));
-            }
+            if (first >= before + 1) steps.push_back(angle_between(u[first - before - 1], u[first - before]));
+            if (after + 1 < n) steps.push_back(angle_between(u[after], u[after + 1]));
         }
-        sigma = noise_of(std::move(around));
-        speed = median_of(std::move(steps));
+        return median_of(std::move(steps));
     };
 
-    // The window's score: the smallest over its frames of departure / max(threshold·σ·g, min_angle);
-    // negative when the window cannot be marked.
+    // The window's score: the smallest over its frames of departure / max((1 + kRunShare·(L − 1))·
+    // max(threshold·σ·g, roughness·g, local speed), min_angle (× g/g₀ where the cubic extrapolates)),
+    // L the window's length; negative when the window cannot be marked.
     auto score = [&](std::size_t first, std::size_t length) {
         const std::size_t last = first + length - 1;
         for (std::size_t i = first; i <= last; ++i)
             if (marked[i]) return -1.0;
         Nodes nodes;
         if (!find_nodes(marked, first, last, runs, nodes)) return -1.0;
-        double local = 0.0, speed = 0.0;
-        local_scales(first, last, local, speed);
+        const double speed = local_speed(first, last);
+        const double run = 1.0 + kRunShare * static_cast<double>(length - 1);
+        // Two nodes on each side: the cubic interpolates (else it extrapolates, at the clip's ends).
+        const bool inside = nodes.count == 4 && nodes.index[1] < first && nodes.index[2] > last;
         double s = std::numeric_limits<double>::infinity();
         for (std::size_t i = first; i <= last; ++i) {
             double gain;
             const Quat p = predict(in.tau, u, nodes, in.tau[i], gain);
-            const double sigma = std::max(noise, local);
-            const double limit =
-                std::max({options.threshold * sigma * gain, options.min_angle, kSpeedShare * speed, 1e-300});
+            const double limit = std::max(
+                {run * std::max({options.threshold * noise * gain, rough * gain, kSpeedShare * speed}),
+                 options.min_angle * (inside ? 1.0 : std::max(1.0, gain / kInteriorGain)), 1e-300});
             s = std::min(s, angle_between(p, u[i]) / limit);
         }
         return s;
@@ -401,26 +438,46 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
         const double value = score(first, length);
         if (value > 1.0) queue.emplace(value, first, length, s);
     };
-    for (std::size_t first = 0; first < n; ++first)
-        for (std::size_t length = 1; length <= runs; ++length) rescore(first, length);
-    while (!queue.empty()) {
-        const Entry top = queue.top();
-        queue.pop();
-        const std::size_t first = std::get<1>(top), length = std::get<2>(top);
-        if (stamp[first * runs + length - 1] != std::get<3>(top)) continue;
-        const std::size_t last = first + length - 1;
-        for (std::size_t i = first; i <= last; ++i) marked[i] = 1;
-        // Windows whose neighbours or run may include the marked frames: from max_run before the third
-        // unmarked frame on the left to the third unmarked frame on the right.
-        std::size_t lo = first, hi = last, seen = 0;
-        while (lo > 0 && seen < 3)
-            if (!marked[--lo]) ++seen;
-        seen = 0;
-        while (hi + 1 < n && seen < 3)
-            if (!marked[++hi]) ++seen;
-        lo = lo >= runs ? lo - runs : 0;
-        for (std::size_t a = lo; a <= hi; ++a)
-            for (std::size_t len = 1; len <= runs; ++len) rescore(a, len);
+    auto search = [&] {
+        for (std::size_t first = 0; first < n; ++first)
+            for (std::size_t length = 1; length <= runs; ++length) rescore(first, length);
+        while (!queue.empty()) {
+            const Entry top = queue.top();
+            queue.pop();
+            const std::size_t first = std::get<1>(top), length = std::get<2>(top);
+            if (stamp[first * runs + length - 1] != std::get<3>(top)) continue;
+            const std::size_t last = first + length - 1;
+            for (std::size_t i = first; i <= last; ++i) marked[i] = 1;
+            // Windows whose neighbours or run may include the marked frames: from max_run before the
+            // third unmarked frame on the left to the third unmarked frame on the right.
+            std::size_t lo = first, hi = last, seen = 0;
+            while (lo > 0 && seen < 3)
+                if (!marked[--lo]) ++seen;
+            seen = 0;
+            while (hi + 1 < n && seen < 3)
+                if (!marked[++hi]) ++seen;
+            lo = lo >= runs ? lo - runs : 0;
+            for (std::size_t a = lo; a <= hi; ++a)
+                for (std::size_t len = 1; len <= runs; ++len) rescore(a, len);
+        }
+    };
+    // A frame marked while a spike not yet marked spoiled its prediction (an extrapolation at the
+    // clip's ends through a spike, say) is no spike once that one is marked: each marked frame is
+    // scored again alone with every other mark in place and unmarked below the limit; the search then
+    // runs again on what is left, until nothing changes.
+    for (int round = 0; round < 8; ++round) {
+        search();
+        bool pruned = false;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!marked[i]) continue;
+            marked[i] = 0;
+            if (score(i, 1) > 1.0) {
+                marked[i] = 1;
+            } else {
+                pruned = true;
+            }
+        }
+        if (!pruned) break;
     }
 
     Spikes out;
@@ -483,28 +540,36 @@ Smoothed smooth_rotations(const std::vector<double>& times, const std::vector<Qu
     if (options.smoothness) {
         out.smoothness = *options.smoothness;
     } else {
-        // Discrepancy principle: the λ whose mean squared deviation over the bound frames is noise²,
-        // by bisection on log λ (the deviation grows with λ).
+        // Stein's unbiased risk estimate of the mean squared angle to the truth over the bound frames,
+        // for white noise of RMS angle σ: (Σ dev² + 2·σ²·tr(S))/m − σ², minimized over log λ (a grid
+        // of decades over [10⁻³, 10¹⁰], then golden section around the best to 0.01).
         const double noise = options.noise ? *options.noise : estimate_rotation_noise(times, u);
-        const double target = noise * noise;
-        double lo = -3.0, hi = 10.0;
-        smoother.solve(std::pow(10.0, hi), w, p);
-        if (smoother.mean_square_deviation(p, bound) <= target) {
-            lo = hi;
-        } else {
-            p = u;
-            smoother.solve(std::pow(10.0, lo), w, p);
-            if (smoother.mean_square_deviation(p, bound) >= target) {
-                hi = lo;
+        const double sigma2 = noise * noise;
+        const double m = static_cast<double>(std::count(bound.begin(), bound.end(), 1));
+        auto risk = [&](double log_lambda) {
+            const double lambda = std::pow(10.0, log_lambda);
+            smoother.solve(lambda, w, p);
+            return smoother.mean_square_deviation(p, bound) +
+                   2.0 * sigma2 * smoother.degrees_of_freedom(lambda, w) / m;
+        };
+        double best = 10.0, best_risk = std::numeric_limits<double>::infinity();
+        for (double x = 10.0; x >= -3.0; x -= 1.0) {
+            const double r = risk(x);
+            if (r < best_risk) best_risk = r, best = x;
+        }
+        const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+        double a = std::max(-3.0, best - 1.0), b = std::min(10.0, best + 1.0);
+        double c = b - golden * (b - a), d = a + golden * (b - a);
+        double rc = risk(c), rd = risk(d);
+        while (b - a > 0.01) {
+            if (rc < rd) {
+                b = d, d = c, rd = rc, c = b - golden * (b - a), rc = risk(c);
             } else {
-                while (hi - lo > 0.01) {  // λ within 2.3%
-                    const double mid = 0.5 * (lo + hi);
-                    smoother.solve(std::pow(10.0, mid), w, p);
-                    (smoother.mean_square_deviation(p, bound) < target ? lo : hi) = mid;
-                }
+                a = c, c = d, rc = rd, d = a + golden * (b - a), rd = risk(d);
             }
         }
-        out.smoothness = std::pow(10.0, 0.5 * (lo + hi));
+        const double x = 0.5 * (a + b);
+        out.smoothness = std::pow(10.0, risk(x) <= best_risk ? x : best);
     }
 
     // The bound: raise the weights of the frames beyond 0.98·deviation until every bound frame is

@@ -65,14 +65,15 @@ double estimate_rotation_noise(const std::vector<double>& times, const std::vect
 // ---- 3. spikes -----------------------------------------------------------------------------------
 struct SpikeOptions {
     // A frame is a spike when it departs from its neighbours' prediction by more than
-    // max(threshold·σ·g, min_angle), g the prediction's noise gain (below). For white noise a
-    // clean frame's departure exceeds 4·σ·g with probability about 2e-10.
-    double threshold = 4.0;
+    // threshold·σ·g (and the motion's own scales, below), g the prediction's noise gain. For white
+    // noise a clean frame's departure exceeds 3·σ·g with probability about 6e-6.
+    double threshold = 3.0;
     // Longest run of consecutive spike frames (≥ 1): a run is predicted across from its neighbours.
     std::size_t max_run = 3;
-    // Departures below this are never spikes, however low the noise (1°: a noise-free or keyed clip's
-    // corners are not spikes).
-    double min_angle = 0.017453292519943295;
+    // Departures below this are never spikes, however low the noise (9°: the motion's own one-frame
+    // events — a foot's flick at a plant — depart from the cubic by up to 8.1° in the shared
+    // 30–120 fps capture without noise; smaller spikes are left to the smoother's bound).
+    double min_angle = 0.15707963267948966;
 };
 
 struct Spikes {
@@ -94,14 +95,24 @@ struct Spikes {
 // rotation about a fixed axis the prediction is the slerp of the neighbours.
 //
 // Where the captured motion itself turns faster than a cubic through its neighbours follows (a
-// jerky stretch of a clip, a foot's plant), the motion raises the threshold there: σ is the larger
-// of the clip's noise and the local noise (the same estimate over the ten frames 3 to 7 frames
-// before and after the window, beyond the neighbours a spike in it moves), and a departure must also
-// exceed the motion's own speed there (the median angle between consecutive frames of those
-// frames): a reversal at 8°/frame departs 5.3° from the cubic and is not a spike.
+// jerky stretch of a clip, a foot's plant), the motion raises the limit. A departure must exceed,
+// besides threshold·σ·g:
+// - 2·Q₉₀·g, Q₉₀ the 90th percentile over the clip of the frames' |r_i|/g_i (the residuals of
+//   estimate_rotation_noise): for white noise 2.9σ·g, more where the motion departs from the cubic
+//   at more than a tenth of its frames;
+// - the motion's own speed there (the median angle between consecutive frames over the ten frames
+//   3 to 7 frames before and after the window, beyond the neighbours a spike in it moves): a
+//   reversal at 8°/frame departs 5.3° from the cubic and is not a spike.
+// A run of L frames needs 1 + (L − 1)/2 times those: predicted across a gap, it is less sure. And
+// every departure must exceed min_angle, times g/g₀ where the cubic extrapolates (fewer than two
+// nodes on a side, at the clip's ends; g₀ = 1.39 the gain inside the clip).
+//
+// After the search, every marked frame is scored again alone with the other marks in place and
+// unmarked below its limit (a frame marked while a spike among its nodes threw its prediction off),
+// and the search runs again on what is left, until nothing changes.
 //
 // Search: every window of 1..max_run unmarked frames is scored by the smallest over its frames of
-// departure / max(threshold·σ·g, min_angle, local speed); the best window above 1 is marked, the windows near it
+// departure / limit; the best window above 1 is marked, the windows near it
 // scored again (the spike no longer predicts its neighbours), until none is above 1. A window is
 // only marked if the run of marked frames it joins stays within max_run. The departures returned
 // are those from the final prediction (the curve replace_spikes puts there).
@@ -116,8 +127,12 @@ std::vector<Quat> replace_spikes(const std::vector<double>& times, const std::ve
 
 // ---- 4. smoothing within a deviation bound --------------------------------------------------------
 struct SmoothOptions {
-    // λ of the smoother (below); none: chosen so that the mean squared deviation from the bound
-    // frames equals noise² (Morozov's discrepancy principle), searched over [1e-3, 1e10].
+    // λ of the smoother (below); none: the λ in [1e-3, 1e10] that minimizes Stein's unbiased estimate
+    // of the mean squared angle to the truth over the bound frames for white noise of RMS angle σ,
+    //     SURE(λ) = (Σ_i dev_i² + 2·σ²·tr S_λ)/m − σ²,
+    // dev_i the angle to the input, m the bound frames, S_λ = (W + λ·AᵀMA)⁻¹·W the linearized
+    // smoother (its diagonal from the L·D·Lᵀ factors); a grid of decades, then golden section to 0.01
+    // in log₁₀ λ.
     std::optional<double> smoothness;
     // σ for the automatic λ (radians); none: estimate_rotation_noise of q (when smoothness is not
     // given).
@@ -156,7 +171,7 @@ struct CleanOptions {
     bool spikes = true;               // find and replace spikes
     SpikeOptions spike;
     bool smooth = true;               // smooth within the deviation
-    std::optional<double> smoothness; // λ; none: the discrepancy principle
+    std::optional<double> smoothness; // λ; none: by the risk estimate (SmoothOptions::smoothness)
 };
 
 struct CleanResult {
