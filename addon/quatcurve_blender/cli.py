@@ -157,21 +157,24 @@ def add_task_arguments(p):
                    help="the bound: ANGLE (default: each target's rotation within --tolerance) or DISTANCE "
                         "(per armature, every bone's tail and the points at --shell along its axes within "
                         "--distance in the armature's space). On a bake (not --reduce): DISTANCE bakes dense, "
-                        "then reduces the baked keys so, against the dense bake")
+                        "then reduces the baked keys so, against the dense bake. --clean: the same bound "
+                        "instead of --deviation, at every frame that is not a spike")
     g.add_argument("--distance", type=float, default=0.0, metavar="LENGTH",
                    help="--error DISTANCE: how far a tail or shell point may move, in scene units (default 0: "
-                        "1 mm in real size)")
+                        "1 mm in real size; --clean: the noise's reach, 2.5 × a bone's noise angle × how far "
+                        "its vertices and its children's reach, the largest over the bones)")
     g.add_argument("--shell", type=float, default=0.0, metavar="LENGTH",
                    help="--error DISTANCE: the shell points' distance from each bone's head, in scene units "
                         "(default 0: 10 cm in real size)")
 
     g = p.add_argument_group("clean", "Instead of baking (the quatcurve.clean operator): the targets' captured "
                                       "rotations cleaned on the sphere of rotations — sign flips removed, spikes "
-                                      "replaced, jitter smoothed within --deviation of every other frame — into a "
-                                      "new action (docs/clean.md).")
+                                      "replaced, jitter smoothed within --deviation of every other frame (or with "
+                                      "--error DISTANCE every virtual vertex within --distance) — into a new action "
+                                      "(docs/clean.md).")
     g.add_argument("--clean", action="store_true",
-                   help="clean instead of bake; uses --deviation, --keep-spikes, --clean-reduce (with "
-                        "--tolerance, default 0.1°) and --no-new-action")
+                   help="clean instead of bake; uses --deviation (or --error DISTANCE, --distance, --shell), "
+                        "--keep-spikes, --clean-reduce (with --tolerance, default 0.1°) and --no-new-action")
     g.add_argument("--deviation", type=float, default=0.0, metavar="DEG",
                    help="--clean: how far the cleaned rotation may stray from each frame that is not a spike, "
                         "in degrees (default 0: 2.5 times the clip's estimated noise, target by target)")
@@ -348,14 +351,19 @@ def reduce_settings(args):
 def clean_settings(args):
     """CleanSettings from the arguments (the operator's defaults where not given), checked by clean's
     own check; options of other operations are a UsageError."""
-    refuse_options(args, NOT_FOR_REDUCE + REDUCE_ONLY,
+    refuse_options(args, NOT_FOR_REDUCE + REDUCE_KEYS_ONLY,
                    "not an option of --clean (it cleans the keys as Blender plays them, in their own modes)")
     if args.tolerance is not None and not args.clean_reduce:
         raise UsageError("--tolerance: an option of --clean only with --clean-reduce (the reduction's bound)")
+    if args.reduce_error == "ANGLE" and (args.distance or args.shell):
+        raise UsageError("--distance, --shell: options of --error DISTANCE")
+    if args.reduce_error == "DISTANCE" and args.deviation:
+        raise UsageError("--deviation: not an option of --clean --error DISTANCE (its bound is --distance)")
     defaults = clean.CleanSettings()
     settings = clean.CleanSettings(
         deviation=args.deviation, spikes=args.clean_spikes, reduce=args.clean_reduce,
-        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance, new_action=args.new_action)
+        tolerance=defaults.tolerance if args.tolerance is None else args.tolerance, new_action=args.new_action,
+        error=args.reduce_error, distance=args.distance, shell=args.shell)
     try:
         clean.check_settings(settings)
     except clean.CleanError as error:
@@ -800,20 +808,30 @@ class CleanTask(Task):
 
     def apply(self, chosen, source, output):
         settings = self.settings
-        bound = "deviation %s" % ("%g°" % settings.deviation if settings.deviation else "2.5 × noise")
+        result = clean.clean(chosen, settings)
+        if settings.error == "DISTANCE":
+            bound = "distance %s%s, shell %s" % (result.length(result.distance), "" if settings.distance else
+                                                 " (the noise's reach)", result.length(result.shell))
+        else:
+            bound = "deviation %s" % ("%g°" % settings.deviation if settings.deviation else "2.5 × noise")
         if settings.reduce:
             bound += ", reduced within %g°" % settings.tolerance
-        return self.report(clean.clean(chosen, settings), "quatcurve_clean", "clean, " + bound, source, output)
+        return self.report(result, "quatcurve_clean", "clean, " + bound, source, output)
 
     def outcome(self, result):
-        # The error: the largest deviation from a frame that is not a spike (plus the reduction's bound).
+        # The error: the largest deviation from a frame that is not a spike (plus the reduction's bound);
+        # under DISTANCE the worst virtual-vertex distance there, and the bound in the record.
+        figures = {"spike_frames": result.spike_frames, "flips": sum(t.flips for t in result.targets),
+                   "noise_deg": round(max([t.noise_deg for t in result.targets] or [0.0]), 6)}
+        keys = (sum(t.keys_before for t in result.targets), sum(t.keys_after for t in result.targets))
+        if result.distance is not None:
+            figures.update(distance=float("%.9g" % result.distance), shell=float("%.9g" % result.shell))
+            return Outcome([t.name for t in result.targets], *keys, None, max_distance=result.worst_distance,
+                           clean=figures)
         worst = max([t.max_deviation_deg for t in result.targets] or [0.0])
         if result.settings.reduce:
             worst += result.settings.tolerance
-        return Outcome([t.name for t in result.targets], sum(t.keys_before for t in result.targets),
-                       sum(t.keys_after for t in result.targets), worst,
-                       clean={"spike_frames": result.spike_frames, "flips": sum(t.flips for t in result.targets),
-                              "noise_deg": round(max([t.noise_deg for t in result.targets] or [0.0]), 6)})
+        return Outcome([t.name for t in result.targets], *keys, worst, clean=figures)
 
 
 class ConvertTask(Task):

@@ -242,6 +242,22 @@ Quaternions (w, x, y, z); lengths in scene units; docs/reduce.md, "Distance boun
             py::arg("a"), py::arg("b"), py::arg("shell"),
             "VertexError of two motions, each (locations, rotations, scales) as pose() takes them.")
         .def(
+            "vertex_distances",
+            [](const Skeleton& sk, py::handle a, py::handle b, double shell) {
+                const SkeletonPose pa = read_motion(sk, a, "a"), pb = read_motion(sk, b, "b");
+                std::vector<double> d;
+                {
+                    py::gil_scoped_release release;
+                    d = virtual_vertex_distances(sk, pa, pb, shell);
+                }
+                DArray out({static_cast<py::ssize_t>(sk.size()), static_cast<py::ssize_t>(pa.samples)});
+                std::copy(d.begin(), d.end(), out.mutable_data());
+                return out;
+            },
+            py::arg("a"), py::arg("b"), py::arg("shell"),
+            "(B, N): per bone and sample the largest distance between the same virtual vertex of motions a and "
+            "b (each (locations, rotations, scales) as pose() takes them); vertex_error is its maximum.")
+        .def(
             "dominant_shell_budgets",
             [](const Skeleton& sk, py::handle pose, double distance, double shell) {
                 std::size_t n = 0;

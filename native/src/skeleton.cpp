@@ -255,4 +255,25 @@ VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a
     return e;
 }
 
+std::vector<double> virtual_vertex_distances(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
+                                             double shell) {
+    detail::check_shell(shell);
+    if (a.samples != b.samples)
+        throw InvalidArgument("b: " + std::to_string(b.samples) + " samples, a has " + std::to_string(a.samples));
+    check_skeleton(skeleton);
+    check_pose(skeleton, a, "a");
+    check_pose(skeleton, b, "b");
+    const std::vector<Vec3> va = virtual_vertices(skeleton, pose_matrices(skeleton, a), a.samples, shell);
+    const std::vector<Vec3> vb = virtual_vertices(skeleton, pose_matrices(skeleton, b), b.samples, shell);
+    std::vector<double> out(skeleton.size() * a.samples, 0.0);
+    for (std::size_t k = 0; k < out.size(); ++k)
+        for (int v = 0; v < kVirtualVertices; ++v) {
+            const double d = glm::length(va[k * kVirtualVertices + v] - vb[k * kVirtualVertices + v]);
+            if (!std::isfinite(d))
+                throw InvalidArgument("b: its distance from a overflows double precision (the input is too large)");
+            out[k] = std::max(out[k], d);
+        }
+    return out;
+}
+
 }  // namespace quatcurve

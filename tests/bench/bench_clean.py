@@ -18,6 +18,12 @@ Columns: the angle to the truth over every bone and frame (RMS, 99th percentile,
 further than 3 × the noise from the truth, jitter (the RMS of the angular acceleration, per frame²,
 against the truth's own), and seconds. Goal (issue 36): quatcurve's RMS at most half the noisy
 input's and below the best filter's, no frame beyond 3 × the noise.
+A second table per clip and noise level: the distance at the virtual vertices (reduce's, with its
+default 10 cm shell: each bone's tail and shell points in the armature's space, at a unit scale of
+0.01 since the clips are in centimetres), RMS and max over bones and frames of each bone's farthest
+vertex from the truth's, for the noisy input, the best Blender filter, quatcurve's clean and
+quatcurve's clean with error='DISTANCE' at its default (the noise's reach; its bound and its worst
+distance from the noisy input at the frames that are not spikes).
 
   ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_clean.py
   blender -b --factory-startup --python tests/bench/bench_clean.py
@@ -42,13 +48,14 @@ sys.path.insert(0, HERE)
 
 import smoke  # noqa: E402
 from bench_reduce_blender import first_frames, fresh_copy, graph_operator, import_clip, rotation_curves  # noqa: E402
-from quatcurve_blender import clean, fcurves, native, plot, targets  # noqa: E402
+from quatcurve_blender import clean, fcurves, native, plot, reduce, skeleton, targets  # noqa: E402
 
 CLIPS = ("mocapbank.bvh", "freebvh.bvh")
 MOCAP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap"))
 NOISE_DEG = (0.5,) if smoke.SMOKE else (0.5, 2.0)
 SMOKE_FRAMES = 120
 SPIKE_EVERY, FLIP_EVERY = 200, 50
+SCALE = 0.01  # scene unit scale: the clips are in centimetres (as bench_reduce_distance_blender)
 if smoke.SMOKE:
     GAUSS = [(1.0, 4)]
     BUTTER = [(3.0, 4)]
@@ -128,6 +135,24 @@ def figures(result, truth, noise_deg):
                 max=float(errors.max()), beyond=int((errors > 3 * noise_deg).sum()), jitter=math.degrees(jit))
 
 
+def vertex_figures(read, played_by):
+    """{name: (RMS, max)} in millimetres over bones and frames of each bone's farthest virtual vertex
+    (Skeleton.vertex_distances, the default shell) from the truth's pose — read: the armature as
+    skeleton.read_armature reads the truth; played_by {name: {bone: (N, 4)}}, bones not there kept
+    as the truth."""
+    qc = native.require()
+    sk = read.skeleton()
+    truth = np.array([qc.channels_to_quats(v, mode) for mode, v in read.rotations])
+    shell = reduce.DEFAULT_SHELL / SCALE
+    out = {}
+    for name, quats in played_by.items():
+        rotations = np.array([quats.get(bone, truth[b]) for b, bone in enumerate(read.names)])
+        d = sk.vertex_distances((read.locations, truth, read.scales), (read.locations, rotations, read.scales), shell)
+        mm = d * SCALE * 1000.0
+        out[name] = (float(np.sqrt(np.mean(mm ** 2))), float(mm.max()))
+    return out
+
+
 def has_graph_operator(name):
     """Whether this Blender has bpy.ops.graph.<name> (bpy.ops answers any name until it is called)."""
     try:
@@ -185,11 +210,14 @@ def draw_picture(path, clip, bone, frames, truth, noise_deg, played_by):
 def bench_clip(path, folder, picture=None):
     clip = first_frames(path, SMOKE_FRAMES, folder) if smoke.SMOKE else path
     arm, original = import_clip(clip)
+    bpy.context.scene.unit_settings.scale_length = SCALE
     original.use_fake_user = True
     curves = rotation_curves(arm, original)
     frames = fcurves.key_frames(curves[next(iter(curves))])
     truth = {name: np.stack([fcurves.read_keys(f)[1] for f in fc], axis=1) for name, fc in curves.items()}
     truth = {name: q / np.linalg.norm(q, axis=1, keepdims=True) for name, q in truth.items()}
+    truth_read = skeleton.read_armature(arm, [])
+    assert np.array_equal(truth_read.frames, frames), "the skeleton's frames are not the keys'"
     print("\nBlender %s, %s: %d frames, %d bones" % (bpy.app.version_string, os.path.basename(path), len(frames),
                                                   len(truth)))
     for k, noise_deg in enumerate(NOISE_DEG):
@@ -234,6 +262,28 @@ def bench_clip(path, folder, picture=None):
         ours = rows[1][1]
         print("    quatcurve / noisy RMS %.2f (goal <= 0.5), / best Blender filter %.2f (goal < 1); frames beyond 3σ: %d"
               % (ours["rms"] / rows[0][1]["rms"], ours["rms"] / best_blender, ours["beyond"]))
+        # the distance at the virtual vertices; quatcurve under error='DISTANCE' at its default
+        fcurves.assign_action(arm, noisy_action)
+        begin = time.perf_counter()
+        by_distance = clean.clean([targets.Target(arm, name) for name in sorted(truth)],
+                                  clean.CleanSettings(error="DISTANCE"))
+        distance_seconds = time.perf_counter() - begin
+        distance_action = fcurves.active_action(arm)
+        distance_played = played(arm, distance_action, frames, sorted(truth))
+        best = min(rows[2:], key=lambda r: r[1]["rms"])
+        vertex_rows = [("noisy input", rows[0][3], rows[0][1]), (best[0], best[3], best[1]),
+                       ("quatcurve clean", rows[1][3], rows[1][1]),
+                       ("quatcurve clean, error DISTANCE", distance_played,
+                        figures(distance_played, truth, noise_deg))]
+        vertex = vertex_figures(truth_read, {name: quats for name, quats, _ in vertex_rows})
+        print("    virtual vertices (shell 10 cm) against the truth; DISTANCE: bound %.2f mm (the noise's reach), "
+              "%.2f mm from the noisy input at its frames that are not spikes, %.2f s" % (
+                  by_distance.distance * SCALE * 1000, by_distance.worst_distance * SCALE * 1000, distance_seconds))
+        print("    %-40s %8s %8s %8s %8s" % ("method", "RMS mm", "max mm", "RMS °", "max °"))
+        for name, _, fig in vertex_rows:
+            print("    %-40s %8.2f %8.1f %8.3f %8.2f" % (name, *vertex[name], fig["rms"], fig["max"]))
+        fcurves.assign_action(arm, noisy_action)
+        fcurves.remove_action(distance_action)
         if picture and k == len(NOISE_DEG) - 1:
             bone = max(spikes.items(), key=lambda item: item[1])[0][0]
             best = min(rows[2:], key=lambda r: r[1]["rms"])

@@ -457,3 +457,18 @@ def test_clean_records_its_figures(library, tmp_path):
         assert figures["spike_frames"] >= 0 and figures["flips"] >= 0 and figures["noise_deg"] >= 0, record
         assert record["max_error_deg"] <= 2.5 * figures["noise_deg"] + 1e-5, record
     assert records["shots/a.blend"]["clean"]["spike_frames"] == 0  # keyed straight segments: no spike
+
+
+def test_clean_distance_records_the_bound(library, tmp_path):
+    """--clean --error DISTANCE in a batch: the record's clean figures carry the bound and the shell
+    (scene units), max_distance the worst virtual-vertex distance within it, max_error_deg null."""
+    out = tmp_path / "cleaned"
+    proc = run_batch(["--clean", "--error", "DISTANCE", "--distance", "0.5", "--jobs", "1", "--output", out,
+                      library / "clips" / "walk.bvh", library / "shots" / "a.blend"])
+    assert proc.returncode == 0, (proc.stdout, proc.stderr)
+    records, _ = read_results(out)
+    assert sorted(records) == ["clips/walk.bvh", "shots/a.blend"]
+    for record in records.values():
+        assert record["status"] == "done" and record["max_error_deg"] is None, record
+        assert record["clean"]["distance"] == 0.5 and record["clean"]["shell"] > 0, record
+        assert 0 <= record["max_distance"] <= 0.5, record

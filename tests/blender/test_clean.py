@@ -4,7 +4,10 @@ in every supported Blender.
 
 The capture is synthetic with a known truth (a smooth motion), so the clean can be held against it:
 rotation noise of 1° RMS by a fixed seed, planted spikes of 15°–25°, quaternion sign flips every 50
-frames, and Euler rows written on the other Euler branch or a turn away.
+frames, and Euler rows written on the other Euler branch or a turn away. Under error='DISTANCE' the
+capture is the Rigify-like chain of rigs.py (every rotation mode, Inherit Rotation off, inherit scale
+None, connected bones) with the same noise and spikes on every bone, and the bound is held on the
+virtual vertices of the armature Blender itself poses (pose_bone.matrix) in a fresh Blender.
 """
 
 import math
@@ -13,9 +16,11 @@ import bpy
 import numpy as np
 import pytest
 
-from quatcurve_blender import clean, fcurves, native, targets
+from quatcurve_blender import clean, fcurves, native, reduce, skeleton, targets
 from test_fit import fresh_blender_quats
 from test_reduce import keyed_object
+from test_reduce_distance import posed, vertices
+import rigs
 
 FRAMES = np.arange(1.0, 401.0)
 NOISE_DEG = 1.0
@@ -222,3 +227,88 @@ def test_refusals_name_the_target_and_change_nothing(cleaner):
     select_only()
     with pytest.raises(RuntimeError, match="Nothing to clean"):
         bpy.ops.quatcurve.clean()
+
+
+def noisy_chain():
+    """rigs.build_chain_rig at FRAMES, every bone's rotation replaced by LINEAR keys of its smooth
+    motion with noise and spikes (noisy_capture, a seed per bone; no sign flips), in the bone's own
+    mode. Returns (rig, the truth {bone: (N, 4)}, the capture {bone: (N, 4)})."""
+    rig = rigs.build_chain_rig(frames=len(FRAMES))
+    qc = native.require()
+    read = skeleton.read_armature(rig, [b.name for b in rig.data.bones])
+    channels = fcurves.Channels.of(rig)
+    truth, captured = {}, {}
+    for k, (target, (mode, values), prop) in enumerate(zip(read.targets, read.rotations, read.props)):
+        truth[target.bone] = qc.channels_to_quats(values, mode)
+        captured[target.bone] = noisy_capture(truth[target.bone], 40 + k, flips=False)
+        rows = qc.quats_to_channels(captured[target.bone], mode, reference=values[0])
+        for i in range(rows.shape[1]):
+            fcurves.write_keys(channels.find(target.data_path(prop), i), read.frames, rows[:, i], "LINEAR")
+    return rig, truth, captured
+
+
+def test_distance_bound_holds_on_blenders_pose_in_a_fresh_blender(cleaner, tmp_path):
+    """error='DISTANCE' on a noisy chain (every rotation mode): a fresh Blender poses the cleaned
+    action with every virtual vertex (reduce's: tail and shell points, armature space) within the
+    reported bound of the captured pose's at every frame that is not a spike of the bone or a parent,
+    measured from Blender's own pose_bone.matrix; the planted spikes are replaced; the clean gets
+    closer to the truth than the capture; with the default distance (0: the noise's reach) and an
+    explicit one."""
+    rig, truth, captured = noisy_chain()
+    original = fcurves.active_action(rig)
+    shell = 0.1
+    before = posed(rig, FRAMES, tmp_path, "captured")
+    bones = [b.name for b in rig.data.bones]
+    parents = {b.name: b.parent.name if b.parent else None for b in rig.data.bones}
+    for distance in (0.0, 0.004):
+        fcurves.assign_action(rig, original)
+        result = clean.clean([targets.Target(rig, name) for name in bones],
+                             clean.CleanSettings(error="DISTANCE", distance=distance, shell=shell))
+        print("\n" + "\n".join(result.lines()) + "\n" + result.summary())
+        blend = tmp_path / "cleaned.blend"
+        bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+        played, matrices = fresh_blender_quats(blend, [[rig.name, b] for b in bones], FRAMES, tmp_path,
+                                               matrices=True)
+        spikes = {t.name.split("/", 1)[1]: {int(round(f)) - 1 for f in t.spikes} for t in result.targets}
+        assert all(set(SPIKES) <= found for found in spikes.values()), result.lines()
+        worst = 0.0
+        for bone in rig.data.bones:
+            skip, name = set(), bone.name
+            while name is not None:  # the spike frames of the bone and its parents: no bound there
+                skip |= spikes[name]
+                name = parents[name]
+            keep = np.ones(len(FRAMES), dtype=bool)
+            keep[sorted(skip)] = False
+            after = matrices["%s/%s" % (rig.name, bone.name)]
+            d = np.linalg.norm(vertices(after, bone.length, shell)
+                               - vertices(before[bone.name], bone.length, shell), axis=2).max(axis=1)[keep]
+            worst = max(worst, float(d.max()))
+            assert d.max() <= result.distance, "%s frame %s: %.6g above %.6g" % (
+                bone.name, FRAMES[keep][d.argmax()], d.max(), result.distance)
+        rms = [float(np.sqrt(np.mean(np.concatenate([angles_deg(q[b], truth[b]) for b in bones]) ** 2)))
+               for q in (captured, {b: played["%s/%s" % (rig.name, b)] for b in bones})]
+        print("Blender's worst distance %.6g, the result's %.6g, bound %.6g; RMS to the truth %.3f° → %.3f°" % (
+            worst, result.worst_distance, result.distance, *rms))
+        if distance:
+            assert result.distance == distance
+        assert result.shell == shell and "virtual vertices within" in result.summary()
+        assert worst == pytest.approx(result.worst_distance, rel=1e-3, abs=1e-6)
+        assert rms[1] < rms[0]
+
+
+def test_distance_refusals(cleaner):
+    """error='DISTANCE': a negative distance or shell, reduce on the way out, an unknown error, and
+    what reduce's distance bound refuses (a constraint on a bone), each naming the cause; nothing
+    written."""
+    rig, _, _ = noisy_chain()
+    found = [targets.Target(rig, b.name) for b in rig.data.bones]
+    for settings, match in ((clean.CleanSettings(error="DISTANCE", distance=-0.001), "distance -0.001"),
+                            (clean.CleanSettings(error="DISTANCE", shell=-1.0), "shell -1.0"),
+                            (clean.CleanSettings(error="DISTANCE", reduce=True), "reduce: its bound is an angle"),
+                            (clean.CleanSettings(error="LENGTH"), "error 'LENGTH'")):
+        with pytest.raises(clean.CleanError, match=match):
+            clean.clean(found, settings)
+    rig.pose.bones["hand.L"].constraints.new("COPY_ROTATION")
+    with pytest.raises(clean.CleanError, match="Chain/hand.L: constraint"):
+        clean.clean(found, clean.CleanSettings(error="DISTANCE"))
+    assert len(bpy.data.actions) == 1

@@ -295,6 +295,21 @@ def test_clean(addon, source_blend, tmp_path):
     assert digest(source_blend) == before and out.is_file()
 
 
+def test_clean_distance(addon, source_blend, tmp_path):
+    """--clean --error DISTANCE on Turn (an object: its three shell points, as --reduce does): the
+    bound and shell in the header, the worst distance in the total, reduce's unit text."""
+    out = tmp_path / "cleaned.blend"
+    proc = run_cli(["--clean", "--error", "DISTANCE", "--distance", "0.002", "--shell", "0.1", "--objects", "Turn",
+                    "--output", out, source_blend])
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert any("clean, distance 2 mm, shell 10 cm" in line for line in lines), proc.stdout
+    assert any(line.strip().startswith("Turn (XYZ): 21 frames, noise ") and "virtual vertices within" in line
+               for line in lines), proc.stdout
+    assert any(line.startswith("total: 1 target: no spikes") and "(bound 2 mm, shell 10 cm; Turn, frame" in line
+               for line in lines), proc.stdout
+
+
 @pytest.fixture(scope="module")
 def broken(addon, tmp_path_factory):
     return broken_files.make(str(tmp_path_factory.mktemp("broken")))
@@ -366,6 +381,14 @@ BAD_ARGUMENTS = [
     ("clean-tolerance", ["--clean", "--tolerance", "0.1", "--output", "{OUT}", "{IN}"], 2,
      "--tolerance: an option of --clean only with --clean-reduce"),
     ("clean-deviation", ["--clean", "--deviation", "-1", "--output", "{OUT}", "{IN}"], 2, "deviation -1.0°"),
+    ("clean-distance-deviation", ["--clean", "--error", "DISTANCE", "--deviation", "1", "--output", "{OUT}", "{IN}"],
+     2, "--deviation: not an option of --clean --error DISTANCE"),
+    ("clean-distance-angle", ["--clean", "--distance", "0.01", "--output", "{OUT}", "{IN}"], 2,
+     "--distance, --shell: options of --error DISTANCE"),
+    ("clean-distance-negative", ["--clean", "--error", "DISTANCE", "--distance", "-0.01", "--output", "{OUT}", "{IN}"],
+     2, "distance -0.01: must be a finite length"),
+    ("clean-distance-reduce", ["--clean", "--error", "DISTANCE", "--clean-reduce", "--output", "{OUT}", "{IN}"], 2,
+     "reduce: its bound is an angle"),
 ]
 
 

@@ -287,6 +287,15 @@ TEST(Skeleton, VertexErrorIsTheWorstDisplacementAndWhereItIs) {
     EXPECT_EQ(e.sample, 2u);
     EXPECT_EQ(e.per_bone[0], 0.0);
     EXPECT_NEAR(e.per_bone[1], 2 * 0.5 * std::sin(angle / 2), 1e-12);
+    // Per bone and sample: only sample 2 of bones 1 and 2 moves; their maxima are vertex_error's.
+    const std::vector<double> d = virtual_vertex_distances(sk, a, b, 0.1);
+    ASSERT_EQ(d.size(), 12u);
+    for (int bone = 0; bone < 3; ++bone)
+        for (int s = 0; s < 4; ++s)
+            if (bone == 0 || s != 2) EXPECT_EQ(d[bone * 4 + s], 0.0) << bone << " " << s;
+    EXPECT_EQ(d[1 * 4 + 2], e.per_bone[1]);
+    EXPECT_EQ(d[2 * 4 + 2], e.distance);
+    EXPECT_THROW(virtual_vertex_distances(sk, a, b, -1.0), InvalidArgument);
 }
 
 TEST(Skeleton, RefusesBadInputNamingIt) {

@@ -2463,10 +2463,10 @@ def build_skeleton(fn, d):
     rot = fill(rng, (bones, n, 4), level)
     scale = fill(rng, (bones, n, 3), level)
     shell = float(d.pick((0.1, 0.0, 1.0, -1.0, NAN), "shell"))
-    method = d.pick(("pose", "virtual_vertices", "vertex_error", "dominant_shell_budgets", "reduce", "reduce_slerp"),
-                    "method")
+    method = d.pick(("pose", "virtual_vertices", "vertex_error", "vertex_distances", "dominant_shell_budgets", "reduce",
+                     "reduce_slerp"), "method")
     finite_in = all(np.all(np.isfinite(a)) for a in (loc, rot, scale))
-    if method in ("pose", "vertex_error") and not finite_in:
+    if method in ("pose", "vertex_error", "vertex_distances") and not finite_in:
         must_fail = must_fail or "non-finite channels"
     if method != "pose" and not (shell >= 0):
         must_fail = must_fail or "bad shell"
@@ -2480,6 +2480,8 @@ def build_skeleton(fn, d):
             return sk.virtual_vertices(sk.pose(loc, rot, scale), shell)
         if method == "vertex_error":
             return sk.vertex_error((loc, rot, scale), (loc, rot[:, ::-1], scale), shell)
+        if method == "vertex_distances":
+            return sk.vertex_distances((loc, rot, scale), (loc, rot[:, ::-1], scale), shell)
         if method == "dominant_shell_budgets":
             return sk.dominant_shell_budgets(sk.pose(loc, rot, scale), distance, shell)
         m = min(n, 20)

@@ -92,6 +92,15 @@ def test_vertex_error_and_budgets():
     assert e.distance == pytest.approx(2 * 1.5 * np.sin(0.005), abs=1e-12)
     budgets = sk.dominant_shell_budgets(sk.pose(loc, a, scale), 0.001, 0.1)
     np.testing.assert_allclose(budgets, [0.001 / 1.5, 0.001 / 0.5])
+    # per bone and sample: only sample 1 moves, each bone's maximum over its four vertices
+    d = sk.vertex_distances((loc, a, scale), (loc, b, scale), 0.1)
+    assert d.shape == (2, 3)
+    assert d[:, [0, 2]].max() == 0.0
+    assert d.max() == e.distance and d[1, 1] == e.distance
+    np.testing.assert_allclose(d[:, 1], e.per_bone)
+    assert d[0, 1] == pytest.approx(2 * 1.0 * np.sin(0.005), abs=1e-12)
+    with pytest.raises(ValueError, match="shell"):
+        sk.vertex_distances((loc, a, scale), (loc, b, scale), -0.1)
 
 
 def test_reduce_keeps_the_distance():

@@ -99,6 +99,12 @@ struct VertexError {
 VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
                                  double shell);
 
+// The same distances, not reduced to their maximum: per bone and sample the largest of its four virtual
+// vertices' distances, [bone·samples + sample] (callers that leave some samples out of a bound, as the
+// clean leaves out its spike frames, take their maximum over the rest). Throws as virtual_vertex_error.
+std::vector<double> virtual_vertex_distances(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
+                                             double shell);
+
 // ---- key reduction under a distance bound ---------------------------------------------------------
 //
 // Per-bone angular budgets of ACL's dominant shells: budget_i = distance / R_i, where R_i is the
