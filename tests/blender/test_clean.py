@@ -20,6 +20,7 @@ from quatcurve_blender import clean, fcurves, native, reduce, skeleton, targets
 from test_fit import fresh_blender_quats
 from test_reduce import keyed_object
 from test_reduce_distance import posed, vertices
+from test_session import windowed
 import rigs
 
 FRAMES = np.arange(1.0, 401.0)
@@ -312,3 +313,13 @@ def test_distance_refusals(cleaner):
     with pytest.raises(clean.CleanError, match="Chain/hand.L: constraint"):
         clean.clean(found, clean.CleanSettings(error="DISTANCE"))
     assert len(bpy.data.actions) == 1
+
+
+def test_one_undo_takes_a_clean_back_in_a_window(tmp_path):
+    """In a Blender with a window (sessions/clean_undo_session.py): a clean into a new action and one in
+    place each change the file, and one ed.undo after each restores every action and the action played."""
+    verdict = windowed("clean_undo_session.py", tmp_path / "clean_undo.json")
+    for label, run in verdict["runs"].items():
+        assert run["result"] == ["FINISHED"], label
+        assert run["changed"], "%s: the clean changed nothing, so undo proves nothing" % label
+        assert run["restored"], (label, run["differences"])
