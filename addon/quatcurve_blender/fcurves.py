@@ -539,8 +539,9 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     (bpy_extras.anim_utils): they do not take part in these interpolations, are not drawn for them,
     and any edit in Blender recomputes them (they keep the AUTO_CLAMPED type) — or 'BEZIER' with
     `handle_left` and `handle_right` given as (N, 2) arrays of (frame, value), written as FREE
-    handles so Blender keeps them (the key-reduction path). `with_handles=True` places LINEAR keys'
-    handles on the straight segments (a third of the way to each neighbour) at some cost.
+    handles so Blender keeps them (the key-reduction path); or one identifier per key (the
+    reduction's keys copied from the original keep its interpolation). `with_handles=True` places
+    LINEAR keys' handles on the straight segments (a third of the way to each neighbour) at some cost.
 
     Increasing frames skip fcurve.update() (a sort and an automatic-handle pass, the largest cost of
     a dense write); otherwise update() sorts the keys."""
@@ -563,8 +564,12 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
             points.clear()
         points.add(n)
     points.foreach_set("co", packed.co)
-    kind = _enum_value(bpy.types.Keyframe, "interpolation", interpolation)
-    points.foreach_set("interpolation", np.full(n, kind, dtype=KEY_ENUM_DTYPE))
+    if isinstance(interpolation, str):
+        kinds = np.full(n, _enum_value(bpy.types.Keyframe, "interpolation", interpolation), dtype=KEY_ENUM_DTYPE)
+    else:
+        kinds = np.array([_enum_value(bpy.types.Keyframe, "interpolation", str(name)) for name in interpolation],
+                         dtype=KEY_ENUM_DTYPE)
+    points.foreach_set("interpolation", kinds)
     if reuse:
         for point in points:
             if point.handle_left_type != "FREE":

@@ -12,18 +12,23 @@ targets (targets.py: reading), the native reducer, and write.py (writing).
     print(result.summary())
 
 Samples: a target's rotation channels as Blender evaluates them at every whole frame of its keyed
-range and at every key frame. Quaternion samples are made hemisphere-continuous first (signs flipped
+range and at every key frame. Quaternion samples are reduced hemisphere-continuous (signs flipped
 where neighbours disagree: the same rotations, and no forced keys at the flips).
 
 The bound at every instant: when Blender's playback of the original keys can be emulated (every
 segment of the rotation channels LINEAR, or every one BEZIER; no NLA strips playing; constant
 extrapolation where a channel's keys end early), the native `quatcurve.reduce_keys_proved` reduces
 against that playback and proves the reduced keys within the tolerance of it at every instant from
-the first key to the last, not only at frames — except inside the frames where the original's own
-quaternion channels flip sign (Blender turns through the flip there, up to 360° inside one frame,
-while the reduction takes the short way); the result line names those frames' count. Otherwise the
-reduction holds at frames and keys (`reduce_values`) and the result line says why between frames is
-not proved.
+the first key to the last, not only at frames. Where the original's own quaternion keys flip sign
+(two neighbouring samples, or the two keys of a segment, in opposite hemispheres), Blender
+interpolates the four channels through near zero — a turn of up to 360° inside that segment — and
+the reduced keys play it exactly as the original does: they are the original's keys there, copied bit
+for bit (from the last frame before the flip where every channel has a key to the first after it:
+frames, values with their stored signs, the handles of those segments, the original's
+interpolation; FREE handles, so Blender keeps them), which is why they are within the bound there.
+The pieces between are reduced as above, each in the hemisphere of its own stored signs, ending on
+the copied keys (`TargetResult.copied` lists the spans). Otherwise the reduction holds at frames and
+keys (`reduce_values`) and the result line says why between frames is not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
 builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
 with modifiers are refused (the bound is for the keys alone), except a loop's (cycles.py): its period
@@ -96,19 +101,20 @@ def check_settings(settings):
 @dataclass
 class ReducedChannels:
     """Reduced keys of one target's rotation channels. keys[i] = (frames, values, handle_left,
-    handle_right) of channel i (handles (K, 2) for BEZIER, None for LINEAR); max_error in radians
-    (Blender's evaluation, emulated, against the samples).
+    handle_right) of channel i (handles (K, 2) where a key has a BEZIER segment, None otherwise);
+    max_error in radians (Blender's evaluation, emulated, against the samples).
 
     proof: the quatcurve.PlaybackBound of Blender's playback of the keys against the reference (the
     original keys' playback, or the bake's curve) at every instant from the first sample to the last
-    outside `excluded` — None when nothing was proved between frames (`between` then says why);
-    excluded: (M, 2) frame intervals left out of the proof (the original's own quaternion sign
-    flips)."""
+    — None when nothing was proved between frames (`between` then says why). copied: (M, 2) frame
+    spans [f0, f1] whose keys are the original's own, bit for bit, around its quaternion sign flips
+    (their segments keep the original's interpolation, `copied_interpolation`: key_interpolations)."""
     interpolation: str
     keys: list
     max_error: float
     proof: object = None
-    excluded: np.ndarray = None
+    copied: np.ndarray = None
+    copied_interpolation: str = ""
     between: str = ""
 
     @property
@@ -117,14 +123,29 @@ class ReducedChannels:
 
     @property
     def bound(self):
-        """Radians: Blender's playback stays within it at every instant (outside `excluded`), or None."""
+        """Radians: Blender's playback stays within it at every instant, or None."""
         return None if self.proof is None else self.proof.bound
+
+    @property
+    def key_interpolations(self):
+        """Per channel, each key's interpolation (the segment after it): the original's for a key in a
+        copied span [f0, f1), `interpolation` for the others — or None when every key has
+        `interpolation`."""
+        if self.copied is None or not len(self.copied) or self.copied_interpolation == self.interpolation:
+            return None
+        out = []
+        for frames, *_ in self.keys:
+            frames = np.asarray(frames)
+            inside = np.zeros(len(frames), dtype=bool)
+            for f0, f1 in self.copied:
+                inside |= (frames >= f0) & (frames < f1)
+            out.append(np.where(inside, self.copied_interpolation, self.interpolation))
+        return out
 
     def error_text(self, tolerance_deg):
         """The error for a result line: 'max error X° at every instant' (the proved bound), or where
-        the proof did not get within the tolerance the bound, what it found and where; with the count
-        of the original's sign-flip frames left out. Without a proof: 'max error X° at frames and
-        keys (between frames not proved: why)'."""
+        the proof did not get within the tolerance the bound, what it found and where. Without a
+        proof: 'max error X° at frames and keys (between frames not proved: why)'."""
         if self.proof is None:
             return "max error %.4f° at frames and keys (between frames not proved: %s)" % (
                 math.degrees(self.max_error), self.between)
@@ -138,24 +159,20 @@ class ReducedChannels:
             text = ("max error %.4f° at frames and keys; between frames within the tolerance except near "
                     "frame %s, where it is not proved (bounded by %.4f°)" % (
                         math.degrees(self.max_error), num(proof.worst_time), bound))
-        flips = 0 if self.excluded is None else len(self.excluded)
-        if flips:
-            text += (", except inside %d frame%s where the original's quaternion keys flip sign (Blender turns "
-                     "through the flip there, the reduction takes the short way)" % (flips, "" if flips == 1 else "s"))
         return text
 
 
-def _channels_of(result, interpolation):
-    bezier = interpolation == "BEZIER"
-    return [(ch.frames, ch.values, ch.handle_left if bezier else None, ch.handle_right if bezier else None)
+def _channels_of(result):
+    """(frames, values, handle_left, handle_right) per channel; handles None where the keys have none."""
+    return [(ch.frames, ch.values, *((ch.handle_left, ch.handle_right) if len(ch.handle_left) else (None, None)))
             for ch in result.channels]
 
 
 def _proved(proved, interpolation):
     """ReducedChannels of a quatcurve.ProvedKeys (tolerance 0 proves nothing between samples)."""
     proof = proved.proof if math.isfinite(proved.proof.bound) else None
-    return ReducedChannels(interpolation, _channels_of(proved.keys, interpolation), proved.keys.max_error,
-                           proof=proof, excluded=proved.excluded,
+    return ReducedChannels(interpolation, _channels_of(proved.keys), proved.keys.max_error, proof=proof,
+                           copied=proved.copied, copied_interpolation=proved.copied_interpolation,
                            between="" if proof is not None else "a tolerance of 0 keeps every sample")
 
 
@@ -200,7 +217,7 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
                                                synchronized, detailed=True)
     except ValueError as error:
         raise ReduceError(str(error)) from error
-    return ReducedChannels(interpolation, _channels_of(result, interpolation), result.max_error)
+    return ReducedChannels(interpolation, _channels_of(result), result.max_error)
 
 
 # ---- the original keys' playback, for the proof ------------------------------------------------------
@@ -274,9 +291,9 @@ class TargetResult:
     max_error_deg: float        # at the samples (every frame and key), Blender's evaluation emulated
     action: str
     error_text: str = ""        # ReducedChannels.error_text: the bound at every instant, or why not
-    bound_deg: float = None     # at every instant (outside the original's sign flips); None: no proof ran
+    bound_deg: float = None     # at every instant; None: no proof ran
     proven: bool = False        # bound_deg is within the tolerance
-    sign_flips: list = field(default_factory=list)  # (start, end) frames left out: the original's sign flips
+    copied: list = field(default_factory=list)  # (start, end) frames whose keys are the original's (sign flips)
 
 
 @dataclass
@@ -411,7 +428,8 @@ def reduce(found, settings):
         for item in parallel_imap(reduce_item, read_all()):
             items.append(item)
             yield write.RotationWrite(item.target, item.mode, item.reduced.keys, item.reduced.interpolation,
-                                      replace=(item.prop,), cycles=item.cycles)
+                                      replace=(item.prop,), cycles=item.cycles,
+                                      key_interpolations=item.reduced.key_interpolations)
 
     actions = write.write_rotations(writes() if settings.new_action else list(writes()),
                                     settings.new_action, "reduced")
@@ -428,8 +446,8 @@ def reduce(found, settings):
                                            error_deg, action.name, text,
                                            None if bound is None else math.degrees(bound),
                                            item.reduced.proof is not None and item.reduced.proof.proven,
-                                           [] if item.reduced.excluded is None else
-                                           [tuple(map(float, e)) for e in item.reduced.excluded]))
+                                           [] if item.reduced.copied is None else
+                                           [tuple(map(float, e)) for e in item.reduced.copied]))
         result.keys_before += item.keys_before
         result.keys_after += after
         result.max_error_deg = max(result.max_error_deg, error_deg)

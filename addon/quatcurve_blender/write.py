@@ -23,7 +23,9 @@ class RotationWrite:
     F-curves are removed first (all three when the mode changes). own_action: in place was asked
     for, but the action is shared with objects not being written: write into a copy instead.
     cycles: a loop's keys (one period): per channel (mode_before, mode_after) of the Cycles modifier
-    put on its new F-curve (None: none on that channel), or one pair for every channel."""
+    put on its new F-curve (None: none on that channel), or one pair for every channel.
+    key_interpolations: per channel, each key's interpolation where they differ (the reduction's keys
+    copied from the original around its sign flips), None: `interpolation` for every key."""
     target: object
     mode: str
     keys: list
@@ -31,6 +33,7 @@ class RotationWrite:
     replace: tuple = fcurves.ROTATION_PROPERTIES
     own_action: bool = False
     cycles: tuple = None
+    key_interpolations: list = None
 
     @property
     def key_count(self):
@@ -116,7 +119,8 @@ def _write_keys(channels, item):
             fcurve = channels.write_packed(path, index, keys, group=group, interpolation=item.interpolation)
         else:
             frames, values, left, right = keys
-            fcurve = channels.write(path, index, frames, values, group=group, interpolation=item.interpolation,
+            interpolation = item.interpolation if item.key_interpolations is None else item.key_interpolations[index]
+            fcurve = channels.write(path, index, frames, values, group=group, interpolation=interpolation,
                                     handle_left=left, handle_right=right)
         modes = item.cycles[index] if item.cycles and isinstance(item.cycles[0], tuple) else item.cycles
         if modes:

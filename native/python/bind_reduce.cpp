@@ -379,9 +379,13 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
         .def_readonly("keys", &ProvedKeys::keys, "the reduced keys (ReducedKeys; max_error is at `times` only)")
         .def_readonly("proof", &ProvedKeys::proof,
                       "PlaybackBound of the reduced keys' playback against the reference over every proved span")
-        .def_property_readonly("excluded", [](const ProvedKeys& r) { return pairs_array(r.excluded); },
-                               "(M, 2) sample intervals left out of the proof: the original's own quaternion sign "
-                               "flips, where Blender swings through them and the reduction takes the short way")
+        .def_property_readonly("copied", [](const ProvedKeys& r) { return pairs_array(r.copied); },
+                               "(M, 2) frame spans [f0, f1] whose keys are the original's, bit for bit: around the "
+                               "original's own quaternion sign flips, which Blender swings through (a key at a frame "
+                               "in [f0, f1) has copied_interpolation, every other key keys.interpolation)")
+        .def_property_readonly("copied_interpolation",
+                               [](const ProvedKeys& r) { return std::string(key_interpolation_name(r.copied_interpolation)); },
+                               "'LINEAR' or 'BEZIER': the interpolation of the keys in the copied spans (the original's)")
         .def_property_readonly("times", [](const ProvedKeys& r) { return vector_array(r.times); },
                                "the samples of the last reduction: the given ones and those added (midpoints and the "
                                "proof's failing times)")
@@ -389,7 +393,7 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
         .def("__repr__", [](const ProvedKeys& r) {
             return std::string("<ProvedKeys ") + std::to_string(r.keys.key_count()) + " keys, " +
                    (r.proof.proven() ? "proven" : "NOT proven") + ", bound " + std::to_string(r.proof.bound) +
-                   " rad, " + std::to_string(r.excluded.size()) + " excluded, " + std::to_string(r.rounds) +
+                   " rad, " + std::to_string(r.copied.size()) + " copied, " + std::to_string(r.rounds) +
                    " rounds>";
         });
 
@@ -424,10 +428,11 @@ The samples are reduced as reduce_keys* does at 90% of `tolerance`; Blender's pl
 is proved against the original's playback (blender_evaluate) at every time from times[0] to
 times[-1] (prove_playback's method); the times that fail become samples of another reduction (the
 original's values there; keys between the given frames only where keys on them cannot meet those), up
-to 8 reductions. Left out of the proof: the sample intervals where the
-original's quaternion channels flip sign (ProvedKeys.excluded), where Blender swings through the flip
-and the reduction takes the short way. Tolerance 0 keeps every sample and proves nothing between them
-(bound inf).)doc");
+to 8 reductions. Where the original's stored quaternions flip sign between two samples (Blender swings
+through the flip), the original's keys around it are copied bit for bit (ProvedKeys.copied, with the
+original's interpolation and handles) and the pieces between are reduced on their own: the bound holds
+from times[0] to times[-1], the flips included. Tolerance 0 keeps every sample and proves nothing
+between them (bound inf).)doc");
 
     m.def(
         "reduce_curve_proved",
@@ -443,7 +448,7 @@ and the reduction takes the short way. Tolerance 0 keeps every sample and proves
         py::arg("curve"), py::arg("mode"), py::arg("times"), py::arg("values"), py::arg("tolerance"),
         py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
         R"doc(Reduce samples of `curve` and prove the reduced keys against the curve at every instant: a
-ProvedKeys (as reduce_keys_proved, the reference being the curve; nothing is excluded).
+ProvedKeys (as reduce_keys_proved, the reference being the curve; nothing is copied).
 
 times: (N,) increasing frames; values: (N, C) the curve's rotations there as channel values of `mode`
 (quats_to_channels, with any reference; kept as given, quaternions made hemisphere-continuous); a

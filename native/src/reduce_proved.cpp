@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "quatcurve/channels.hpp"
 #include "quatcurve/errors.hpp"
 #include "quatcurve/reduce.hpp"
 #include "reduce_impl.hpp"
@@ -99,7 +100,7 @@ void merge_into(PlaybackBound& all, const PlaybackBound& part) {
 }
 
 // ---- the proof, piece by piece ---------------------------------------------------------------------
-// The range is cut at every kPiece-th given sample (and at the excluded intervals) into pieces, each
+// The range is cut at every kPiece-th given sample into pieces, each
 // proved on its own with the keys that shape Blender's playback there: a piece whose keys did not
 // change since the last reduction keeps its proof (the playback there is the same, whatever samples
 // were added), so the rounds after the first prove only where the keys moved, and every evaluation
@@ -151,26 +152,18 @@ bool same_keys(const std::vector<FCurveKeys>& a, const std::vector<FCurveKeys>& 
     return true;
 }
 
-// The pieces of the given samples `times`: each span between the excluded intervals (each joins two
-// neighbouring samples) cut at every kPiece-th sample; the pieces of a span share their ends.
-std::vector<Piece> make_pieces(const std::vector<double>& times, const std::vector<std::pair<double, double>>& excluded,
-                               const ReferenceOn& reference_on) {
+// The pieces of the given samples `times`: cut at every kPiece-th sample, neighbours sharing their ends.
+std::vector<Piece> make_pieces(const std::vector<double>& times, const ReferenceOn& reference_on) {
     std::vector<Piece> pieces;
-    std::size_t e = 0, begin = 0;
-    for (std::size_t i = 0; i < times.size(); ++i) {
-        const bool left_out = e < excluded.size() && excluded[e].first == static_cast<float>(times[i]);
-        if (!left_out && i + 1 < times.size()) continue;
-        for (std::size_t a = begin;; a += kPiece) {  // the span [begin, i]
-            const std::size_t b = std::min(a + kPiece, i);
-            Piece piece;
-            piece.t0 = static_cast<float>(times[a]);
-            piece.t1 = static_cast<float>(times[b]);
-            piece.reference = reference_on(piece.t0, piece.t1);
-            pieces.push_back(std::move(piece));
-            if (b == i) break;
-        }
-        if (left_out) ++e;
-        begin = i + 1;
+    const std::size_t last = times.size() - 1;
+    for (std::size_t a = 0;; a += kPiece) {
+        const std::size_t b = std::min(a + kPiece, last);
+        Piece piece;
+        piece.t0 = static_cast<float>(times[a]);
+        piece.t1 = static_cast<float>(times[b]);
+        piece.reference = reference_on(piece.t0, piece.t1);
+        pieces.push_back(std::move(piece));
+        if (b == last) break;
     }
     return pieces;
 }
@@ -209,10 +202,9 @@ PlaybackBound prove_pieces(const ReducedKeys& keys, const RotationMode& mode, co
 // shows the reducer its shape there, and the next reduction moves its keys: on random BEZIER
 // channels whose handles swing between frames this took 3-6 reductions where the failing times
 // alone took 5-8 or more), as float32 frames, each kAddedSampleGap clear of the samples and of each
-// other and none inside an excluded interval. Inserts them (with the reference's values) into
+// other. Inserts them (with the reference's values) into
 // times/values; returns how many.
-std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, std::size_t C,
-                        const std::vector<std::pair<double, double>>& excluded, Samples& s) {
+std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, std::size_t C, Samples& s) {
     const std::vector<double>& times = s.times;
     std::vector<double> failed = proof.violations;
     for (const auto& span : proof.unproven) failed.push_back(0.5 * (span.first + span.second));
@@ -227,14 +219,6 @@ std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, s
         }
     }
     for (double& t : add) t = static_cast<float>(t);
-    // Nothing inside an excluded interval (the reduction takes the short way there).
-    add.erase(std::remove_if(add.begin(), add.end(),
-                             [&](double t) {
-                                 for (const auto& e : excluded)
-                                     if (t > e.first && t < e.second) return true;
-                                 return false;
-                             }),
-              add.end());
     std::sort(add.begin(), add.end());
     Samples out;
     out.times.reserve(times.size() + add.size());
@@ -269,24 +253,20 @@ std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, s
 }
 
 // The first reduction's samples: the given ones and, as added samples (checked, not keys), the
-// reference midway between each two of them outside the excluded intervals. The reducer's own
+// reference midway between each two of them. The reducer's own
 // between-samples guard measures its fit midway against the samples' LINEAR mean, loosely (reduce_fit.cpp);
 // the reference's own value there lets the first reduction pass the proof far more often (the 19
 // joints of mocapbank.bvh keyed at every frame, BEZIER and LINEAR: 25 of 38 proved after the first
 // reduction instead of 8, in half the time).
-void add_midpoints(const ValuesAt& values_at, std::size_t C, const std::vector<std::pair<double, double>>& excluded,
-                   Samples& s) {
+void add_midpoints(const ValuesAt& values_at, std::size_t C, Samples& s) {
     Samples out;
     out.times.reserve(2 * s.times.size());
     out.values.reserve(2 * s.values.size());
     out.given.reserve(2 * s.times.size());
-    std::size_t e = 0;  // the next excluded interval
     for (std::size_t i = 0; i < s.times.size(); ++i) {
         if (i > 0) {
             const double a = s.times[i - 1], b = s.times[i], t = static_cast<float>(0.5 * (a + b));
-            while (e < excluded.size() && excluded[e].second <= static_cast<float>(a)) ++e;
-            const bool left_out = e < excluded.size() && excluded[e].first == static_cast<float>(a);
-            if (!left_out && t - a > kAddedSampleGap && b - t > kAddedSampleGap) {
+            if (t - a > kAddedSampleGap && b - t > kAddedSampleGap) {
                 out.times.push_back(t);
                 const std::size_t row = out.values.size();
                 out.values.resize(row + C);
@@ -332,10 +312,8 @@ bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double t
 
 ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_on, const ValuesAt& values_at,
                          const RotationMode& mode, const std::vector<double>& times, std::vector<double> values,
-                         std::vector<std::pair<double, double>> excluded, double tolerance, KeyInterpolation ipo,
-                         bool synchronized) {
+                         double tolerance, KeyInterpolation ipo, bool synchronized) {
     ProvedKeys out;
-    out.excluded = std::move(excluded);
     const std::size_t C = channel_count(mode);
     Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1),
               std::vector<unsigned char>(times.size(), 1)};
@@ -351,8 +329,8 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
         out.times = std::move(s.times);
         return out;
     }
-    std::vector<Piece> pieces = make_pieces(times, out.excluded, reference_on);
-    add_midpoints(values_at, C, out.excluded, s);
+    std::vector<Piece> pieces = make_pieces(times, reference_on);
+    add_midpoints(values_at, C, s);
     for (int round = 1;; ++round) {
         out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized);
         if (out.keys.max_error > kReduceShare * tolerance && open_candidates(out.keys, mode, kReduceShare * tolerance, s))
@@ -360,7 +338,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
         out.rounds = round;
         out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
         if (out.proof.proven() || round >= kProofRounds) break;
-        if (add_samples(out.proof, values_at, C, out.excluded, s) == 0) break;
+        if (add_samples(out.proof, values_at, C, s) == 0) break;
     }
     out.times = std::move(s.times);
     return out;
@@ -379,6 +357,239 @@ void check_rows(const std::vector<double>& times, const std::vector<double>& val
         if (!std::isfinite(times[i])) throw InvalidArgument("times[" + std::to_string(i) + "]: not finite");
 }
 
+// ---- the original's own sign flips, copied -----------------------------------------------------------
+// Where the original's stored quaternions lie in opposite hemispheres at two neighbouring samples,
+// Blender interpolates the four channels through near zero: a turn of up to 360° inside one
+// interval that no hemisphere-continuous reduction follows. The keys that shape that playback are
+// copied instead, bit for bit (reduce.hpp), and the pieces between them reduced on their own.
+
+// Quaternion rows in place: each with the sign of the original's playback at its time (the caller's
+// values are Blender's evaluation, possibly of either sign).
+void stored_signs(const PlaybackMotion& playback, const std::vector<double>& times, std::vector<double>& rows) {
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        double p[4];
+        playback.values(times[i], p);
+        double* r = &rows[4 * i];
+        if (r[0] * p[0] + r[1] * p[1] + r[2] * p[2] + r[3] * p[3] < 0.0)
+            for (int c = 0; c < 4; ++c) r[c] = -r[c];
+    }
+}
+
+// A channel of one key or none is constant: keyed, in effect, at every frame.
+bool constant_channel(const FCurveKeys& ch) { return ch.frames.size() <= 1; }
+
+// Whether every channel with more than one key has a key at `frame` (float32): `all`; or any: !all.
+bool keyed_at(const std::vector<FCurveKeys>& original, float frame, bool all) {
+    bool any = false;
+    for (const FCurveKeys& ch : original) {
+        if (constant_channel(ch)) continue;
+        const bool has = std::binary_search(ch.frames.begin(), ch.frames.end(), static_cast<double>(frame));
+        if (all && !has) return false;
+        any = any || has;
+    }
+    return all || any;
+}
+
+// The sample spans [S0, S1] (indices into times) whose keys are copied. Blender leaves the
+// hemisphere-continuous path where two neighbouring samples lie in opposite hemispheres, and across
+// every segment between two neighbouring key frames (of any channel) whose ends do — there every
+// channel interpolates between two keys of its own, toward the far side of the origin, whether or not
+// a sample lands on either side of where it passes it. Each such interval is widened to the last
+// sample before it where every channel has a key (keyed_at) and the first one after it — the range's
+// first or last sample where there is none — and the spans merged where they overlap or touch.
+std::vector<std::pair<std::size_t, std::size_t>> flip_spans(const std::vector<FCurveKeys>& original,
+                                                            const std::vector<double>& times,
+                                                            const std::vector<double>& rows) {
+    const std::size_t n = times.size();
+    std::vector<unsigned char> common(n), keyed(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        common[i] = keyed_at(original, static_cast<float>(times[i]), true);
+        keyed[i] = keyed_at(original, static_cast<float>(times[i]), false);
+    }
+    const auto opposite = [&](std::size_t i, std::size_t j) {
+        const double* a = &rows[4 * i];
+        const double* b = &rows[4 * j];
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0;
+    };
+    std::vector<std::pair<std::size_t, std::size_t>> spans;
+    std::size_t last_key = keyed[0] ? 0 : n;  // the last keyed sample so far (n: none)
+    for (std::size_t i = 1; i < n; ++i) {
+        std::size_t s0 = n;
+        if (opposite(i - 1, i)) s0 = i - 1;
+        if (keyed[i] && last_key < n && opposite(last_key, i)) s0 = std::min(s0, last_key);
+        if (keyed[i]) last_key = i;
+        if (s0 == n) continue;
+        std::size_t s1 = i;
+        while (s0 > 0 && !common[s0]) --s0;
+        while (s1 + 1 < n && !common[s1]) ++s1;
+        if (!spans.empty() && s0 <= spans.back().second) {
+            spans.back().first = std::min(spans.back().first, s0);
+            spans.back().second = std::max(spans.back().second, s1);
+        } else {
+            spans.emplace_back(s0, s1);
+        }
+    }
+    return spans;
+}
+
+// One key of an assembled channel; a side without handles gets straight ones (segment_handles).
+struct KeyRow {
+    double frame = 0.0, value = 0.0;
+    double left[2] = {0.0, 0.0}, right[2] = {0.0, 0.0};
+    bool has_left = false, has_right = false;
+};
+
+// The keys of `ch` that shape Blender's playback on [f0, f1], f0 and f1 keys of it or the ends of its
+// keyed range: those with frames in [f0, f1], handles as stored. A constant channel: two keys holding
+// its value at f0 and f1 with flat handles (Blender plays both exactly as the value: a LINEAR change of
+// 0, a BEZIER segment of four equal values).
+std::vector<KeyRow> copy_keys(const FCurveKeys& ch, double f0, double f1) {
+    std::vector<KeyRow> out;
+    if (constant_channel(ch)) {
+        const double v = ch.frames.empty() ? 0.0 : ch.values[0];
+        const double third = static_cast<float>((f1 - f0) / 3.0);
+        for (double f : {f0, f1}) {
+            KeyRow k;
+            k.frame = f;
+            k.value = v;
+            k.left[0] = static_cast<float>(f - third);
+            k.right[0] = static_cast<float>(f + third);
+            k.left[1] = k.right[1] = v;
+            k.has_left = k.has_right = true;
+            out.push_back(k);
+        }
+        return out;
+    }
+    const bool handles = ch.handle_left.size() == 2 * ch.frames.size() && ch.handle_right.size() == 2 * ch.frames.size();
+    for (std::size_t k = 0; k < ch.frames.size(); ++k) {
+        if (ch.frames[k] < f0 || ch.frames[k] > f1) continue;
+        KeyRow r;
+        r.frame = ch.frames[k];
+        r.value = ch.values[k];
+        if (handles) {
+            std::copy(&ch.handle_left[2 * k], &ch.handle_left[2 * k] + 2, r.left);
+            std::copy(&ch.handle_right[2 * k], &ch.handle_right[2 * k] + 2, r.right);
+            r.has_left = r.has_right = true;
+        }
+        out.push_back(r);
+    }
+    return out;
+}
+
+std::vector<KeyRow> reduced_rows(const ReducedChannel& ch) {
+    std::vector<KeyRow> out(ch.frames.size());
+    const bool handles = ch.handle_left.size() == 2 * ch.frames.size();
+    for (std::size_t k = 0; k < out.size(); ++k) {
+        out[k].frame = ch.frames[k];
+        out[k].value = ch.values[k];
+        if (handles) {
+            std::copy(&ch.handle_left[2 * k], &ch.handle_left[2 * k] + 2, out[k].left);
+            std::copy(&ch.handle_right[2 * k], &ch.handle_right[2 * k] + 2, out[k].right);
+            out[k].has_left = out[k].has_right = true;
+        }
+    }
+    return out;
+}
+
+// Appends `part` to `out`; a key on both (the joint of a piece and a copied span) keeps the value of
+// `copied` side's key (the original's, which the piece's end key equals), the left handle of the part
+// before and the right handle of the part after.
+void append_rows(std::vector<KeyRow>& out, const std::vector<KeyRow>& part, bool part_copied) {
+    std::size_t from = 0;
+    if (!out.empty() && !part.empty() && part.front().frame == out.back().frame) {
+        KeyRow& k = out.back();
+        if (part_copied) k.value = part.front().value;
+        std::copy(part.front().right, part.front().right + 2, k.right);
+        k.has_right = part.front().has_right;
+        from = 1;
+    }
+    out.insert(out.end(), part.begin() + static_cast<std::ptrdiff_t>(from), part.end());
+}
+
+// The reduced pieces (pieces[p] reduced the samples piece_of[p]) and the copied spans, joined into one
+// ProvedKeys over `times`: per channel the pieces' keys and the original's keys of each span in frame
+// order; handles where the output or the copied keys are BEZIER (a side that has none straight);
+// the proofs of the pieces merged (a copied span's playback is the original's); the samples of every
+// piece, the given ones inside the spans and the copied key frames.
+ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
+                       const std::vector<double>& times, const std::vector<std::pair<std::size_t, std::size_t>>& spans,
+                       const std::vector<ProvedKeys>& pieces,
+                       const std::vector<std::pair<std::size_t, std::size_t>>& piece_of, double tolerance,
+                       KeyInterpolation ipo) {
+    ProvedKeys out;
+    out.copied_interpolation = original_interpolation;
+    for (const auto& span : spans) out.copied.emplace_back(static_cast<float>(times[span.first]), static_cast<float>(times[span.second]));
+    out.keys.interpolation = ipo;
+    out.proof.worst_time = static_cast<float>(times.front());
+    out.rounds = 1;
+    for (const ProvedKeys& piece : pieces) {
+        merge_into(out.proof, piece.proof);
+        out.keys.max_error = std::fmax(out.keys.max_error, piece.keys.max_error);
+        out.rounds = std::max(out.rounds, piece.rounds);
+        out.times.insert(out.times.end(), piece.times.begin(), piece.times.end());
+    }
+    std::sort(out.proof.violations.begin(), out.proof.violations.end());
+    std::sort(out.proof.unproven.begin(), out.proof.unproven.end());
+    if (tolerance == 0.0) {  // every sample kept; nothing promised between them at 0
+        out.proof = PlaybackBound();
+        out.proof.bound = HUGE_VAL;
+        out.proof.worst_time = times.front();
+        out.proof.unproven.emplace_back(times.front(), times.back());
+    }
+    for (const auto& span : spans)
+        out.times.insert(out.times.end(), times.begin() + static_cast<std::ptrdiff_t>(span.first),
+                         times.begin() + static_cast<std::ptrdiff_t>(span.second) + 1);
+    const bool handles = ipo == KeyInterpolation::BEZIER || original_interpolation == KeyInterpolation::BEZIER;
+    std::vector<std::vector<KeyRow>> channels(original.size());
+    for (std::size_t c = 0; c < original.size(); ++c) {
+        std::size_t p = 0;
+        for (std::size_t s = 0; s <= spans.size(); ++s) {
+            const std::size_t before = s < spans.size() ? spans[s].first : times.size();
+            for (; p < pieces.size() && piece_of[p].first < before; ++p)
+                append_rows(channels[c], reduced_rows(pieces[p].keys.channels[c]), false);
+            if (s == spans.size()) break;
+            const std::vector<KeyRow> copied =
+                copy_keys(original[c], out.copied[s].first, out.copied[s].second);
+            append_rows(channels[c], copied, true);
+            for (const KeyRow& k : copied) out.times.push_back(k.frame);
+        }
+    }
+    // The samples, increasing: a copied key on a sample's float32 frame is that sample.
+    std::sort(out.times.begin(), out.times.end());
+    std::vector<double> unique;
+    for (double t : out.times)
+        if (unique.empty() || static_cast<float>(t) != static_cast<float>(unique.back())) unique.push_back(t);
+    out.times = std::move(unique);
+    std::vector<float> frames32(out.times.begin(), out.times.end());
+    out.keys.synchronized = true;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+        const std::vector<KeyRow>& rows = channels[c];
+        ReducedChannel ch;
+        for (const KeyRow& k : rows) {
+            ch.frames.push_back(k.frame);
+            ch.values.push_back(k.value);
+            ch.indices.push_back(static_cast<std::size_t>(
+                std::lower_bound(frames32.begin(), frames32.end(), static_cast<float>(k.frame)) - frames32.begin()));
+        }
+        if (handles) {
+            const std::size_t K = rows.size();
+            std::vector<double> left(2 * K), right(2 * K);
+            segment_handles(ch.frames.data(), ch.values.data(), K, left.data(), right.data());
+            for (std::size_t k = 0; k < K; ++k) {
+                if (rows[k].has_left) std::copy(rows[k].left, rows[k].left + 2, &left[2 * k]);
+                if (rows[k].has_right) std::copy(rows[k].right, rows[k].right + 2, &right[2 * k]);
+            }
+            for (double& x : left) x = static_cast<float>(x);
+            for (double& x : right) x = static_cast<float>(x);
+            ch.handle_left = std::move(left);
+            ch.handle_right = std::move(right);
+        }
+        if (c > 0 && ch.indices != out.keys.channels[0].indices) out.keys.synchronized = false;
+        out.keys.channels.push_back(std::move(ch));
+    }
+    return out;
+}
+
 }  // namespace
 
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
@@ -389,17 +600,6 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
     const PlaybackMotion playback(original, original_interpolation, mode);
     const std::size_t C = channel_count(mode);
     std::vector<double> rows = values;
-    std::vector<std::pair<double, double>> excluded;
-    if (mode.kind == RotationMode::Kind::quaternion) {
-        // The original's own sign flips, from its values as given: Blender swings through them.
-        for (std::size_t i = 1; i < times.size(); ++i) {
-            const double* a = &values[4 * (i - 1)];
-            const double* b = &values[4 * i];
-            if (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] < 0.0)
-                excluded.emplace_back(static_cast<float>(times[i - 1]), static_cast<float>(times[i]));
-        }
-        make_continuous(rows);
-    }
     const ValuesAt values_at = [&](double at, const double* before, double* out) {
         playback.values(at, out);
         if (mode.kind == RotationMode::Kind::quaternion &&
@@ -411,8 +611,44 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
         return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, mode);
     };
-    return reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), std::move(excluded),
-                         tolerance, interpolation, synchronized);
+    if (mode.kind != RotationMode::Kind::quaternion) {
+        ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
+                                       interpolation, synchronized);
+        out.copied_interpolation = original_interpolation;
+        return out;
+    }
+    // The given samples checked as a whole, before any piece is (errors name their index in `times`).
+    reduce_impl::check_float32_storage(
+        make_problem(Samples{times, rows, {}, {}}, mode, interpolation), tolerance);
+    stored_signs(playback, times, rows);
+    const std::vector<std::pair<std::size_t, std::size_t>> spans = flip_spans(original, times, rows);
+    if (spans.empty()) {
+        make_continuous(rows);
+        ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
+                                       interpolation, synchronized);
+        out.copied_interpolation = original_interpolation;
+        return out;
+    }
+    for (const auto& span : spans)  // the copied keys' values exactly, where the pieces beside them end
+        for (std::size_t i : {span.first, span.second}) playback.values(times[i], &rows[4 * i]);
+    // The pieces between the spans, each reduced and proved on its own.
+    std::vector<ProvedKeys> pieces;
+    std::vector<std::pair<std::size_t, std::size_t>> piece_of;
+    std::size_t begin = 0;
+    for (std::size_t s = 0; s <= spans.size(); ++s) {
+        const std::size_t end = s < spans.size() ? spans[s].first : times.size() - 1;
+        if (end > begin) {
+            const std::vector<double> t(times.begin() + static_cast<std::ptrdiff_t>(begin),
+                                        times.begin() + static_cast<std::ptrdiff_t>(end) + 1);
+            std::vector<double> v(rows.begin() + static_cast<std::ptrdiff_t>(4 * begin),
+                                  rows.begin() + static_cast<std::ptrdiff_t>(4 * end + 4));
+            pieces.push_back(reduce_proved(playback, reference_on, values_at, mode, t, std::move(v), tolerance,
+                                           interpolation, synchronized));
+            piece_of.emplace_back(begin, end);
+        }
+        if (s < spans.size()) begin = spans[s].second;
+    }
+    return join_pieces(original, original_interpolation, times, spans, pieces, piece_of, tolerance, interpolation);
 }
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
@@ -434,7 +670,7 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
     };
     const KeptBreaks kept(motion);
     const ReferenceOn whole = [](double, double) { return std::unique_ptr<Motion>(); };
-    return reduce_proved(kept, whole, values_at, mode, times, rows, {}, tolerance, interpolation, synchronized);
+    return reduce_proved(kept, whole, values_at, mode, times, rows, tolerance, interpolation, synchronized);
 }
 
 }  // namespace quatcurve

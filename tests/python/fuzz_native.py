@@ -1758,17 +1758,46 @@ def playback_quats(channels, interpolation, mode, ts):
     return qc.channels_to_quats(vals, mode)
 
 
-def proved_keys_checks(out, tol, mode, interpolation_out, reference, t0, t1, excluded, rng):
-    """What every ProvedKeys must hold: its lists and verdict agree, and Blender's playback of its keys
-    (emulated at 2000 even and 1000 random times) is nowhere above the proved bound outside
-    `excluded`; tolerance 0 proves nothing (bound inf)."""
+def mixed_playback_quats(out, mode, ts):
+    """Blender's rotation (N, 4) of a ProvedKeys' keys at ts, each key with its own interpolation (a key
+    in a copied span [f0, f1) the original's, copied_interpolation): a value depends only on the segment
+    holding t, so each channel is evaluated both ways and each time takes its segment's key's."""
+    keys = out.keys
+    cols = []
+    for c in keys.channels:
+        handles = (c.handle_left, c.handle_right) if len(c.handle_left) else (None, None)
+        both = {ipo: qc.blender_evaluate(c.frames, c.values, ts, ipo, *(handles if ipo == "BEZIER" else (None, None)))
+                for ipo in {keys.interpolation, out.copied_interpolation if len(out.copied) else keys.interpolation}}
+        seg = c.frames[np.clip(np.searchsorted(c.frames.astype(np.float32), ts.astype(np.float32), "right") - 1,
+                               0, len(c.frames) - 1)]
+        copied = np.zeros(len(ts), dtype=bool)
+        for f0, f1 in out.copied:
+            copied |= (seg >= f0) & (seg < f1)
+        cols.append(np.where(copied, both.get(out.copied_interpolation), both[keys.interpolation]) if copied.any()
+                    else both[keys.interpolation])
+    vals = np.stack(cols, 1)
+    if mode == "AXIS_ANGLE":
+        zero = np.all(vals[:, 1:] == 0, axis=1)
+        vals[zero, 0], vals[zero, 1] = 0.0, 1.0
+    if mode == "QUATERNION":
+        vals[np.all(vals == 0, axis=1), 1] = 1.0
+    return qc.channels_to_quats(vals, mode)
+
+
+def proved_keys_checks(out, tol, mode, interpolation_out, reference, t0, t1, flips, rng):
+    """What every ProvedKeys must hold: its lists and verdict agree, every sample pair in `flips` lies
+    in a copied span, and Blender's playback of its keys (emulated at 2000 even and 1000 random
+    times, each key with its own interpolation) is nowhere above the proved bound, inside the copied
+    spans too; tolerance 0 proves nothing (bound inf)."""
     expect(type(out).__name__ == "ProvedKeys", f"result {type(out).__name__}")
     keys, proof = out.keys, out.proof
     expect(len(keys.channels) == _channel_count(mode), f"{len(keys.channels)} channels")
     expect(keys.interpolation == interpolation_out, f"interpolation {keys.interpolation}")
     finite(keys.max_error, "max_error")
     expect(proof.proven == (len(proof.violations) == 0 and len(proof.unproven) == 0), "proven disagrees with the lists")
-    expect(np.array_equal(out.excluded, excluded), lambda: f"excluded {out.excluded!r}, expected {excluded!r}")
+    copied = np.asarray(out.copied).reshape(-1, 2)
+    for a, b in flips:
+        expect(any(f0 <= a and b <= f1 for f0, f1 in copied), lambda: f"flip {a}|{b} outside the copied {copied!r}")
     expect(out.times.ndim == 1 and np.all(np.diff(out.times) > 0), "times not increasing")
     expect(1 <= out.rounds <= 8, f"{out.rounds} rounds")
     repr(out)
@@ -1780,12 +1809,7 @@ def proved_keys_checks(out, tol, mode, interpolation_out, reference, t0, t1, exc
     if t1 <= t0:
         return
     ts = np.sort(np.concatenate([np.linspace(t0, t1, 2001), rng.uniform(t0, t1, 1000)]))
-    inside = np.zeros(len(ts), dtype=bool)
-    for a, b in excluded:
-        inside |= (ts > a) & (ts < b)
-    ts = ts[~inside]
-    got = playback_quats([(c.frames, c.values, c.handle_left, c.handle_right) for c in keys.channels],
-                         keys.interpolation, mode, ts)
+    got = mixed_playback_quats(out, mode, ts)
     dense = np_angle(got, reference(ts))
     expect(dense.max() <= proof.bound + 1e-6,
            f"dense evaluation {dense.max()!r} rad at frame {ts[dense.argmax()]!r} above the proved {proof.bound!r}")
@@ -1829,19 +1853,19 @@ def draw_original(d, mode):
 def build_reduce_keys_proved(fn, d):
     """reduce_keys_proved: random original F-curves of any mode (LINEAR or BEZIER, handles that swing
     between keys, quaternion sign flips), reduced and proved against their own playback; the proof is
-    checked by dense evaluation of both (emulated), nowhere above the bound outside the excluded sign
-    flips, which are exactly the sample pairs in opposite hemispheres."""
+    checked by dense evaluation of both (emulated), nowhere above the bound, inside the sign flips too
+    (the sample pairs in opposite hemispheres lie in copied spans, the original's keys)."""
     rng = d.rng
     mode = d.pick(("QUATERNION", "AXIS_ANGLE") + ORDERS, "mode")
     channels, channel_ipo, times, values = draw_original(d, mode)
     tol = float(d.pick((0.0, 1e-4, 1e-3, 0.01, 0.05), "tolerance"))
     interpolation = d.pick(("BEZIER", "LINEAR"), "interpolation")
     synchronized = d.pick((False, True), "synchronized")
-    excluded = np.zeros((0, 2))
+    flips = np.zeros((0, 2))
     if mode == "QUATERNION":
         flip = np.flatnonzero(np.sum(values[1:] * values[:-1], axis=1) < 0)
         t32 = times.astype(np.float32).astype(np.float64)
-        excluded = np.column_stack([t32[flip], t32[flip + 1]]).reshape(-1, 2)
+        flips = np.column_stack([t32[flip], t32[flip + 1]]).reshape(-1, 2)
     form = d.pick(("ok",) * 6 + ("unsorted", "tolerance", "channels", "handles", "width", "junk"), "form")
     args, must_fail = [channels, channel_ipo, mode, times, values, tol, interpolation, synchronized], ""
     if form == "unsorted" and len(times) > 1:
@@ -1867,7 +1891,8 @@ def build_reduce_keys_proved(fn, d):
         return playback_quats(channels, channel_ipo, mode, ts)
 
     def check(out):
-        proved_keys_checks(out, tol, mode, interpolation, reference, times[0], times[-1], excluded, rng)
+        proved_keys_checks(out, tol, mode, interpolation, reference, times[0], times[-1], flips, rng)
+        expect(out.copied_interpolation == channel_ipo, f"copied_interpolation {out.copied_interpolation}")
 
     return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
 
@@ -1899,6 +1924,7 @@ def build_reduce_curve_proved(fn, d):
 
     def check(out):
         proved_keys_checks(out, tol, mode, interpolation, curve.sample, times[0], times[-1], np.zeros((0, 2)), rng)
+        expect(len(out.copied) == 0, f"copied {out.copied!r} against a curve")
 
     return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
 

@@ -148,27 +148,42 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 // reduction is returned whatever its verdict: its bound holds at every instant of the proved spans
 // either way.
 //
-// Left out of the proof (reduce_keys_proved, quaternion mode only): the sample intervals across
-// which the original's quaternion channels flip hemisphere (consecutive samples with a negative dot
-// product). Blender interpolates the four channels through near zero there — a fast turn of up to
-// 360° inside the interval — while the reduction, made of hemisphere-continuous samples, takes the
-// short way: there the two differ by up to 180° by design. They are reported in `excluded`.
+// The original's own sign flips (reduce_keys_proved, quaternion mode): where the original's stored
+// quaternions lie in opposite hemispheres at two neighbouring samples, Blender interpolates the four
+// channels through near zero — a fast turn of up to 360° inside that interval, which no
+// hemisphere-continuous reduction follows. There the result keeps the original's keys instead: from
+// the last sample before the flip where every channel has a key (a channel of one key is constant and
+// counts as keyed everywhere) to the first one after it — the first or last sample where there is
+// none — each channel's keys in that span are copied bit for bit (frames, values with their stored
+// signs, handles; a constant channel gets two keys holding its value at the span's ends), and their
+// segments keep the original's interpolation (`copied_interpolation`). Blender's playback of the
+// span is then the original's, exactly: that is the proof there, and the bound covers it. The pieces
+// between the spans are reduced and proved as above, each on its own, from the quaternion signs the
+// original stores there; a piece's end keys sit on the span's end keys with their values, so a key
+// at a span's end has the left handle of the part before it and the right handle of the part after.
+// The samples' values are taken with the sign of the original's playback at their time.
 //
 // tolerance 0 keeps every sample (as reduce_keys does) and proves nothing between them: the proof
 // then has bound +∞ and the whole range unproven.
 struct ProvedKeys {
-    ReducedKeys keys;     // the reduced keys (max_error: at `times`, emulated)
-    PlaybackBound proof;  // the reduced playback against the reference over every proved span, merged
-    std::vector<std::pair<double, double>> excluded;  // sample intervals left out (the original's sign flips)
-    std::vector<double> times;  // the samples of the last reduction: the given ones and those added
-    int rounds = 0;             // reductions made (1: the first was proved)
+    // The reduced keys (max_error: at `times`, emulated). A key whose frame lies in a `copied` span
+    // [f0, f1) has the interpolation `copied_interpolation` (the segment after it is the original's),
+    // every other key `keys.interpolation`. Handles on every key where either is BEZIER (sides no
+    // BEZIER segment uses lie on the straight segment, segment_handles).
+    ReducedKeys keys;
+    PlaybackBound proof;  // the reduced playback against the reference over the reduced pieces, merged
+    std::vector<std::pair<double, double>> copied;  // frame spans whose keys are the original's (sign flips)
+    KeyInterpolation copied_interpolation = KeyInterpolation::LINEAR;
+    std::vector<double> times;  // the samples of the last reduction: the given ones, those added, copied key frames
+    int rounds = 0;             // reductions made (1: the first was proved); with copied spans, the most of a piece
 };
 
 // Reduce the samples (times, values: n rows of channel_count(mode) channel values, Blender's
 // evaluation of `original`) of a rotation whose keys are `original` (channel_count(mode) F-curves,
 // every segment of each `original_interpolation`; the channels of `mode` in order), proved against
-// the original's own playback. Quaternion values are made hemisphere-continuous first (as reduce_keys
-// wants them); Euler and axis-angle values are kept as given. Throws InvalidArgument as
+// the original's own playback at every time from the first sample to the last, the original's sign
+// flips included (copied, above). Quaternion values take the sign the original stores at their time,
+// and each reduced piece is hemisphere-continuous; Euler and axis-angle values are kept as given. Throws InvalidArgument as
 // PlaybackMotion (the original keys), as reduce_keys* (times, values, tolerance), and for a values
 // count that is not n rows.
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
@@ -179,7 +194,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
 // The same against a method's curve: values are the curve's rotations at `times` as channel values of
 // `mode` (quats_to_channels, with whatever reference the caller chose: they are kept as given, made
 // hemisphere-continuous for quaternions); a sample the proof adds takes the curve's rotation there
-// as channel values continuous with the sample before. Nothing is left out (`excluded` is empty).
+// as channel values continuous with the sample before. Nothing is copied (`copied` is empty).
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
                                const std::vector<double>& values, double tolerance,
                                KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
