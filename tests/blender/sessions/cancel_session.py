@@ -22,15 +22,13 @@ import traceback
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from session_kit import VERDICT, window_override  # noqa: E402  (it puts addon/ and tests/blender/ on the path)
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import bake, bake_ops, fcurves  # noqa: E402
 import rigs  # noqa: E402
 
-VERDICT = sys.argv[sys.argv.index("--") + 1]
 BONES, LAST_FRAME, KEY_EVERY = 100, 10_000, 10
 HOLD_AT = 3        # targets computed when the bake is held for the Esc
 HOLD_LIMIT = 60.0  # seconds the hold waits for the Esc before letting the bake go on
@@ -82,12 +80,6 @@ def build_rig():
     for obj in list(bpy.context.scene.objects):
         bpy.data.objects.remove(obj)
     rigs.build_rig("Rig", LAST_FRAME, 7, BONES, KEY_EVERY)
-
-
-def window_override():
-    window = bpy.context.window_manager.windows[0]
-    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
-    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
 
 
 def finish():

@@ -9,21 +9,18 @@ operator twice, with an undo push each as a button press does — once into a ne
 place — checks that each changed the file, runs ed.undo after each and compares the state with the
 recording. The verdict goes to VERDICT.json; Blender then quits."""
 
-import json
 import math
 import os
 import sys
-import traceback
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import session_kit  # noqa: E402  (it puts addon/ and tests/blender/ on the path)
+from session_kit import differences, window_override  # noqa: E402
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import fcurves  # noqa: E402
-
-VERDICT = sys.argv[sys.argv.index("--") + 1]
 
 
 def state():
@@ -54,36 +51,19 @@ def build():
     return obj
 
 
-def window_override():
-    window = bpy.context.window_manager.windows[0]
-    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
-    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
+def session(verdict):
+    quatcurve_blender.register()
+    with window_override():
+        build()
+        bpy.ops.ed.undo_push(message="quatcurve test: captured")
+        before = state()
+        for label, new_action in (("new action", True), ("in place", False)):
+            result = bpy.ops.quatcurve.clean("EXEC_DEFAULT", True, new_action=new_action)
+            cleaned = state()
+            bpy.ops.ed.undo()
+            after = state()
+            verdict["runs"][label] = dict(result=sorted(result), changed=cleaned != before,
+                                          restored=after == before, differences=differences(before, after))
 
 
-def run():
-    verdict = {"ok": False, "runs": {}}
-    try:
-        quatcurve_blender.register()
-        with window_override():
-            build()
-            bpy.ops.ed.undo_push(message="quatcurve test: captured")
-            before = state()
-            for label, new_action in (("new action", True), ("in place", False)):
-                result = bpy.ops.quatcurve.clean("EXEC_DEFAULT", True, new_action=new_action)
-                cleaned = state()
-                bpy.ops.ed.undo()
-                after = state()
-                verdict["runs"][label] = dict(
-                    result=sorted(result), changed=cleaned != before, restored=after == before,
-                    differences={k: [before.get(k), after.get(k)] for k in set(before) | set(after)
-                                 if before.get(k) != after.get(k)})
-        verdict["ok"] = True
-    except Exception:  # noqa: BLE001 — the verdict carries it
-        verdict["error"] = traceback.format_exc()
-    with open(VERDICT, "w") as f:
-        json.dump(verdict, f, indent=1)
-    bpy.ops.wm.quit_blender()
-    return None
-
-
-bpy.app.timers.register(run, first_interval=0.5)
+session_kit.start(session, runs={})

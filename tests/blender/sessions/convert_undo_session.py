@@ -9,21 +9,18 @@ with an undo push, as a button press does), checks that the file changed, runs e
 the state with the recording (every action's digest, fit records, rotation modes and values). The
 verdict goes to VERDICT.json; Blender then quits."""
 
-import json
 import math
 import os
 import sys
-import traceback
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import session_kit  # noqa: E402  (it puts addon/ and tests/blender/ on the path)
+from session_kit import differences, window_override  # noqa: E402
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import fcurves  # noqa: E402
-
-VERDICT = sys.argv[sys.argv.index("--") + 1]
 
 
 def state():
@@ -65,38 +62,22 @@ def build():
     bpy.context.view_layer.objects.active = cube
 
 
-def window_override():
-    window = bpy.context.window_manager.windows[0]
-    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
-    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
+def session(verdict):
+    quatcurve_blender.register()
+    with window_override():
+        build()
+        bpy.ops.ed.undo_push(message="quatcurve test: scene")
+        before = state()
+        for mode in ("AXIS_ANGLE", "ZXY"):
+            result = bpy.ops.quatcurve.convert("EXEC_DEFAULT", True, rotation_mode=mode, tolerance=0.05)
+            converted = state()
+            bpy.ops.ed.undo()
+            after = state()
+            verdict["rounds"].append({
+                "mode": mode, "result": sorted(result), "changed": converted != before,
+                "modes_after_convert": [converted["object Cube"][0], converted["object Quat"][0]],
+                "restored": after == before,
+                "differences": differences(before, after)})
 
 
-def run():
-    verdict = {"ok": False, "rounds": []}
-    try:
-        quatcurve_blender.register()
-        with window_override():
-            build()
-            bpy.ops.ed.undo_push(message="quatcurve test: scene")
-            before = state()
-            for mode in ("AXIS_ANGLE", "ZXY"):
-                result = bpy.ops.quatcurve.convert("EXEC_DEFAULT", True, rotation_mode=mode, tolerance=0.05)
-                converted = state()
-                bpy.ops.ed.undo()
-                after = state()
-                verdict["rounds"].append({
-                    "mode": mode, "result": sorted(result), "changed": converted != before,
-                    "modes_after_convert": [converted["object Cube"][0], converted["object Quat"][0]],
-                    "restored": after == before,
-                    "differences": {k: [before.get(k), after.get(k)] for k in set(before) | set(after)
-                                    if before.get(k) != after.get(k)}})
-        verdict["ok"] = True
-    except Exception:  # noqa: BLE001 — the verdict carries it
-        verdict["error"] = traceback.format_exc()
-    with open(VERDICT, "w") as f:
-        json.dump(verdict, f, indent=1)
-    bpy.ops.wm.quit_blender()
-    return None
-
-
-bpy.app.timers.register(run, first_interval=0.5)
+session_kit.start(session, rounds=[])

@@ -9,21 +9,19 @@ operator does); live mode refits from its timer (after its debounce on 3.4). The
 back exactly the recorded state (one undo step for the insert and its refit together), and ed.redo
 the refitted state again. The verdict goes to VERDICT.json; Blender then quits."""
 
-import json
 import os
 import sys
 import time
-import traceback
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import session_kit  # noqa: E402  (it puts addon/ and tests/blender/ on the path)
+from session_kit import window_override  # noqa: E402
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import fcurves, live  # noqa: E402
 
-VERDICT = sys.argv[sys.argv.index("--") + 1]
 KEYS = [(1, (1, 0, 0, 0)), (5, (0.7071, 0.7071, 0, 0)), (6, (0.5, 0.5, 0.5, 0.5)), (30, (-0.2, 0.1, 0.9, -0.38))]
 
 
@@ -34,12 +32,6 @@ def state():
         out[action.name] = [fcurves.action_digest(action),
                             [[r.owner_path, r.method, r.signature] for r in action.quatcurve_fits]]
     return out
-
-
-def window_override():
-    window = bpy.context.window_manager.windows[0]
-    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
-    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
 
 
 def wait_for(condition, seconds=60.0):
@@ -98,23 +90,4 @@ def session(verdict):
     quatcurve_blender.unregister()
 
 
-def main():
-    verdict = {"ok": False, "blender": bpy.app.version_string}
-    steps = session(verdict)
-
-    def tick():
-        try:
-            return next(steps)
-        except StopIteration:
-            verdict["ok"] = True
-        except Exception:  # noqa: BLE001 — the verdict carries it
-            verdict["error"] = traceback.format_exc()
-        with open(VERDICT, "w") as f:
-            json.dump(verdict, f, indent=1)
-        bpy.ops.wm.quit_blender()
-        return None
-
-    bpy.app.timers.register(tick, first_interval=0.5)
-
-
-main()
+session_kit.start(session, blender=bpy.app.version_string)

@@ -11,22 +11,18 @@ the fit ("fit_rounds"): a fit of the original keys, undone; and a refit of a fit
 method and tolerance), undone back to the first fit — keys, handles, key types and the fit records
 on the action. The verdict goes to VERDICT.json; Blender then quits."""
 
-import json
 import math
 import os
 import sys
-import traceback
 
 import bpy
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import session_kit  # noqa: E402  (it puts addon/ and tests/blender/ on the path)
+from session_kit import differences, window_override  # noqa: E402
 
 import quatcurve_blender  # noqa: E402
 from quatcurve_blender import fcurves  # noqa: E402
-
-VERDICT = sys.argv[sys.argv.index("--") + 1]
 
 
 def state():
@@ -69,60 +65,43 @@ def build():
     bpy.context.view_layer.objects.active = cube
 
 
-def window_override():
-    window = bpy.context.window_manager.windows[0]
-    area = next((a for a in window.screen.areas if a.type == "VIEW_3D"), window.screen.areas[0])
-    return bpy.context.temp_override(window=window, area=area, screen=window.screen)
+def session(verdict):
+    quatcurve_blender.register()
+    with window_override():
+        build()
+        bpy.ops.ed.undo_push(message="quatcurve test: scene")
+        before = state()
+        verdict["rounds"] = []
+        for kwargs in (dict(method="SQUAD", rotation_mode="QUATERNION", new_action=True),
+                       dict(method="SLERP", rotation_mode="KEEP", new_action=False)):
+            # undo=True: push an undo step as the UI does for an operator with the UNDO flag
+            # (a plain call from a script does not).
+            result = bpy.ops.quatcurve.bake("EXEC_DEFAULT", True, **kwargs)
+            baked = state()
+            bpy.ops.ed.undo()
+            after = state()
+            verdict["rounds"].append({
+                "bake": kwargs, "result": sorted(result), "bake_changed_file": baked != before,
+                "new_actions": sorted(set(baked["actions"]) - set(after["actions"])),
+                "restored": after == before,
+                "differences": differences(before, after)})
+        verdict["fit_rounds"] = []
+        # 1: the original keys fitted, undone. 2: a fitted file refitted (another method and
+        # tolerance), undone back to the first fit.
+        for name, first, kwargs in (("fit", None, dict(method="SQUAD", tolerance=0.01)),
+                                    ("refit", dict(method="SLERP", tolerance=0.05),
+                                     dict(method="TCB", tension=0.5, tolerance=0.01))):
+            if first is not None:
+                bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **first)
+            start = state()
+            result = bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **kwargs)
+            fitted = state()
+            bpy.ops.ed.undo()
+            after = state()
+            verdict["fit_rounds"].append({
+                "fit": name, "result": sorted(result), "fit_changed_file": fitted != start,
+                "records_after_fit": fitted["fit records"], "restored": after == start,
+                "differences": differences(start, after)})
 
 
-def run():
-    verdict = {"ok": False}
-    try:
-        quatcurve_blender.register()
-        with window_override():
-            build()
-            bpy.ops.ed.undo_push(message="quatcurve test: scene")
-            before = state()
-            verdict["rounds"] = []
-            for kwargs in (dict(method="SQUAD", rotation_mode="QUATERNION", new_action=True),
-                           dict(method="SLERP", rotation_mode="KEEP", new_action=False)):
-                # undo=True: push an undo step as the UI does for an operator with the UNDO flag
-                # (a plain call from a script does not).
-                result = bpy.ops.quatcurve.bake("EXEC_DEFAULT", True, **kwargs)
-                baked = state()
-                bpy.ops.ed.undo()
-                after = state()
-                verdict["rounds"].append({
-                    "bake": kwargs, "result": sorted(result), "bake_changed_file": baked != before,
-                    "new_actions": sorted(set(baked["actions"]) - set(after["actions"])),
-                    "restored": after == before,
-                    "differences": {k: [before.get(k), after.get(k)] for k in set(before) | set(after)
-                                    if before.get(k) != after.get(k)}})
-            verdict["fit_rounds"] = []
-            # 1: the original keys fitted, undone. 2: a fitted file refitted (another method and
-            # tolerance), undone back to the first fit.
-            for name, first, kwargs in (("fit", None, dict(method="SQUAD", tolerance=0.01)),
-                                        ("refit", dict(method="SLERP", tolerance=0.05),
-                                         dict(method="TCB", tension=0.5, tolerance=0.01))):
-                if first is not None:
-                    bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **first)
-                start = state()
-                result = bpy.ops.quatcurve.fit("EXEC_DEFAULT", True, **kwargs)
-                fitted = state()
-                bpy.ops.ed.undo()
-                after = state()
-                verdict["fit_rounds"].append({
-                    "fit": name, "result": sorted(result), "fit_changed_file": fitted != start,
-                    "records_after_fit": fitted["fit records"], "restored": after == start,
-                    "differences": {k: [start.get(k), after.get(k)] for k in set(start) | set(after)
-                                    if start.get(k) != after.get(k)}})
-        verdict["ok"] = True
-    except Exception:  # noqa: BLE001 — the verdict carries it
-        verdict["error"] = traceback.format_exc()
-    with open(VERDICT, "w") as f:
-        json.dump(verdict, f, indent=1)
-    bpy.ops.wm.quit_blender()
-    return None
-
-
-bpy.app.timers.register(run, first_interval=0.5)
+session_kit.start(session)
