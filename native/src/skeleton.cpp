@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "quatcurve/errors.hpp"
 #include "quatcurve/quat.hpp"
@@ -239,16 +241,26 @@ VertexError detail::vertex_error(const std::vector<Vec3>& a, const std::vector<V
     return e;
 }
 
-VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
-                                 double shell) {
+namespace {
+
+// The virtual vertices of two motions of the skeleton (a's, then b's), their inputs checked.
+std::pair<std::vector<Vec3>, std::vector<Vec3>> vertices_of_both(const Skeleton& skeleton, const SkeletonPose& a,
+                                                                const SkeletonPose& b, double shell) {
     detail::check_shell(shell);
     if (a.samples != b.samples)
         throw InvalidArgument("b: " + std::to_string(b.samples) + " samples, a has " + std::to_string(a.samples));
     check_skeleton(skeleton);
     check_pose(skeleton, a, "a");
     check_pose(skeleton, b, "b");
-    const std::vector<Vec3> va = virtual_vertices(skeleton, pose_matrices(skeleton, a), a.samples, shell);
-    const std::vector<Vec3> vb = virtual_vertices(skeleton, pose_matrices(skeleton, b), b.samples, shell);
+    return {virtual_vertices(skeleton, pose_matrices(skeleton, a), a.samples, shell),
+            virtual_vertices(skeleton, pose_matrices(skeleton, b), b.samples, shell)};
+}
+
+}  // namespace
+
+VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
+                                 double shell) {
+    const auto [va, vb] = vertices_of_both(skeleton, a, b, shell);
     const VertexError e = detail::vertex_error(va, vb, skeleton.size(), a.samples);
     if (!std::isfinite(e.distance))
         throw InvalidArgument("b: its distance from a overflows double precision (the input is too large)");
@@ -257,14 +269,7 @@ VertexError virtual_vertex_error(const Skeleton& skeleton, const SkeletonPose& a
 
 std::vector<double> virtual_vertex_distances(const Skeleton& skeleton, const SkeletonPose& a, const SkeletonPose& b,
                                              double shell) {
-    detail::check_shell(shell);
-    if (a.samples != b.samples)
-        throw InvalidArgument("b: " + std::to_string(b.samples) + " samples, a has " + std::to_string(a.samples));
-    check_skeleton(skeleton);
-    check_pose(skeleton, a, "a");
-    check_pose(skeleton, b, "b");
-    const std::vector<Vec3> va = virtual_vertices(skeleton, pose_matrices(skeleton, a), a.samples, shell);
-    const std::vector<Vec3> vb = virtual_vertices(skeleton, pose_matrices(skeleton, b), b.samples, shell);
+    const auto [va, vb] = vertices_of_both(skeleton, a, b, shell);
     std::vector<double> out(skeleton.size() * a.samples, 0.0);
     for (std::size_t k = 0; k < out.size(); ++k)
         for (int v = 0; v < kVirtualVertices; ++v) {
