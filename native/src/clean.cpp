@@ -42,6 +42,8 @@ constexpr double kRunShare = 0.5;
 // min_angle applies where the cubic interpolates (two nodes on each side), and grows with the gain
 // where it extrapolates near the clip's ends (a spike among the nodes throws it far off there).
 const double kInteriorGain = std::sqrt(35.0 / 18.0);
+// Rounds of search and pruning in find_spikes at most: a guard against marks and prunes cycling.
+constexpr int kPruneRounds = 8;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
 std::string num(double x) {
@@ -252,7 +254,10 @@ struct Smoother {
 
     // Gauss–Newton from p to the smoother's fixed point for λ and the weights w.
     void solve(double lambda, const std::vector<double>& w, std::vector<Quat>& p) const {
-        const Pentadiagonal m = matrix(lambda, w);
+        solve(matrix(lambda, w), lambda, w, p);
+    }
+    // The same with the factored matrix of λ and w given.
+    void solve(const Pentadiagonal& m, double lambda, const std::vector<double>& w, std::vector<Quat>& p) const {
         std::vector<Vec3> omega(n - 1), rhs(n);
         std::vector<double> x(3 * n);  // the three components' right-hand sides, then δ, row by row
         for (int iteration = 0; iteration < 60; ++iteration) {
@@ -276,9 +281,10 @@ struct Smoother {
         }
     }
 
-    // tr(S) of the linearized smoother S = (W + λ·AᵀMA)⁻¹·W: its degrees of freedom.
-    double degrees_of_freedom(double lambda, const std::vector<double>& w) const {
-        const std::vector<double> z = matrix(lambda, w).inverse_diagonal();
+    // tr(S) of the linearized smoother S = (W + λ·AᵀMA)⁻¹·W (m: its factored matrix): its degrees of
+    // freedom.
+    double degrees_of_freedom(const Pentadiagonal& m, const std::vector<double>& w) const {
+        const std::vector<double> z = m.inverse_diagonal();
         double df = 0.0;
         for (std::size_t i = 0; i < n; ++i) df += z[i] * w[i];
         return df;
@@ -464,8 +470,8 @@ Spikes find_spikes(const std::vector<double>& times, const std::vector<Quat>& q,
     // A frame marked while a spike not yet marked spoiled its prediction (an extrapolation at the
     // clip's ends through a spike, say) is no spike once that one is marked: each marked frame is
     // scored again alone with every other mark in place and unmarked below the limit; the search then
-    // runs again on what is left, until nothing changes.
-    for (int round = 0; round < 8; ++round) {
+    // runs again on what is left, until nothing changes (or after kPruneRounds rounds).
+    for (int round = 0; round < kPruneRounds; ++round) {
         search();
         bool pruned = false;
         for (std::size_t i = 0; i < n; ++i) {
@@ -545,12 +551,12 @@ Smoothed smooth_rotations(const std::vector<double>& times, const std::vector<Qu
         // of decades over [10⁻³, 10¹⁰], then golden section around the best to 0.01).
         const double noise = options.noise ? *options.noise : estimate_rotation_noise(times, u);
         const double sigma2 = noise * noise;
-        const double m = static_cast<double>(std::count(bound.begin(), bound.end(), 1));
+        const double m = std::max(1.0, static_cast<double>(std::count(bound.begin(), bound.end(), 1)));
         auto risk = [&](double log_lambda) {
             const double lambda = std::pow(10.0, log_lambda);
-            smoother.solve(lambda, w, p);
-            return smoother.mean_square_deviation(p, bound) +
-                   2.0 * sigma2 * smoother.degrees_of_freedom(lambda, w) / m;
+            const Pentadiagonal matrix = smoother.matrix(lambda, w);
+            smoother.solve(matrix, lambda, w, p);
+            return smoother.mean_square_deviation(p, bound) + 2.0 * sigma2 * smoother.degrees_of_freedom(matrix, w) / m;
         };
         double best = 10.0, best_risk = std::numeric_limits<double>::infinity();
         for (double x = 10.0; x >= -3.0; x -= 1.0) {
