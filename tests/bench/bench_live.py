@@ -19,6 +19,11 @@ quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapp
 `--smoke` (tests/bench/smoke.py): each case once, the big action cut to 3 bones x 100 frames.
 `--profile`: the last run of each case under cProfile (its time counts with the profiler's cost), its
 top functions by own time.
+`--addon DIR`: import quatcurve_blender from DIR (a folder holding it, with its module built) instead of
+this tree's addon/ — the previous release's add-on, run by the same script for a before → after table:
+
+  git archive <commit> addon | tar -x -C /tmp/before   # and copy that commit's built quatcurve*.so in
+  blender -b --factory-startup --python tests/bench/bench_live.py -- --addon /tmp/before/addon
 """
 import cProfile
 import os
@@ -31,15 +36,18 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
+import smoke  # noqa: E402
+
+ARGS = smoke.script_args()
+ADDON = ARGS[ARGS.index("--addon") + 1] if "--addon" in ARGS else os.path.join(ROOT, "addon")
+sys.path.insert(0, os.path.abspath(ADDON))
 
 import quatcurve_blender  # noqa: E402
-import smoke  # noqa: E402
 from quatcurve_blender import fcurves, fit, live, native, targets  # noqa: E402
 
 REPEAT = 1 if smoke.SMOKE else 7
-PROFILE = "--profile" in sys.argv
+PROFILE = "--profile" in ARGS
 BIG_BONES, BIG_FRAMES = (3, 100) if smoke.SMOKE else (100, 1000)
 NATIVE = [0.0]
 
@@ -153,7 +161,8 @@ def main():
     t1 = time.perf_counter()
     second = fit.fit([targets.Target(big, pb.name) for pb in big.pose.bones], settings)
     t2 = time.perf_counter()
-    print("quatcurve live refit, Blender %s (%s)" % (bpy.app.version_string, "binary" if bpy.app.binary_path else "bpy module"))
+    print("quatcurve live refit, Blender %s (%s), add-on %s" % (
+        bpy.app.version_string, "binary" if bpy.app.binary_path else "bpy module", os.path.dirname(quatcurve_blender.__file__)))
     print("initial fit: One %.1f ms (%s); Big %.0f ms (%s)" % ((t1 - t) * 1e3, first.summary(), (t2 - t1) * 1e3,
                                                              second.summary()))
     bpy.context.scene.quatcurve_fit.live = True
