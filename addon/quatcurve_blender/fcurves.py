@@ -586,6 +586,37 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     return fcurve
 
 
+def rewrite_handles(fcurve, frames, values, handle_left, handle_right, old_frames, old_values):
+    """Writes BEZIER keys with FREE handles (as write_keys) over an F-curve that holds as many keys,
+    keeping its key slots — and with them their types and selection, which the caller found to be
+    the ones it writes: (old_frames, old_values) are the keys it holds (read_keys), and their frames
+    and values are written only where they differ bit for bit from these as float32. Interpolation,
+    handle types and handles are always written, so nothing an animator set there stays. The caller
+    tags the action (foreach_set tags nothing): see fit.write_plan."""
+    packed = PackedKeys(frames, values)
+    n = len(packed)
+    points = fcurve.keyframe_points
+    old = np.empty((n, 2), dtype=np.float32)
+    old[:, 0], old[:, 1] = old_frames, old_values
+    if not np.array_equal(packed.co.view(np.uint32), old.reshape(-1).view(np.uint32)):
+        points.foreach_set("co", packed.co)
+    kind = _enum_value(bpy.types.Keyframe, "interpolation", "BEZIER")
+    points.foreach_set("interpolation", np.full(n, kind, dtype=KEY_ENUM_DTYPE))
+    if _BULK_ENUM.get("handle_left_type") is False:  # 3.4: key by key, only those not FREE already
+        for point in points:
+            if point.handle_left_type != "FREE":
+                point.handle_left_type = "FREE"
+            if point.handle_right_type != "FREE":
+                point.handle_right_type = "FREE"
+    else:
+        _set_free_handles(points, n)
+    points.foreach_set("handle_left", np.asarray(handle_left, dtype=np.float32).reshape(n, 2).ravel())
+    points.foreach_set("handle_right", np.asarray(handle_right, dtype=np.float32).reshape(n, 2).ravel())
+    if not packed.increasing:
+        fcurve.update()
+    return fcurve
+
+
 # Whether bulk foreach_set / foreach_get work on a Keyframe enum property in this Blender, learnt
 # from the first use (prop → bool): Blender 3.4 ignores both on handle types, 4.x and 5.x take them.
 # Knowing it spares every later call the bulk attempt and the read-back check.

@@ -106,7 +106,19 @@ def curve_options(settings, ease_in=None, ease_out=None, turns=None):
 # ---- records on the action: fitted targets and per-key ease -----------------------------------------
 
 def target_key(target):
-    """(slot, owner path): what identifies a target's rotation channels inside its action."""
+    """(slot, owner path): what identifies a target's rotation channels inside its action. Inside
+    record_index() each target's is found once (a refit asks up to nine times per target)."""
+    memo = _target_keys
+    if memo is not None:
+        at = (target.object.as_pointer(), target.bone)
+        key = memo.get(at)
+        if key is None:
+            key = memo[at] = _target_key(target)
+        return key
+    return _target_key(target)
+
+
+def _target_key(target):
     owner = target.owner
     path = owner.path_from_id() if target.bone is not None else ""
     return fcurves.slot_identifier(target.id_data) or "", path
@@ -114,6 +126,11 @@ def target_key(target):
 
 # action pointer → (record count, {(slot, owner path): index of its first record}), inside record_index() only.
 _record_index = None
+# Also inside record_index() only: (object pointer, bone) → target_key, and the pointers of the
+# F-curves write_plan wrote (one written twice in a block — two objects playing one action's
+# channels — is not compared with what its read found: that read is no longer what it holds).
+_target_keys = None
+_written = None
 # The last fit written for each target, by (action name, slot, owner path): the next fit of the same
 # target reuses its unchanged key segments (native fit_through_keys' previous). Memory only, cleared
 # when a file loads; the native side checks every reused segment against the new keys and curve, so
@@ -157,15 +174,15 @@ def record_index():
     target: 26 µs each). Inside the block only store_record may change records (it adds; slots and
     owner paths never change); the index is made again when the action's record count changes, and
     a record found must still carry the target's slot and path. Main thread only, like all bpy use."""
-    global _record_index
+    global _record_index, _target_keys, _written
     outer = _record_index
     if outer is None:
-        _record_index = {}
+        _record_index, _target_keys, _written = {}, {}, set()
     try:
         yield
     finally:
         if outer is None:
-            _record_index = None
+            _record_index = _target_keys = _written = None
 
 
 def find_record(action, target):
@@ -213,8 +230,10 @@ def key_eases(action, target, frames):
 
 def set_key_eases(action, target, frames, ease_in, ease_out):
     """Replaces the target's ease records by one per key frame with a non-zero ease."""
-    slot, path = target_key(target)
     items = action.quatcurve_eases
+    if not len(items) and not (np.any(ease_in) or np.any(ease_out)):
+        return  # nothing stored, nothing to store
+    slot, path = target_key(target)
     for i in reversed(range(len(items))):
         if items[i].owner_path == path and items[i].slot == slot:
             items.remove(i)
@@ -259,7 +278,7 @@ def key_turns(action, target, frames):
 def set_key_turns(action, target, frames, turns):
     """Replaces the target's turn records by one per key frame with non-zero turns."""
     items = getattr(action, "quatcurve_turns", None)
-    if items is None:
+    if items is None or (not len(items) and (turns is None or not np.any(turns))):
         return
     slot, path = target_key(target)
     for i in reversed(range(len(items))):
@@ -354,7 +373,10 @@ class AnimatorKeys:
     data path; frames (K,): the union of the channels' animator key frames (channels keyed separately,
     e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
     (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit;
-    loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open."""
+    loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open.
+    stored: per channel, what its F-curve held when read — (frames, values, types, selected) of every
+    key, generated ones too, in stored order — or None (no F-curve): write_plan leaves what is
+    already there as it is (not part of the signature)."""
     name: str
     mode: str
     prop: str
@@ -364,6 +386,7 @@ class AnimatorKeys:
     types: np.ndarray
     selected: np.ndarray
     loop: cycles.Loop = None
+    stored: list = None
 
     @property
     def is_euler(self):
@@ -374,13 +397,18 @@ class AnimatorKeys:
         return self.mode == "AXIS_ANGLE"
 
     def signature(self):
-        """A digest of the animator's keys (frames, values, types): live mode refits when it changes."""
+        """A digest of the animator's keys (frames, values, types): live mode refits when it changes.
+        Computed once (live compares it, store_record stores it): the arrays are not changed in place."""
+        known = self.__dict__.get("_signature")
+        if known is not None:
+            return known
         h = hashlib.sha256(("%s %s" % (self.mode, self.path)).encode())
         if self.loop is not None:  # adding or removing the Cycles modifiers refits (or stops)
             h.update(("loop %r %r %d" % (self.loop.start, self.loop.end, self.loop.offset)).encode())
         for a in (self.frames, self.values, self.types):
             h.update(np.ascontiguousarray(a).tobytes())
-        return h.hexdigest()
+        self._signature = h.hexdigest()
+        return self._signature
 
 
 def read_animator_keys(target):
@@ -393,11 +421,14 @@ def read_animator_keys(target):
         targets.check_editable(target, new_action=False)
     except TargetError as e:
         raise FitError(str(e)) from None
-    mode = target.owner.rotation_mode
+    owner = target.owner
+    mode = owner.rotation_mode
     prop, count = fcurves.rotation_property(mode)
-    path = target.data_path(prop)
+    path = owner.path_from_id(prop)
+    anim = target.id_data.animation_data
     try:
-        targets.refuse_drivers(target, prop, count)
+        if anim is not None and len(anim.drivers):
+            targets.refuse_drivers(target, prop, count)
     except TargetError as e:
         raise FitError(str(e)) from None
     action = fcurves.active_action(target.id_data)
@@ -412,14 +443,16 @@ def read_animator_keys(target):
         loop = cycles.target_loop(target.name, prop, curves, mode, action)
     except TargetError as e:
         raise FitError(str(e)) from None
-    per_channel = []
+    per_channel, stored = [], []
     for c, curve in enumerate(curves):
         if curve is None or not fcurves.key_count(curve):
             per_channel.append(None)
+            stored.append(None)
             continue
         frames, values = fcurves.read_keys(curve)
         types = fcurves.read_key_types(curve)
         selected = fcurves.read_key_selection(curve)
+        stored.append((frames, values, types, selected))
         mine = types != KEY_TYPE_GENERATED
         if not mine.all():
             frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
@@ -486,7 +519,7 @@ def read_animator_keys(target):
     types[types < 0] = KEY_TYPE_KEYFRAME
     if loop is not None:
         check_loop(target.name, prop, curves, loop, frames, values)
-    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop)
+    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop, stored)
 
 
 def check_loop(name, prop, curves, loop, frames, values):
@@ -589,13 +622,19 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
     channels, generated = [], 0
+    shared = None  # (indices, types, generated) of the channel before: synchronized channels share them
     for ch in fitted.channels:
-        types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
-        at = np.searchsorted(forced, ch.indices)
-        is_key = (at < K) & (forced[np.minimum(at, K - 1)] == ch.indices)
-        types[is_key] = keys.types[at[is_key]]
-        generated += int((~is_key).sum())
-        channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
+        indices = ch.indices
+        if shared is not None and np.array_equal(shared[0], indices):
+            types = shared[1].copy()
+        else:
+            types = np.full(len(indices), KEY_TYPE_GENERATED, dtype=np.int64)
+            at = np.searchsorted(forced, indices)
+            is_key = (at < K) & (forced[np.minimum(at, K - 1)] == indices)
+            types[is_key] = keys.types[at[is_key]]
+            shared = (indices, types.copy(), len(indices) - int(np.count_nonzero(is_key)))
+        generated += shared[2]
+        channels.append((ch.frames, ch.values, ch.handle_left, ch.handle_right, types))
     proof = kf.proof
     if not proof.proven:
         notes.append("%s: the bound holds within %.4f° at every instant, ABOVE the tolerance near frame %.3f%s" % (
@@ -636,12 +675,18 @@ def euler_notes(keys, kf):
 def write_plan(plan, target):
     """Writes one target's fitted keys into its active action, in place: the rotation F-curves' keys
     are replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
-    selection kept) and the generated keys; then the fit record and the eases are stored."""
+    selection kept) and the generated keys; then the fit record and the eases are stored.
+
+    A refit mostly changes a few key segments: where an F-curve still holds, key for key, the frames,
+    values, types and selection this fit writes (as its read found them, `keys.stored`), its keys are
+    kept and only their handles, interpolation and handle types written (fcurves.rewrite_handles);
+    either way the F-curve ends up holding exactly the fitted keys."""
     keys = plan.keys
     action = fcurves.active_action(target.id_data)
     channels = fcurves.Channels.of(target.id_data, action, create=True)
     found = channels.find_all(keys.path, len(plan.channels))
     group = False  # the group of the channels' F-curves, read when a missing one is made
+    written, kept = _written, False
     for c, (frames, values, left, right, types) in enumerate(plan.channels):
         curve = found[c]
         if curve is None:
@@ -650,13 +695,24 @@ def write_plan(plan, target):
             curve = channels.new_fcurve(keys.path, c, group=group)
             if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
                 curve.modifiers.new("CYCLES")
-        fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
-        fcurves.write_key_types(curve, types)
         chosen = np.zeros(len(frames), dtype=bool)
         at = np.searchsorted(keys.frames, frames)
         on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
         chosen[on_key] = keys.selected[c, at[on_key]]
-        fcurves.write_key_selection(curve, chosen)
+        was = keys.stored[c] if keys.stored is not None and found[c] is not None and written is not None else None
+        pointer = curve.as_pointer() if written is not None else None
+        if (was is not None and pointer not in written and len(was[0]) == len(frames) == fcurves.key_count(curve)
+                and np.array_equal(was[2], types) and np.array_equal(was[3], chosen)):
+            fcurves.rewrite_handles(curve, frames, values, left, right, was[0], was[1])
+            kept = True
+        else:
+            fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
+            fcurves.write_key_types(curve, types)
+            fcurves.write_key_selection(curve, chosen)
+        if written is not None:
+            written.add(pointer)
+    if kept:  # foreach_set tags nothing: the action's evaluated copy must be made again
+        action.update_tag()
     store_record(keys, plan.settings, target, action)
     if plan.fit is not None:
         _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
@@ -679,12 +735,19 @@ def store_record(keys, settings, target, action=None):
         if known is not None and known[0] == len(records) - 1:  # the index learns the new record
             known[1].setdefault((record.slot, record.owner_path), len(records) - 1)
             _record_index[action.as_pointer()] = (len(records), known[1])
-    record.method = settings.method
-    for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
-        setattr(record, name, getattr(settings, name))
-    record.prop = keys.prop
-    record.signature = keys.signature()
-    record.key_frames = " ".join(map(repr, np.asarray(keys.frames, dtype=np.float64).tolist()))
+    # Each property only when it changes (a refit keeps the settings and mostly the frames).
+    for name in ("method", "tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
+        value = getattr(settings, name)
+        if getattr(record, name) != value:
+            setattr(record, name, value)
+    if record.prop != keys.prop:
+        record.prop = keys.prop
+    signature = keys.signature()
+    if record.signature != signature:
+        record.signature = signature
+    frames = np.asarray(keys.frames, dtype=np.float64)
+    if not np.array_equal(record_frames(record), frames):
+        record.key_frames = " ".join(map(repr, frames.tolist()))
 
 
 def settings_of(record):
@@ -694,8 +757,20 @@ def settings_of(record):
                        clamped=record.clamped, subframes=record.subframes)
 
 
+_record_frames = {}  # record.key_frames text → its frames (read-only), the latest few hundred
+
+
 def record_frames(record):
-    return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
+    """The key frames a fit record stores (read-only array)."""
+    text = record.key_frames
+    frames = _record_frames.get(text)
+    if frames is None:
+        if len(_record_frames) >= 512:
+            _record_frames.clear()
+        frames = np.array([float(x) for x in text.split()], dtype=np.float64)
+        frames.flags.writeable = False
+        _record_frames[text] = frames
+    return frames
 
 
 def refit_eases(keys, target, record=None):
