@@ -374,9 +374,10 @@ class AnimatorKeys:
     e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
     (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit;
     loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open.
-    stored: per channel, what its F-curve held when read — (frames, values, types, selected) of every
-    key, generated ones too, in stored order — or None (no F-curve): write_plan leaves what is
-    already there as it is (not part of the signature)."""
+    stored: what the rotation F-curves held when read, when every channel has one with as many keys
+    (fcurves.read_keys_together: co (C, 2N) float32, types (C, N), selected (C, N), generated keys
+    too, in stored order), else None: write_plan leaves what is already there as it is (not part of
+    the signature)."""
     name: str
     mode: str
     prop: str
@@ -443,16 +444,18 @@ def read_animator_keys(target):
         loop = cycles.target_loop(target.name, prop, curves, mode, action)
     except TargetError as e:
         raise FitError(str(e)) from None
-    per_channel, stored = [], []
+    if loop is None:
+        keys = _keys_together(target.name, mode, prop, path, fcurves.read_keys_together(curves))
+        if keys is not None:
+            return keys
+    per_channel = []
     for c, curve in enumerate(curves):
         if curve is None or not fcurves.key_count(curve):
             per_channel.append(None)
-            stored.append(None)
             continue
         frames, values = fcurves.read_keys(curve)
         types = fcurves.read_key_types(curve)
         selected = fcurves.read_key_selection(curve)
-        stored.append((frames, values, types, selected))
         mine = types != KEY_TYPE_GENERATED
         if not mine.all():
             frames, values, types, selected = frames[mine], values[mine], types[mine], selected[mine]
@@ -519,7 +522,31 @@ def read_animator_keys(target):
     types[types < 0] = KEY_TYPE_KEYFRAME
     if loop is not None:
         check_loop(target.name, prop, curves, loop, frames, values)
-    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop, stored)
+    return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop)
+
+
+def _keys_together(name, mode, prop, path, together):
+    """The AnimatorKeys of channels read together (fcurves.read_keys_together) when they are what
+    read_animator_keys' general path reads in the usual case — every channel holds the same frames
+    and marks the same keys generated, the animator's frames strictly increase from a finite one,
+    their values are finite — and so come out the same, in a few operations over all channels at
+    once; None otherwise (the general path then reads, fills, sorts or refuses)."""
+    if together is None:
+        return None
+    co, types_all, selected_all = together
+    frames_all, values_all = co[:, 0::2].astype(np.float64), co[:, 1::2].astype(np.float64)
+    mine_all = types_all != KEY_TYPE_GENERATED
+    mine = mine_all[0]
+    if not (mine_all == mine).all() or not (frames_all == frames_all[0]).all():
+        return None
+    frames = frames_all[0][mine]
+    values = np.ascontiguousarray(values_all[:, mine].T)
+    if not len(frames) or not np.isfinite(frames[0]) or not (frames[1:] > frames[:-1]).all():
+        return None
+    if not np.isfinite(values).all():
+        return None
+    return AnimatorKeys(name, mode, prop, path, frames, values, types_all[0][mine], selected_all[:, mine], None,
+                        together)
 
 
 def check_loop(name, prop, curves, loop, frames, values):
@@ -677,48 +704,81 @@ def write_plan(plan, target):
     are replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
     selection kept) and the generated keys; then the fit record and the eases are stored.
 
-    A refit mostly changes a few key segments: where an F-curve still holds, key for key, the frames,
-    values, types and selection this fit writes (as its read found them, `keys.stored`), its keys are
-    kept and only their handles, interpolation and handle types written (fcurves.rewrite_handles);
-    either way the F-curve ends up holding exactly the fitted keys."""
+    A refit mostly changes a few key segments: where the F-curves still hold, key for key, the types
+    and selection this fit writes (as their read found them, `keys.stored`), their keys are kept and
+    their frames and values written only where they changed (_rewrite_kept); either way the
+    F-curves end up holding exactly the fitted keys, with BEZIER interpolation and FREE handles."""
     keys = plan.keys
     action = fcurves.active_action(target.id_data)
     channels = fcurves.Channels.of(target.id_data, action, create=True)
     found = channels.find_all(keys.path, len(plan.channels))
-    group = False  # the group of the channels' F-curves, read when a missing one is made
-    written, kept = _written, False
-    for c, (frames, values, left, right, types) in enumerate(plan.channels):
-        curve = found[c]
-        if curve is None:
-            if group is False:
-                group = channels.group_of(keys.path)
-            curve = channels.new_fcurve(keys.path, c, group=group)
-            if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
-                curve.modifiers.new("CYCLES")
-        chosen = np.zeros(len(frames), dtype=bool)
-        at = np.searchsorted(keys.frames, frames)
-        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
-        chosen[on_key] = keys.selected[c, at[on_key]]
-        was = keys.stored[c] if keys.stored is not None and found[c] is not None and written is not None else None
-        pointer = curve.as_pointer() if written is not None else None
-        if (was is not None and pointer not in written and len(was[0]) == len(frames) == fcurves.key_count(curve)
-                and np.array_equal(was[2], types) and np.array_equal(was[3], chosen)):
-            fcurves.rewrite_handles(curve, frames, values, left, right, was[0], was[1])
-            kept = True
-        else:
+    if _rewrite_kept(plan, found):
+        action.update_tag()  # foreach_set tags nothing: the action's evaluated copy must be made again
+    else:
+        group = False  # the group of the channels' F-curves, read when a missing one is made
+        for c, (frames, values, left, right, types) in enumerate(plan.channels):
+            curve = found[c]
+            if curve is None:
+                if group is False:
+                    group = channels.group_of(keys.path)
+                curve = channels.new_fcurve(keys.path, c, group=group)
+                if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
+                    curve.modifiers.new("CYCLES")
             fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
             fcurves.write_key_types(curve, types)
+            chosen = np.zeros(len(frames), dtype=bool)
+            at = np.searchsorted(keys.frames, frames)
+            on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
+            chosen[on_key] = keys.selected[c, at[on_key]]
             fcurves.write_key_selection(curve, chosen)
-        if written is not None:
-            written.add(pointer)
-    if kept:  # foreach_set tags nothing: the action's evaluated copy must be made again
-        action.update_tag()
+            if _written is not None:
+                _written.add(curve.as_pointer())
     store_record(keys, plan.settings, target, action)
     if plan.fit is not None:
         _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
     set_key_turns(action, target, keys.frames, plan.turns)
     target.id_data.update_tag(refresh={"TIME"})
+
+
+def _rewrite_kept(plan, curves):
+    """Writes the plan's channels over `curves` keeping their key slots, when each still holds as many
+    keys, with the types and selection the plan gives them, as its read found (`keys.stored`), and
+    no earlier write_plan of this record_index() block wrote it: only the frames and values of a
+    channel whose keys changed bit for bit, and every channel's interpolation, handle types and
+    handles (fcurves.rewrite_handles). All channels at once; False (nothing written) otherwise."""
+    keys, chans, written = plan.keys, plan.channels, _written
+    if keys.stored is None or written is None or any(curve is None for curve in curves):
+        return False
+    co_was, types_was, selected_was = keys.stored
+    C, n = types_was.shape
+    if len(chans) != C or any(len(ch[0]) != n for ch in chans):
+        return False
+    pointers = [curve.as_pointer() for curve in curves]
+    if any(p in written for p in pointers) or any(fcurves.key_count(curve) != n for curve in curves):
+        return False
+    if not np.array_equal(np.array([ch[4] for ch in chans]), types_was):
+        return False
+    frames = np.array([ch[0] for ch in chans])
+    if not (frames == frames[0]).all() or not (frames[0, 1:] > frames[0, :-1]).all():
+        return False
+    at = np.searchsorted(keys.frames, frames[0])
+    on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames[0])
+    chosen = np.zeros((C, n), dtype=bool)
+    chosen[:, on_key] = keys.selected[:, at[on_key]]
+    if not np.array_equal(chosen, selected_was):
+        return False
+    co = np.empty((C, n, 2), dtype=np.float32)
+    co[:, :, 0] = frames
+    co[:, :, 1] = np.array([ch[1] for ch in chans])
+    co = co.reshape(C, 2 * n)
+    changed = (co.view(np.uint32) != co_was.view(np.uint32)).any(axis=1)
+    left = np.array([ch[2] for ch in chans], dtype=np.float32).reshape(C, 2 * n)
+    right = np.array([ch[3] for ch in chans], dtype=np.float32).reshape(C, 2 * n)
+    for c, curve in enumerate(curves):
+        fcurves.rewrite_handles(curve, co[c] if changed[c] else None, left[c], right[c])
+    written.update(pointers)
+    return True
 
 
 def store_record(keys, settings, target, action=None):
