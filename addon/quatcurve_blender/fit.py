@@ -94,13 +94,18 @@ def check_settings(settings):
 def curve_options(settings, ease_in=None, ease_out=None, turns=None):
     """Keyword options of quatcurve.Curve for the settings' method (and per-key ease and turns)."""
     options = methods.options(settings.method, settings)
-    if ease_in is not None and np.any(ease_in):
+    if ease_in is not None and _any(ease_in):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
-    if ease_out is not None and np.any(ease_out):
+    if ease_out is not None and _any(ease_out):
         options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
-    if turns is not None and np.any(turns):
+    if turns is not None and _any(turns):
         options["turns"] = np.asarray(turns, dtype=np.float64)
     return options
+
+
+def _any(values):
+    """np.any(values), without its dispatch for an array (a refit asks five times per target)."""
+    return bool(values.any()) if isinstance(values, np.ndarray) else bool(np.any(values))
 
 
 # ---- records on the action: fitted targets and per-key ease -----------------------------------------
@@ -126,9 +131,10 @@ def _target_key(target):
 
 # action pointer → (record count, {(slot, owner path): index of its first record}), inside record_index() only.
 _record_index = None
-# Also inside record_index() only: (object pointer, bone) → target_key, and the pointers of the
-# F-curves write_plan wrote (one written twice in a block — two objects playing one action's
-# channels — is not compared with what its read found: that read is no longer what it holds).
+# Also inside record_index() only: (object pointer, bone) → target_key, and the rotation channels
+# write_plan wrote, as (action name, slot, data path) (channels written twice in a block — two objects
+# playing one action's channels — are not compared with what their read found: that read is no
+# longer what they hold).
 _target_keys = None
 _written = None
 # The last fit written for each target, by (action name, slot, owner path): the next fit of the same
@@ -231,7 +237,7 @@ def key_eases(action, target, frames):
 def set_key_eases(action, target, frames, ease_in, ease_out):
     """Replaces the target's ease records by one per key frame with a non-zero ease."""
     items = action.quatcurve_eases
-    if not len(items) and not (np.any(ease_in) or np.any(ease_out)):
+    if not len(items) and not (_any(ease_in) or _any(ease_out)):
         return  # nothing stored, nothing to store
     slot, path = target_key(target)
     for i in reversed(range(len(items))):
@@ -278,7 +284,7 @@ def key_turns(action, target, frames):
 def set_key_turns(action, target, frames, turns):
     """Replaces the target's turn records by one per key frame with non-zero turns."""
     items = getattr(action, "quatcurve_turns", None)
-    if items is None or (not len(items) and (turns is None or not np.any(turns))):
+    if items is None or (not len(items) and (turns is None or not _any(turns))):
         return
     slot, path = target_key(target)
     for i in reversed(range(len(items))):
@@ -670,7 +676,8 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
              if not keys.is_axis_angle else
              " (a change of the angle's turn: convert the target to quaternion for the method's exact path)")
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
-    return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, len(kf.times),
+    # The samples (kf.times, a copy when asked for): the last key is the last of them.
+    return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, int(forced[-1]) + 1,
                    ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns, kf)
 
 
@@ -712,7 +719,8 @@ def write_plan(plan, target):
     action = fcurves.active_action(target.id_data)
     channels = fcurves.Channels.of(target.id_data, action, create=True)
     found = channels.find_all(keys.path, len(plan.channels))
-    if _rewrite_kept(plan, found):
+    where = (action.name, target_key(target)[0], keys.path)
+    if _rewrite_kept(plan, found, where):
         action.update_tag()  # foreach_set tags nothing: the action's evaluated copy must be made again
     else:
         group = False  # the group of the channels' F-curves, read when a missing one is made
@@ -731,8 +739,8 @@ def write_plan(plan, target):
             on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
             chosen[on_key] = keys.selected[c, at[on_key]]
             fcurves.write_key_selection(curve, chosen)
-            if _written is not None:
-                _written.add(curve.as_pointer())
+    if _written is not None:
+        _written.add(where)
     store_record(keys, plan.settings, target, action)
     if plan.fit is not None:
         _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
@@ -741,10 +749,11 @@ def write_plan(plan, target):
     target.id_data.update_tag(refresh={"TIME"})
 
 
-def _rewrite_kept(plan, curves):
+def _rewrite_kept(plan, curves, where):
     """Writes the plan's channels over `curves` keeping their key slots, when each still holds as many
     keys, with the types and selection the plan gives them, as its read found (`keys.stored`), and
-    no earlier write_plan of this record_index() block wrote it: only the frames and values of a
+    no earlier write_plan of this record_index() block wrote them (`where`: action name, slot, data
+    path): only the frames and values of a
     channel whose keys changed bit for bit, and every channel's interpolation, handle types and
     handles (fcurves.rewrite_handles). All channels at once; False (nothing written) otherwise."""
     keys, chans, written = plan.keys, plan.channels, _written
@@ -754,8 +763,7 @@ def _rewrite_kept(plan, curves):
     C, n = types_was.shape
     if len(chans) != C or any(len(ch[0]) != n for ch in chans):
         return False
-    pointers = [curve.as_pointer() for curve in curves]
-    if any(p in written for p in pointers) or any(fcurves.key_count(curve) != n for curve in curves):
+    if where in written or any(fcurves.key_count(curve) != n for curve in curves):
         return False
     if not np.array_equal(np.array([ch[4] for ch in chans]), types_was):
         return False
@@ -777,7 +785,6 @@ def _rewrite_kept(plan, curves):
     right = np.array([ch[3] for ch in chans], dtype=np.float32).reshape(C, 2 * n)
     for c, curve in enumerate(curves):
         fcurves.rewrite_handles(curve, co[c] if changed[c] else None, left[c], right[c])
-    written.update(pointers)
     return True
 
 
