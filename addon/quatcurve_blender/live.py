@@ -121,26 +121,21 @@ def raw_digest(target):
     h = hashlib.blake2b(("%s %d" % (mode, len(anim.drivers) if anim is not None else 0)).encode(), digest_size=16)
     channels = fcurves.Channels.of(target.id_data)
     curves = channels.find_all(target.data_path(prop), count) if channels is not None else [None] * count
-    counts = [len(curve.keyframe_points) if curve is not None else -1 for curve in curves]
-    total = sum(n for n in counts if n > 0)
-    co = np.empty(2 * total, dtype=np.float32)  # every channel's keys in one buffer, one digest update
-    types = np.empty(total, dtype=fcurves.KEY_ENUM_READ_DTYPE)
-    at = 0
-    for curve, n in zip(curves, counts):
+    for curve in curves:
         if curve is None:
             h.update(b"-")
             continue
-        modifiers = len(curve.modifiers)
-        h.update(b"%d %d|" % (n, modifiers))
-        if modifiers:  # a Cycles modifier's settings make the target a loop or refuse it
+        points = curve.keyframe_points
+        n = len(points)
+        co = np.empty(2 * n, dtype=np.float32)
+        types = np.empty(n, dtype=fcurves.KEY_ENUM_READ_DTYPE)
+        points.foreach_get("co", co)
+        points.foreach_get("type", types)
+        h.update(b"%d %d|" % (n, len(curve.modifiers)))
+        if len(curve.modifiers):  # a Cycles modifier's settings make the target a loop or refuse it
             h.update(repr(cycles.channel_cycle(curve)).encode())
-        if n:
-            points = curve.keyframe_points
-            points.foreach_get("co", co[2 * at:2 * (at + n)])
-            points.foreach_get("type", types[at:at + n])
-            at += n
-    h.update(co.tobytes())
-    h.update(types.tobytes())
+        h.update(co.tobytes())
+        h.update(types.tobytes())
     return h.digest()
 
 
