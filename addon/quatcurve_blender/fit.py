@@ -770,10 +770,13 @@ def _rewrite_kept(plan, curves, where):
     frames = np.array([ch[0] for ch in chans])
     if not (frames == frames[0]).all() or not (frames[0, 1:] > frames[0, :-1]).all():
         return False
-    at = np.searchsorted(keys.frames, frames[0])
-    on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames[0])
-    chosen = np.zeros((C, n), dtype=bool)
-    chosen[:, on_key] = keys.selected[:, at[on_key]]
+    if n == len(keys.frames) and np.array_equal(frames[0], keys.frames):
+        chosen = keys.selected  # no generated key: every key is the animator's
+    else:
+        at = np.searchsorted(keys.frames, frames[0])
+        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames[0])
+        chosen = np.zeros((C, n), dtype=bool)
+        chosen[:, on_key] = keys.selected[:, at[on_key]]
     if not np.array_equal(chosen, selected_was):
         return False
     co = np.empty((C, n, 2), dtype=np.float32)

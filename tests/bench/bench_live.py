@@ -9,9 +9,11 @@ view_layer.update() — the depsgraph handler refits inside it, as in background
   (100 refits);                                                                  target ≤ 200 ms
 - nothing relevant changed (a location key): the signature checks alone.
 Each case is run REPEAT times (the changed value alternates), the median printed. Stages come from
-live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: curve,
-sampling and the native fitter; write: keys into Blender); `native` is the time spent inside the
-quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapping it.
+live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: the main
+thread's wait for the plans — curve, sampling and the native fitter on worker threads, beside the
+reads and writes; write: keys into Blender); `native` is the CPU time spent inside the quatcurve
+module (Curve, sample, fit_through_keys) summed over the threads, measured by wrapping it
+(time.thread_time: a worker waiting for the GIL to return from a call does not count).
 
   blender -b --factory-startup --python tests/bench/bench_live.py
   ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_live.py
@@ -69,9 +71,9 @@ class _Timed:
     def __call__(self, *args, **kwargs):
         args = [_unwrapped(a) for a in args]
         kwargs = {k: _unwrapped(v) for k, v in kwargs.items()}
-        t = time.perf_counter()
+        t = time.thread_time()
         out = self._inner(*args, **kwargs)
-        NATIVE[0] += time.perf_counter() - t
+        NATIVE[0] += time.thread_time() - t
         return _Timed(out) if type(out).__name__ == "Curve" else out
 
 
