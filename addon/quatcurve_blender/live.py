@@ -273,7 +273,8 @@ def _refit_action(action):
     # Read and compare on the main thread, plan the changed targets on worker threads (native work
     # without the GIL) while the next ones are read, write on the main thread as the plans come in
     # (workers.parallel_imap). A target whose raw digest is the one its last full check found fitted
-    # is not read again; two objects playing one action's channels are one target.
+    # is not read again; two objects playing one action's rotation channels (same slot and mode) are
+    # refitted once.
     changed = _changed_targets(action, found)
     first = list(itertools.islice(changed, 2))
     if len(first) < 2:  # one refit (an edit of one target): no worker threads to start
@@ -313,9 +314,12 @@ def _changed_targets(action, found):
         t0 = time.perf_counter()
         record = fit.find_record(action, target)
         key = (action.name,) + fit.target_key(target)
-        if record is None or key in seen:
+        if record is None:
             continue
-        seen.add(key)
+        channels = key + (target.owner.rotation_mode,)  # the F-curves this target's refit writes
+        if channels in seen:
+            continue
+        seen.add(channels)
         known = _unchanged.pop(key, None)
         raw = raw_digest(target) if known is not None else None
         if known is not None and raw == known:

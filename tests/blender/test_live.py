@@ -461,3 +461,24 @@ def test_a_refit_over_kept_key_slots_leaves_what_a_full_write_leaves(fitted, mon
     assert any(s for _, _, sel in refitted for s in sel)  # the animator's selection stayed
     frames, values = animator_keys(fitted)
     assert_plays_method(fitted, frames.astype(float), values)
+
+
+def test_two_objects_playing_one_actions_channels_are_refitted_once(fitted):
+    """A second object playing the fitted action through the same slot (a linked duplicate) shares
+    its F-curves: an edit refits them once, and both objects play the method."""
+    twin = add_empty("Twin", "QUATERNION")
+    anim = twin.animation_data_create()
+    anim.action = fcurves.active_action(fitted)
+    if fcurves.SLOTTED:
+        anim.action_slot = fitted.animation_data.action_slot
+    update()
+    live.STATS.reset()
+    frames, _ = animator_keys(fitted)
+    curve = fcurves.Channels.of(fitted).find("rotation_quaternion", 1)
+    last = int(np.flatnonzero(fcurves.read_keys(curve)[0] == frames[-1])[0])
+    curve.keyframe_points[last].co[1] += 0.05
+    update()
+    assert live.STATS.refits == 1 and not live.STATS.errors, live.STATS
+    frames, values = animator_keys(fitted)
+    assert_plays_method(fitted, frames.astype(float), values)
+    assert_plays_method(twin, frames.astype(float), values)
