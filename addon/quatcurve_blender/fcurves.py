@@ -591,6 +591,74 @@ def write_keys(fcurve, frames, values, interpolation="LINEAR", handle_left=None,
     return fcurve
 
 
+_ENUM_FILLS = {}  # (value, n, dtype) → a read-only array of n × value: the enum buffers writes share
+
+
+def _enum_fill(value, n, dtype):
+    key = (value, n, dtype)
+    buf = _ENUM_FILLS.get(key)
+    if buf is None:
+        if len(_ENUM_FILLS) >= 256:
+            _ENUM_FILLS.clear()
+        buf = _ENUM_FILLS[key] = np.full(n, value, dtype=dtype)
+        buf.flags.writeable = False
+    return buf
+
+
+def read_keys_together(curves):
+    """(co (C, 2N) float32, types (C, N) int64, selected (C, N) bool) of C F-curves holding N keys each
+    (the rotation channels of a target keyed together), in three bulk reads per F-curve into shared
+    arrays — or None when one is missing, they hold different key counts or none, or Blender cannot
+    read key types in bulk here (then read them one by one: read_keys, read_key_types,
+    read_key_selection)."""
+    if not curves or any(curve is None for curve in curves):
+        return None
+    n = len(curves[0].keyframe_points)
+    if not n or any(len(curve.keyframe_points) != n for curve in curves):
+        return None
+    if bpy.app.version < (4, 0, 0) and curves[0].id_data.library is not None:
+        return None  # 3.4 reads enums of a linked action's keys wrong in bulk (_get_enum)
+    if not _BULK_ENUM.get("get type", True):
+        return None
+    C = len(curves)
+    co = np.empty((C, 2 * n), dtype=np.float32)
+    types = np.full((C, n), _NO_ENUM, dtype=KEY_ENUM_READ_DTYPE)
+    selected = np.empty((C, n), dtype=bool)
+    for c, curve in enumerate(curves):
+        points = curve.keyframe_points
+        points.foreach_get("co", co[c])
+        points.foreach_get("type", types[c])
+        points.foreach_get("select_control_point", selected[c])
+    if (types == _NO_ENUM).any():
+        return None
+    return co, types.astype(np.int64), selected
+
+
+def rewrite_handles(fcurve, co, handle_left, handle_right):
+    """Rewrites the keys an F-curve holds, keeping their slots (and with them their types and
+    selection): co, (2N,) float32 (frame, value) pairs, or None to leave the frames and values as they
+    are; handle_left and handle_right, (2N,) float32, written as FREE handles of BEZIER keys (as
+    write_keys writes them), so no interpolation or handle type an animator set stays. The frames
+    must increase, and the caller tags the action (foreach_set tags nothing): see fit.write_plan."""
+    points = fcurve.keyframe_points
+    n = len(points)
+    if co is not None:
+        points.foreach_set("co", co)
+    points.foreach_set("interpolation", _enum_fill(_enum_value(bpy.types.Keyframe, "interpolation", "BEZIER"), n,
+                                                   KEY_ENUM_DTYPE))
+    if _BULK_ENUM.get("handle_left_type") is False:  # 3.4: key by key, only those not FREE already
+        for point in points:
+            if point.handle_left_type != "FREE":
+                point.handle_left_type = "FREE"
+            if point.handle_right_type != "FREE":
+                point.handle_right_type = "FREE"
+    else:
+        _set_free_handles(points, n)
+    points.foreach_set("handle_left", handle_left)
+    points.foreach_set("handle_right", handle_right)
+    return fcurve
+
+
 # Whether bulk foreach_set / foreach_get work on a Keyframe enum property in this Blender, learnt
 # from the first use (prop → bool): Blender 3.4 ignores both on handle types, 4.x and 5.x take them.
 # Knowing it spares every later call the bulk attempt and the read-back check.
@@ -605,7 +673,7 @@ def _set_free_handles(points, n):
         return
     free = _enum_value(bpy.types.Keyframe, "handle_left_type", "FREE")
     if _BULK_ENUM.get("handle_left_type", True):
-        buf = np.full(n, free, dtype=KEY_ENUM_READ_DTYPE)
+        buf = _enum_fill(free, n, KEY_ENUM_READ_DTYPE)
         points.foreach_set("handle_left_type", buf)
         points.foreach_set("handle_right_type", buf)
         if "handle_left_type" in _BULK_ENUM:

@@ -94,19 +94,36 @@ def check_settings(settings):
 def curve_options(settings, ease_in=None, ease_out=None, turns=None):
     """Keyword options of quatcurve.Curve for the settings' method (and per-key ease and turns)."""
     options = methods.options(settings.method, settings)
-    if ease_in is not None and np.any(ease_in):
+    if ease_in is not None and _any(ease_in):
         options["ease_in"] = np.asarray(ease_in, dtype=np.float64)
-    if ease_out is not None and np.any(ease_out):
+    if ease_out is not None and _any(ease_out):
         options["ease_out"] = np.asarray(ease_out, dtype=np.float64)
-    if turns is not None and np.any(turns):
+    if turns is not None and _any(turns):
         options["turns"] = np.asarray(turns, dtype=np.float64)
     return options
+
+
+def _any(values):
+    """np.any(values), without its dispatch for an array (a refit asks five times per target)."""
+    return bool(values.any()) if isinstance(values, np.ndarray) else bool(np.any(values))
 
 
 # ---- records on the action: fitted targets and per-key ease -----------------------------------------
 
 def target_key(target):
-    """(slot, owner path): what identifies a target's rotation channels inside its action."""
+    """(slot, owner path): what identifies a target's rotation channels inside its action. Inside
+    record_index() each target's is found once (a refit asks up to nine times per target)."""
+    memo = _target_keys
+    if memo is not None:
+        at = (target.object.as_pointer(), target.bone)
+        key = memo.get(at)
+        if key is None:
+            key = memo[at] = _target_key(target)
+        return key
+    return _target_key(target)
+
+
+def _target_key(target):
     owner = target.owner
     path = owner.path_from_id() if target.bone is not None else ""
     return fcurves.slot_identifier(target.id_data) or "", path
@@ -114,6 +131,12 @@ def target_key(target):
 
 # action pointer → (record count, {(slot, owner path): index of its first record}), inside record_index() only.
 _record_index = None
+# Also inside record_index() only: (object pointer, bone) → target_key, and the rotation channels
+# write_plan wrote, as (action name, slot, data path) (channels written twice in a block — two objects
+# playing one action's channels — are not compared with what their read found: that read is no
+# longer what they hold).
+_target_keys = None
+_written = None
 # The last fit written for each target, by (action name, slot, owner path): the next fit of the same
 # target reuses its unchanged key segments (native fit_through_keys' previous). Memory only, cleared
 # when a file loads; the native side checks every reused segment against the new keys and curve, so
@@ -157,15 +180,15 @@ def record_index():
     target: 26 µs each). Inside the block only store_record may change records (it adds; slots and
     owner paths never change); the index is made again when the action's record count changes, and
     a record found must still carry the target's slot and path. Main thread only, like all bpy use."""
-    global _record_index
+    global _record_index, _target_keys, _written
     outer = _record_index
     if outer is None:
-        _record_index = {}
+        _record_index, _target_keys, _written = {}, {}, set()
     try:
         yield
     finally:
         if outer is None:
-            _record_index = None
+            _record_index = _target_keys = _written = None
 
 
 def find_record(action, target):
@@ -213,8 +236,10 @@ def key_eases(action, target, frames):
 
 def set_key_eases(action, target, frames, ease_in, ease_out):
     """Replaces the target's ease records by one per key frame with a non-zero ease."""
-    slot, path = target_key(target)
     items = action.quatcurve_eases
+    if not len(items) and not (_any(ease_in) or _any(ease_out)):
+        return  # nothing stored, nothing to store
+    slot, path = target_key(target)
     for i in reversed(range(len(items))):
         if items[i].owner_path == path and items[i].slot == slot:
             items.remove(i)
@@ -259,7 +284,7 @@ def key_turns(action, target, frames):
 def set_key_turns(action, target, frames, turns):
     """Replaces the target's turn records by one per key frame with non-zero turns."""
     items = getattr(action, "quatcurve_turns", None)
-    if items is None:
+    if items is None or (not len(items) and (turns is None or not _any(turns))):
         return
     slot, path = target_key(target)
     for i in reversed(range(len(items))):
@@ -354,7 +379,11 @@ class AnimatorKeys:
     data path; frames (K,): the union of the channels' animator key frames (channels keyed separately,
     e.g. with "Only Insert Needed", are filled with Blender's evaluation there); values (K, C); types
     (K,) raw keyframe types; selected (C, K) bool: the animator's selection, kept through the refit;
-    loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open."""
+    loop: the cycles.Loop Blender plays the channels as (their Cycles modifiers), None when open.
+    stored: what the rotation F-curves held when read, when every channel has one with as many keys
+    (fcurves.read_keys_together: co (C, 2N) float32, types (C, N), selected (C, N), generated keys
+    too, in stored order), else None: write_plan leaves what is already there as it is (not part of
+    the signature)."""
     name: str
     mode: str
     prop: str
@@ -364,6 +393,7 @@ class AnimatorKeys:
     types: np.ndarray
     selected: np.ndarray
     loop: cycles.Loop = None
+    stored: list = None
 
     @property
     def is_euler(self):
@@ -374,13 +404,18 @@ class AnimatorKeys:
         return self.mode == "AXIS_ANGLE"
 
     def signature(self):
-        """A digest of the animator's keys (frames, values, types): live mode refits when it changes."""
+        """A digest of the animator's keys (frames, values, types): live mode refits when it changes.
+        Computed once (live compares it, store_record stores it): the arrays are not changed in place."""
+        known = self.__dict__.get("_signature")
+        if known is not None:
+            return known
         h = hashlib.sha256(("%s %s" % (self.mode, self.path)).encode())
         if self.loop is not None:  # adding or removing the Cycles modifiers refits (or stops)
             h.update(("loop %r %r %d" % (self.loop.start, self.loop.end, self.loop.offset)).encode())
         for a in (self.frames, self.values, self.types):
             h.update(np.ascontiguousarray(a).tobytes())
-        return h.hexdigest()
+        self._signature = h.hexdigest()
+        return self._signature
 
 
 def read_animator_keys(target):
@@ -393,11 +428,14 @@ def read_animator_keys(target):
         targets.check_editable(target, new_action=False)
     except TargetError as e:
         raise FitError(str(e)) from None
-    mode = target.owner.rotation_mode
+    owner = target.owner
+    mode = owner.rotation_mode
     prop, count = fcurves.rotation_property(mode)
-    path = target.data_path(prop)
+    path = owner.path_from_id(prop)
+    anim = target.id_data.animation_data
     try:
-        targets.refuse_drivers(target, prop, count)
+        if anim is not None and len(anim.drivers):
+            targets.refuse_drivers(target, prop, count)
     except TargetError as e:
         raise FitError(str(e)) from None
     action = fcurves.active_action(target.id_data)
@@ -412,6 +450,10 @@ def read_animator_keys(target):
         loop = cycles.target_loop(target.name, prop, curves, mode, action)
     except TargetError as e:
         raise FitError(str(e)) from None
+    if loop is None:
+        keys = _keys_together(target.name, mode, prop, path, fcurves.read_keys_together(curves))
+        if keys is not None:
+            return keys
     per_channel = []
     for c, curve in enumerate(curves):
         if curve is None or not fcurves.key_count(curve):
@@ -487,6 +529,30 @@ def read_animator_keys(target):
     if loop is not None:
         check_loop(target.name, prop, curves, loop, frames, values)
     return AnimatorKeys(target.name, mode, prop, path, frames, values, types, selected, loop)
+
+
+def _keys_together(name, mode, prop, path, together):
+    """The AnimatorKeys of channels read together (fcurves.read_keys_together) when they are what
+    read_animator_keys' general path reads in the usual case — every channel holds the same frames
+    and marks the same keys generated, the animator's frames strictly increase from a finite one,
+    their values are finite — and so come out the same, in a few operations over all channels at
+    once; None otherwise (the general path then reads, fills, sorts or refuses)."""
+    if together is None:
+        return None
+    co, types_all, selected_all = together
+    frames_all, values_all = co[:, 0::2].astype(np.float64), co[:, 1::2].astype(np.float64)
+    mine_all = types_all != KEY_TYPE_GENERATED
+    mine = mine_all[0]
+    if not (mine_all == mine).all() or not (frames_all == frames_all[0]).all():
+        return None
+    frames = frames_all[0][mine]
+    values = np.ascontiguousarray(values_all[:, mine].T)
+    if not len(frames) or not np.isfinite(frames[0]) or not (frames[1:] > frames[:-1]).all():
+        return None
+    if not np.isfinite(values).all():
+        return None
+    return AnimatorKeys(name, mode, prop, path, frames, values, types_all[0][mine], selected_all[:, mine], None,
+                        together)
 
 
 def check_loop(name, prop, curves, loop, frames, values):
@@ -589,13 +655,19 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
     channels, generated = [], 0
+    shared = None  # (indices, types, generated) of the channel before: synchronized channels share them
     for ch in fitted.channels:
-        types = np.full(len(ch.frames), KEY_TYPE_GENERATED, dtype=np.int64)
-        at = np.searchsorted(forced, ch.indices)
-        is_key = (at < K) & (forced[np.minimum(at, K - 1)] == ch.indices)
-        types[is_key] = keys.types[at[is_key]]
-        generated += int((~is_key).sum())
-        channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(), types))
+        indices = ch.indices
+        if shared is not None and np.array_equal(shared[0], indices):
+            types = shared[1].copy()
+        else:
+            types = np.full(len(indices), KEY_TYPE_GENERATED, dtype=np.int64)
+            at = np.searchsorted(forced, indices)
+            is_key = (at < K) & (forced[np.minimum(at, K - 1)] == indices)
+            types[is_key] = keys.types[at[is_key]]
+            shared = (indices, types.copy(), len(indices) - int(np.count_nonzero(is_key)))
+        generated += shared[2]
+        channels.append((ch.frames, ch.values, ch.handle_left, ch.handle_right, types))
     proof = kf.proof
     if not proof.proven:
         notes.append("%s: the bound holds within %.4f° at every instant, ABOVE the tolerance near frame %.3f%s" % (
@@ -604,7 +676,8 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
              if not keys.is_axis_angle else
              " (a change of the angle's turn: convert the target to quaternion for the method's exact path)")
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
-    return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, len(kf.times),
+    # The samples (kf.times, a copy when asked for): the last key is the last of them.
+    return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, int(forced[-1]) + 1,
                    ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns, kf)
 
 
@@ -636,33 +709,86 @@ def euler_notes(keys, kf):
 def write_plan(plan, target):
     """Writes one target's fitted keys into its active action, in place: the rotation F-curves' keys
     are replaced by the animator's keys (same frames and values, fitted FREE handles, their types and
-    selection kept) and the generated keys; then the fit record and the eases are stored."""
+    selection kept) and the generated keys; then the fit record and the eases are stored.
+
+    A refit mostly changes a few key segments: where the F-curves still hold, key for key, the types
+    and selection this fit writes (as their read found them, `keys.stored`), their keys are kept and
+    their frames and values written only where they changed (_rewrite_kept); either way the
+    F-curves end up holding exactly the fitted keys, with BEZIER interpolation and FREE handles."""
     keys = plan.keys
     action = fcurves.active_action(target.id_data)
     channels = fcurves.Channels.of(target.id_data, action, create=True)
     found = channels.find_all(keys.path, len(plan.channels))
-    group = False  # the group of the channels' F-curves, read when a missing one is made
-    for c, (frames, values, left, right, types) in enumerate(plan.channels):
-        curve = found[c]
-        if curve is None:
-            if group is False:
-                group = channels.group_of(keys.path)
-            curve = channels.new_fcurve(keys.path, c, group=group)
-            if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
-                curve.modifiers.new("CYCLES")
-        fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
-        fcurves.write_key_types(curve, types)
-        chosen = np.zeros(len(frames), dtype=bool)
-        at = np.searchsorted(keys.frames, frames)
-        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
-        chosen[on_key] = keys.selected[c, at[on_key]]
-        fcurves.write_key_selection(curve, chosen)
+    where = (action.name, target_key(target)[0], keys.path)
+    if _rewrite_kept(plan, found, where):
+        action.update_tag()  # foreach_set tags nothing: the action's evaluated copy must be made again
+    else:
+        group = False  # the group of the channels' F-curves, read when a missing one is made
+        for c, (frames, values, left, right, types) in enumerate(plan.channels):
+            curve = found[c]
+            if curve is None:
+                if group is False:
+                    group = channels.group_of(keys.path)
+                curve = channels.new_fcurve(keys.path, c, group=group)
+                if keys.loop is not None:  # every rotation channel of a loop repeats: Blender's plain Cycles
+                    curve.modifiers.new("CYCLES")
+            fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
+            fcurves.write_key_types(curve, types)
+            chosen = np.zeros(len(frames), dtype=bool)
+            at = np.searchsorted(keys.frames, frames)
+            on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
+            chosen[on_key] = keys.selected[c, at[on_key]]
+            fcurves.write_key_selection(curve, chosen)
+    if _written is not None:
+        _written.add(where)
     store_record(keys, plan.settings, target, action)
     if plan.fit is not None:
         _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
     set_key_turns(action, target, keys.frames, plan.turns)
     target.id_data.update_tag(refresh={"TIME"})
+
+
+def _rewrite_kept(plan, curves, where):
+    """Writes the plan's channels over `curves` keeping their key slots, when each still holds as many
+    keys, with the types and selection the plan gives them, as its read found (`keys.stored`), and
+    no earlier write_plan of this record_index() block wrote them (`where`: action name, slot, data
+    path): only the frames and values of a
+    channel whose keys changed bit for bit, and every channel's interpolation, handle types and
+    handles (fcurves.rewrite_handles). All channels at once; False (nothing written) otherwise."""
+    keys, chans, written = plan.keys, plan.channels, _written
+    if keys.stored is None or written is None or any(curve is None for curve in curves):
+        return False
+    co_was, types_was, selected_was = keys.stored
+    C, n = types_was.shape
+    if len(chans) != C or any(len(ch[0]) != n for ch in chans):
+        return False
+    if where in written or any(fcurves.key_count(curve) != n for curve in curves):
+        return False
+    if not np.array_equal(np.array([ch[4] for ch in chans]), types_was):
+        return False
+    frames = np.array([ch[0] for ch in chans])
+    if not (frames == frames[0]).all() or not (frames[0, 1:] > frames[0, :-1]).all():
+        return False
+    if n == len(keys.frames) and np.array_equal(frames[0], keys.frames):
+        chosen = keys.selected  # no generated key: every key is the animator's
+    else:
+        at = np.searchsorted(keys.frames, frames[0])
+        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames[0])
+        chosen = np.zeros((C, n), dtype=bool)
+        chosen[:, on_key] = keys.selected[:, at[on_key]]
+    if not np.array_equal(chosen, selected_was):
+        return False
+    co = np.empty((C, n, 2), dtype=np.float32)
+    co[:, :, 0] = frames
+    co[:, :, 1] = np.array([ch[1] for ch in chans])
+    co = co.reshape(C, 2 * n)
+    changed = (co.view(np.uint32) != co_was.view(np.uint32)).any(axis=1)
+    left = np.array([ch[2] for ch in chans], dtype=np.float32).reshape(C, 2 * n)
+    right = np.array([ch[3] for ch in chans], dtype=np.float32).reshape(C, 2 * n)
+    for c, curve in enumerate(curves):
+        fcurves.rewrite_handles(curve, co[c] if changed[c] else None, left[c], right[c])
+    return True
 
 
 def store_record(keys, settings, target, action=None):
@@ -679,12 +805,19 @@ def store_record(keys, settings, target, action=None):
         if known is not None and known[0] == len(records) - 1:  # the index learns the new record
             known[1].setdefault((record.slot, record.owner_path), len(records) - 1)
             _record_index[action.as_pointer()] = (len(records), known[1])
-    record.method = settings.method
-    for name in ("tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
-        setattr(record, name, getattr(settings, name))
-    record.prop = keys.prop
-    record.signature = keys.signature()
-    record.key_frames = " ".join(map(repr, np.asarray(keys.frames, dtype=np.float64).tolist()))
+    # Each property only when it changes (a refit keeps the settings and mostly the frames).
+    for name in ("method", "tolerance", "tension", "continuity", "bias", "shortest_path", "clamped", "subframes"):
+        value = getattr(settings, name)
+        if getattr(record, name) != value:
+            setattr(record, name, value)
+    if record.prop != keys.prop:
+        record.prop = keys.prop
+    signature = keys.signature()
+    if record.signature != signature:
+        record.signature = signature
+    frames = np.asarray(keys.frames, dtype=np.float64)
+    if not np.array_equal(record_frames(record), frames):
+        record.key_frames = " ".join(map(repr, frames.tolist()))
 
 
 def settings_of(record):
@@ -694,8 +827,20 @@ def settings_of(record):
                        clamped=record.clamped, subframes=record.subframes)
 
 
+_record_frames = {}  # record.key_frames text → its frames (read-only), the latest few hundred
+
+
 def record_frames(record):
-    return np.array([float(x) for x in record.key_frames.split()], dtype=np.float64)
+    """The key frames a fit record stores (read-only array)."""
+    text = record.key_frames
+    frames = _record_frames.get(text)
+    if frames is None:
+        if len(_record_frames) >= 512:
+            _record_frames.clear()
+        frames = np.array([float(x) for x in text.split()], dtype=np.float64)
+        frames.flags.writeable = False
+        _record_frames[text] = frames
+    return frames
 
 
 def refit_eases(keys, target, record=None):

@@ -31,6 +31,7 @@ tests/bench/bench_live.py read it).
 """
 
 import hashlib
+import itertools
 import time
 from dataclasses import dataclass, field
 
@@ -38,7 +39,7 @@ import bpy
 import numpy as np
 
 from . import cycles, fcurves, fit
-from .workers import parallel_map
+from .workers import parallel_imap
 
 DEBOUNCE = 0.3   # seconds without a key change before Blender 3.4 refits (it cannot see a drag)
 POLL = 0.1       # seconds between checks while a drag runs (4.2+)
@@ -269,16 +270,56 @@ def _refit_action(action):
     t0 = time.perf_counter()
     found = fit.fitted_targets(action)
     STATS.add("targets", time.perf_counter() - t0)
-    # Read and compare on the main thread; plan the changed targets on worker threads (native work
-    # without the GIL, workers.parallel_map); write on the main thread. A target whose raw digest is
-    # the one its last full check found fitted is not read again.
-    changed = []
+    # Read and compare on the main thread, plan the changed targets on worker threads (native work
+    # without the GIL) while the next ones are read, write on the main thread as the plans come in
+    # (workers.parallel_imap). A target whose raw digest is the one its last full check found fitted
+    # is not read again; two objects playing one action's rotation channels (same slot and mode) are
+    # refitted once.
+    changed = _changed_targets(action, found)
+    first = list(itertools.islice(changed, 2))
+    if len(first) < 2:  # one refit (an edit of one target): no worker threads to start
+        plans = (_plan(item) for item in first)
+    else:
+        plans = parallel_imap(_plan, itertools.chain(first, changed))
+    t2, reads = time.perf_counter(), _read_seconds()
+    for target, result in plans:
+        t3 = time.perf_counter()
+        # The wait for this plan; the reads parallel_imap asked for meanwhile count as reads.
+        STATS.add("plan", t3 - t2 - (_read_seconds() - reads))
+        reads = _read_seconds()
+        if isinstance(result, fit.FitError):
+            STATS.errors.append(str(result))
+        elif result is not None:  # None: fewer than two keys, nothing to fit, the record waits for more
+            _busy = True
+            try:
+                fit.write_plan(result, target)
+            finally:
+                _busy = False
+            STATS.refits += 1
+            done.append(target.name)
+        t2 = time.perf_counter()
+        STATS.add("write", t2 - t3)
+    return done
+
+
+def _read_seconds():
+    return STATS.seconds.get("read", 0.0) + STATS.seconds.get("signature", 0.0)
+
+
+def _changed_targets(action, found):
+    """(target, keys, settings, eases, previous) of each target of `action` whose animator keys no
+    longer match its fit record; counts the checks and times them (read, signature)."""
+    seen = set()
     for target in found:
         t0 = time.perf_counter()
         record = fit.find_record(action, target)
+        key = (action.name,) + fit.target_key(target)
         if record is None:
             continue
-        key = (action.name,) + fit.target_key(target)
+        channels = key + (target.owner.rotation_mode,)  # the F-curves this target's refit writes
+        if channels in seen:
+            continue
+        seen.add(channels)
         known = _unchanged.pop(key, None)
         raw = raw_digest(target) if known is not None else None
         if known is not None and raw == known:
@@ -300,36 +341,18 @@ def _refit_action(action):
         if same:
             _unchanged[key] = raw if raw is not None else raw_digest(target)
         else:
-            changed.append((target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record),
-                            fit.last_fit(action, target)))
+            yield (target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record),
+                   fit.last_fit(action, target))
 
-    def plan(item):
-        _, keys, settings, eases, previous = item
-        try:
-            return fit.plan_target(keys, settings, *eases, previous=previous)
-        except fit.FitError as error:
-            return error
 
-    t2 = time.perf_counter()
-    plans = parallel_map(plan, changed)
-    t3 = time.perf_counter()
-    STATS.add("plan", t3 - t2)
-    for (target, _, _, _, _), result in zip(changed, plans):
-        if isinstance(result, fit.FitError):
-            STATS.errors.append(str(result))
-            continue
-        if result is None:  # fewer than two keys: nothing to fit, the record waits for more
-            continue
-        t3 = time.perf_counter()
-        _busy = True
-        try:
-            fit.write_plan(result, target)
-        finally:
-            _busy = False
-        STATS.add("write", time.perf_counter() - t3)
-        STATS.refits += 1
-        done.append(target.name)
-    return done
+def _plan(item):
+    """(target, its FitPlan, its FitError or None) of a changed target (worker thread: the target is
+    only handed back, no Blender data is read)."""
+    target, keys, settings, eases, previous = item
+    try:
+        return target, fit.plan_target(keys, settings, *eases, previous=previous)
+    except fit.FitError as error:
+        return target, error
 
 
 _handlers = (

@@ -9,9 +9,13 @@ view_layer.update() — the depsgraph handler refits inside it, as in background
   (100 refits);                                                                  target ≤ 200 ms
 - nothing relevant changed (a location key): the signature checks alone.
 Each case is run REPEAT times (the changed value alternates), the median printed. Stages come from
-live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: curve,
-sampling and the native fitter; write: keys into Blender); `native` is the time spent inside the
-quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapping it.
+live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: the main
+thread's wait for the plans — curve, sampling and the native fitter on worker threads, beside the
+reads and writes; write: keys into Blender); `native` is the CPU time spent inside the quatcurve
+module (Curve, sample, fit_through_keys) summed over the threads, measured by wrapping it
+(time.thread_time: a worker waiting for the GIL to return from a call does not count); `cpu` is the
+process's CPU time over the update (every thread: what the refit costs, less sensitive than the
+wall time to other jobs on the machine).
 
   blender -b --factory-startup --python tests/bench/bench_live.py
   ~/.cache/quatcurve/bpy-4.5.15/bin/python tests/bench/bench_live.py
@@ -19,6 +23,11 @@ quatcurve module (Curve, sample, quats_to_channels, fit_keys), measured by wrapp
 `--smoke` (tests/bench/smoke.py): each case once, the big action cut to 3 bones x 100 frames.
 `--profile`: the last run of each case under cProfile (its time counts with the profiler's cost), its
 top functions by own time.
+`--addon DIR`: import quatcurve_blender from DIR (a folder holding it, with its module built) instead of
+this tree's addon/ — the previous release's add-on, run by the same script for a before → after table:
+
+  git archive <commit> addon | tar -x -C /tmp/before   # and copy that commit's built quatcurve*.so in
+  blender -b --factory-startup --python tests/bench/bench_live.py -- --addon /tmp/before/addon
 """
 import cProfile
 import os
@@ -31,15 +40,18 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
 sys.path.insert(0, os.path.join(ROOT, "tests", "bench"))
+import smoke  # noqa: E402
+
+ARGS = smoke.script_args()
+ADDON = ARGS[ARGS.index("--addon") + 1] if "--addon" in ARGS else os.path.join(ROOT, "addon")
+sys.path.insert(0, os.path.abspath(ADDON))
 
 import quatcurve_blender  # noqa: E402
-import smoke  # noqa: E402
 from quatcurve_blender import fcurves, fit, live, native, targets  # noqa: E402
 
 REPEAT = 1 if smoke.SMOKE else 7
-PROFILE = "--profile" in sys.argv
+PROFILE = "--profile" in ARGS
 BIG_BONES, BIG_FRAMES = (3, 100) if smoke.SMOKE else (100, 1000)
 NATIVE = [0.0]
 
@@ -61,9 +73,9 @@ class _Timed:
     def __call__(self, *args, **kwargs):
         args = [_unwrapped(a) for a in args]
         kwargs = {k: _unwrapped(v) for k, v in kwargs.items()}
-        t = time.perf_counter()
+        t = time.thread_time()
         out = self._inner(*args, **kwargs)
-        NATIVE[0] += time.perf_counter() - t
+        NATIVE[0] += time.thread_time() - t
         return _Timed(out) if type(out).__name__ == "Curve" else out
 
 
@@ -119,23 +131,24 @@ def measure(label, rig, bone_names, change=True, expect=None):
         profile = cProfile.Profile() if PROFILE and r == REPEAT - 1 else None
         if profile is not None:
             profile.enable()
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         bpy.context.view_layer.update()
-        total = time.perf_counter() - t
+        total, cpu = time.perf_counter() - t, time.process_time() - cpu
         if profile is not None:
             profile.disable()
             pstats.Stats(profile).sort_stats("tottime").print_stats(22)
         assert not live.STATS.errors, (label, live.STATS)
         if expect is not None:
             assert live.STATS.refits == expect, (label, live.STATS)
-        rows.append((total, dict(live.STATS.seconds), NATIVE[0], live.STATS.checks, live.STATS.refits))
+        rows.append((total, dict(live.STATS.seconds), NATIVE[0], live.STATS.checks, live.STATS.refits, cpu))
     total = statistics.median(r[0] for r in rows)
     stages = {s: statistics.median(r[1].get(s, 0.0) for r in rows) for s in ("targets", "read", "signature", "plan", "write")}
     nat = statistics.median(r[2] for r in rows)
+    cpu = statistics.median(r[5] for r in rows)
     handler = sum(stages.values())
-    print("%-34s %8.2f ms  (handler %7.2f: targets %.2f, read %.2f, signature %.2f, plan %.2f [native %.2f], "
-          "write %.2f; %d checked, %d refitted)" % (
-              label, total * 1e3, handler * 1e3, stages["targets"] * 1e3, stages["read"] * 1e3,
+    print("%-34s %8.2f ms, cpu %7.2f ms  (handler %7.2f: targets %.2f, read %.2f, signature %.2f, plan %.2f "
+          "[native %.2f], write %.2f; %d checked, %d refitted)" % (
+              label, total * 1e3, cpu * 1e3, handler * 1e3, stages["targets"] * 1e3, stages["read"] * 1e3,
               stages["signature"] * 1e3, stages["plan"] * 1e3, nat * 1e3, stages["write"] * 1e3, rows[0][3], rows[0][4]))
     return total, nat
 
@@ -153,7 +166,8 @@ def main():
     t1 = time.perf_counter()
     second = fit.fit([targets.Target(big, pb.name) for pb in big.pose.bones], settings)
     t2 = time.perf_counter()
-    print("quatcurve live refit, Blender %s (%s)" % (bpy.app.version_string, "binary" if bpy.app.binary_path else "bpy module"))
+    print("quatcurve live refit, Blender %s (%s), add-on %s" % (
+        bpy.app.version_string, "binary" if bpy.app.binary_path else "bpy module", os.path.dirname(quatcurve_blender.__file__)))
     print("initial fit: One %.1f ms (%s); Big %.0f ms (%s)" % ((t1 - t) * 1e3, first.summary(), (t2 - t1) * 1e3,
                                                              second.summary()))
     bpy.context.scene.quatcurve_fit.live = True

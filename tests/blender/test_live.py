@@ -413,3 +413,72 @@ def test_a_refit_fits_only_the_segments_an_edit_changed(fitted, monkeypatch):
     assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
     assert fit.last_fit(fcurves.active_action(other), fit.targets.Target(other)) is not None
     assert fit.last_fit(action, target) is None
+
+
+def curve_state(owner):
+    """Per rotation F-curve: its digest (keys, handles, interpolation, handle types), key types and selection."""
+    prop, count = fcurves.rotation_property(owner.rotation_mode)
+    out = []
+    for curve in fcurves.Channels.of(owner.id_data).find_all(owner.path_from_id(prop), count):
+        out.append((fcurves.fcurve_digest(curve).hexdigest(), fcurves.read_key_types(curve).tolist(),
+                    fcurves.read_key_selection(curve).tolist()))
+    return out
+
+
+def test_a_refit_over_kept_key_slots_leaves_what_a_full_write_leaves(fitted, monkeypatch):
+    """A refit that keeps the F-curves' key slots (fit._rewrite_kept: same key count, types and
+    selection) writes handles, interpolation and handle types on every key: what an animator changed
+    in a segment the edit did not reach (an interpolation, a handle moved, a handle type) is fitted
+    again, and the F-curves end up as the full write (new key slots) of the same fit leaves them."""
+    kept = []
+    real = fcurves.rewrite_handles
+    monkeypatch.setattr(fcurves, "rewrite_handles", lambda *a: kept.append(a[0]) or real(*a))
+    curves = fcurves.Channels.of(fitted).find_all(fitted.path_from_id("rotation_quaternion"), 4)
+    frames, _ = animator_keys(fitted)
+    second = [int(np.flatnonzero(fcurves.read_keys(c)[0] == frames[1])[0]) for c in curves]
+    curves[2].keyframe_points[second[2]].interpolation = "LINEAR"
+    curves[3].keyframe_points[second[3]].handle_right = (curves[3].keyframe_points[second[3]].co[0] + 1, 3.0)
+    curves[0].keyframe_points[second[0]].handle_left_type = "VECTOR"
+    curves[1].keyframe_points[second[1]].select_control_point = True
+    last = int(np.flatnonzero(fcurves.read_keys(curves[1])[0] == frames[-1])[0])
+    curves[1].keyframe_points[last].co[1] += 0.05
+    update()
+    assert live.STATS.refits == 1 and len(kept) == 4, (live.STATS, kept)
+    assert fit.last_fit(fcurves.active_action(fitted), fit.targets.Target(fitted)).refitted <= 2
+    refitted = curve_state(fitted)
+    # the same fit written in full: new key slots, every key's types and selection written
+    target = fit.targets.Target(fitted)
+    action = fcurves.active_action(fitted)
+    keys = fit.read_animator_keys(target)
+    record = fit.find_record(action, target)
+    plan = fit.plan_target(keys, fit.settings_of(record), *fit.refit_eases(keys, target, record),
+                           previous=fit.last_fit(action, target))
+    assert plan.fit.refitted == 0  # nothing changed since: every segment is the refit's
+    monkeypatch.setattr(fit, "_rewrite_kept", lambda *a: False)
+    with fit.record_index():
+        fit.write_plan(plan, target)
+    assert curve_state(fitted) == refitted
+    assert any(s for _, _, sel in refitted for s in sel)  # the animator's selection stayed
+    frames, values = animator_keys(fitted)
+    assert_plays_method(fitted, frames.astype(float), values)
+
+
+def test_two_objects_playing_one_actions_channels_are_refitted_once(fitted):
+    """A second object playing the fitted action through the same slot (a linked duplicate) shares
+    its F-curves: an edit refits them once, and both objects play the method."""
+    twin = add_empty("Twin", "QUATERNION")
+    anim = twin.animation_data_create()
+    anim.action = fcurves.active_action(fitted)
+    if fcurves.SLOTTED:
+        anim.action_slot = fitted.animation_data.action_slot
+    update()
+    live.STATS.reset()
+    frames, _ = animator_keys(fitted)
+    curve = fcurves.Channels.of(fitted).find("rotation_quaternion", 1)
+    last = int(np.flatnonzero(fcurves.read_keys(curve)[0] == frames[-1])[0])
+    curve.keyframe_points[last].co[1] += 0.05
+    update()
+    assert live.STATS.refits == 1 and not live.STATS.errors, live.STATS
+    frames, values = animator_keys(fitted)
+    assert_plays_method(fitted, frames.astype(float), values)
+    assert_plays_method(twin, frames.astype(float), values)
