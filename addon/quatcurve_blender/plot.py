@@ -146,6 +146,12 @@ class Canvas:
     def _mix(self, index, coverage, colour):
         """pixel = rint(pixel·(1 − a) + colour·a) for the pixels at flat `index` (row·width + column),
         a = coverage (float32 arithmetic); whole pixels are gathered and scattered (alpha stays)."""
+        # Fully covered pixels (a line's inside, text) become the colour itself, as the formula gives
+        # (pixel·0 + colour·1): one 32-bit word each; only the partly covered ones are mixed.
+        full = coverage >= 1.0
+        words = self.pixels.reshape(-1).view(np.uint32)
+        words[index[full]] = _rgba_word(colour)
+        index, coverage = index[~full], coverage[~full]
         flat = self.pixels.reshape(-1, 4)
         a = coverage.astype(np.float32)[:, None]
         under = flat[index]
