@@ -690,24 +690,33 @@ def plot_path(report_path, target_name):
 
 
 def save_plots(report, report_path):
-    """Saves each target's plot as a PNG beside `report_path` (see plot_path): Blender writes its image
-    datablock (plot_image; `filepath_raw`, `file_format = 'PNG'`, `image.save()`) and then packs it
-    from that file, so it is saved with the .blend too. Returns the PNG paths."""
+    """Saves each target's plot as a PNG beside `report_path` (see plot_path) and makes it the target's
+    image datablock: the PNG is encoded here (plot.png_bytes; worker threads draw and encode the
+    targets while this thread writes the ones done), then Blender loads the file as the image
+    (image_name(target), with a fake user, replacing an older one of that name) and packs it from
+    that file, so it is saved with the .blend too. The image's pixels are the drawn ones exactly
+    (bytes / 255), as when Blender encodes them. Returns the PNG paths."""
     folder = os.path.dirname(os.path.abspath(report_path))
     os.makedirs(folder, exist_ok=True)
     pngs = []
-    for t in report.targets:
-        path = plot_path(report_path, t.name)
-        image = plot_image(t)
-        image.filepath_raw = path
-        image.file_format = "PNG"
-        try:
-            image.save()
-        except RuntimeError as error:
-            raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, str(error).strip())) from None
-        image.pack()
-        t.plot_file = os.path.basename(path)
-        pngs.append(path)
+    encoded = parallel_imap(lambda t: plot.png_bytes(t.render_plot()), report.targets)
+    try:
+        for t, data in zip(report.targets, encoded):
+            path = plot_path(report_path, t.name)
+            try:
+                with open(path, "wb") as f:
+                    f.write(data)
+            except OSError as error:
+                raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, error.strerror or error)) from None
+            _remove_plot_image(t)
+            image = bpy.data.images.load(path, check_existing=False)
+            image.name = image_name(t.name)
+            image.use_fake_user = True
+            image.pack()
+            t.image_name, t.plot_file = image.name, os.path.basename(path)
+            pngs.append(path)
+    finally:
+        encoded.close()  # an error: stop the workers now
     return pngs
 
 
@@ -747,16 +756,21 @@ def plot_image(comparison):
     image = bpy.data.images.get(comparison.image_name) if comparison.image_name else None
     if image is not None:
         return image
-    name = image_name(comparison.name)
-    old = bpy.data.images.get(name)
-    if old is not None:
-        bpy.data.images.remove(old)
+    _remove_plot_image(comparison)
     pixels = comparison.render_plot()
-    image = bpy.data.images.new(name, pixels.shape[1], pixels.shape[0], alpha=True)
+    image = bpy.data.images.new(image_name(comparison.name), pixels.shape[1], pixels.shape[0], alpha=True)
     image.pixels.foreach_set(_BYTE_TO_FLOAT[pixels[::-1]].ravel())  # one gather, float32 straight away
     image.use_fake_user = True
     comparison.image_name = image.name
     return image
+
+
+def _remove_plot_image(comparison):
+    """Removes the image datablock of an older plot of the comparison's target (image_name), if any."""
+    old = bpy.data.images.get(image_name(comparison.name))
+    if old is not None:
+        bpy.data.images.remove(old)
+    comparison.image_name = None
 
 
 def make_images(report):

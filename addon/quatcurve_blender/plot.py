@@ -5,8 +5,9 @@ context; blf draws into image buffers only from 4.x on).
 `render_comparison` draws two panels — angular speed over frames per source, and the deviation from
 SLERP over frames per source — with axes, tick labels, titles, axis labels and a legend with colour
 swatches, into an RGBA uint8 array of the documented fixed size WIDTH × HEIGHT (1200 × 800, rows top
-to bottom). Images and PNG files are Blender's business: compare.py hands the array to an image
-datablock (`image.pixels.foreach_set`) and saves it with `image.save()`.
+to bottom). `png_bytes` encodes such an array as a PNG file (8-bit RGBA, zlib), which compare.py writes
+and Blender loads as the image datablock; without a file, compare.py hands the array to an image
+datablock (`image.pixels.foreach_set`).
 
 Text uses the 7×13 "fixed" bitmap font of the X Window System (misc-fixed, public domain: "Public
 domain font. Share and enjoy."), embedded below for printable ASCII plus the degree sign, drawn at
@@ -14,6 +15,9 @@ scale 1 for ticks and legend and 2 for the title. Series are functions of the fr
 drawn a pixel column at a time, every column at once (Canvas.trace): the polyline's vertical extent
 over the column, anti-aliased at its ends.
 """
+
+import struct
+import zlib
 
 import numpy as np
 
@@ -402,3 +406,27 @@ def render_comparison(title, series, key_frames=(), subtitle="", titles=PANEL_TI
             canvas.fill_rect(legend_left + 26, yy, legend_left + 27, yy + 4, KEY_LINE)
         canvas.text(legend_left + 50, y + 7, "key frames", valign="middle")
     return canvas.pixels
+
+
+# ---- PNG ------------------------------------------------------------------------------------------------
+PNG_LEVEL = 1  # zlib level: as fast as Blender's own PNG writer (15 % compression), about the same size
+
+
+def png_bytes(pixels):
+    """The PNG file (bytes) of RGBA uint8 `pixels` (height, width, 4), rows top to bottom: 8 bits per
+    channel, colour type 6 (RGBA), no filter, one zlib stream (level PNG_LEVEL). Any PNG reader gets
+    the same bytes back (Blender's image loader included: its pixels are those bytes / 255).
+    Touches no Blender data and releases the GIL while compressing, so worker threads may encode."""
+    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
+    height, width, channels = pixels.shape
+    if channels != 4:
+        raise ValueError("png_bytes: expected RGBA pixels (height, width, 4), got %s" % (pixels.shape,))
+    rows = np.zeros((height, 1 + 4 * width), np.uint8)  # each row: filter type 0 (none), then its pixels
+    rows[:, 1:] = pixels.reshape(height, -1)
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)  # 8-bit RGBA, deflate, no interlace
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+            + chunk(b"IDAT", zlib.compress(rows.tobytes(), PNG_LEVEL)) + chunk(b"IEND", b""))
