@@ -185,7 +185,7 @@ class SourceResult:
             "max_deviation_frame": _num(m["max_deviation_time"]),
             "mean_deviation_deg": _deg(m["mean_deviation"]),
             "speed_ratio": _num(m["speed_ratio"]),
-            "segment_speed_ratios": [_num(r) for r in m["segment_speed_ratios"]],
+            "segment_speed_ratios": _nums(m["segment_speed_ratios"]),
             "path_length_deg": _deg(m["path_length"]),
             "key_path_length_deg": _deg(m["key_path_length"]),
             "path_length_ratio": _num(m["path_length_ratio"]),
@@ -197,7 +197,7 @@ class SourceResult:
         }
         if self.gimbal is not None:
             out["gimbal"] = {"order": self.euler_order, "closest_deg": _deg(self.gimbal[0]),
-                             "frames": [_num(f) for f in self.gimbal[1]]}
+                             "frames": _nums(self.gimbal[1])}
         return out
 
 
@@ -253,14 +253,14 @@ class TargetComparison:
             "rotation_mode": self.rotation_mode,
             "frames": {"start": _num(self.frames[0]), "end": _num(self.frames[-1]), "step": step,
                        "count": int(len(self.frames))},
-            "key_frames": [_num(f) for f in self.key_frames],
+            "key_frames": _nums(self.key_frames),
             "cyclic": self.loop is not None,
             "period": _num(self.loop.period) if self.loop is not None else None,
             "reference": REFERENCE_METHOD,
             "sources": {name: s.to_json() for name, s in self.sources.items()},
-            "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": [_num(f) for f in frames]}
+            "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": _nums(frames)}
                              for order, (d, frames) in self.euler_orders.items()},
-            "keyed_speed_ratios": [_num(r) for r in self.keyed_speed_ratios],
+            "keyed_speed_ratios": _nums(self.keyed_speed_ratios),
             "path_rule": [b.to_json() for b in self.path_rule],
             "recommendation": dict(self.recommendation),
             "plot": self.plot_file,
@@ -314,6 +314,15 @@ def _num(x):
     """A JSON number (float), None for inf/NaN (JSON has neither; null reads as 'unbounded')."""
     x = float(x)
     return x if math.isfinite(x) else None
+
+
+def _nums(values):
+    """[_num(x) for x in values], in bulk (a report holds ~100 k of them)."""
+    values = np.asarray(values, dtype=np.float64).reshape(-1)
+    out = values.tolist()
+    if not np.isfinite(values).all():
+        out = [x if math.isfinite(x) else None for x in out]
+    return out
 
 
 # Speed ratios above this mean the path comes to a stop inside a segment — as Blender's auto-clamped
