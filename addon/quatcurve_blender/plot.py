@@ -187,29 +187,30 @@ class Canvas:
         if not ok.any():
             return
         half = max(width / 2.0, 0.5)
-        run = np.cumsum(~ok)  # points of one finite run share a value; a non-finite point starts a new one
         idx = np.flatnonzero(ok)
-        # Pieces: the segments between consecutive finite points of one run, and every finite point on
-        # its own (so a lone point is drawn too); each piece spans [xa, xb] with ya, yb at its ends.
-        seg = idx[:-1][(np.diff(idx) == 1) & (run[idx[:-1]] == run[idx[1:]])]
+        # Pieces: the segments between consecutive finite points (neighbours in the series: no
+        # non-finite point between them), and every finite point on its own (so a lone point is drawn
+        # too); each piece spans [xa, xb] with ya, yb at its ends.
+        seg = idx[:-1][np.diff(idx) == 1]
         xa = np.concatenate([xs[idx], xs[seg]])
         xb = np.concatenate([xs[idx], xs[seg + 1]])
         ya = np.concatenate([ys[idx], ys[seg]])
         yb = np.concatenate([ys[idx], ys[seg + 1]])
+        lo_x, hi_x = np.minimum(xa, xb), np.maximum(xa, xb)
+        dx = xb - xa
+        slope = np.divide(yb - ya, dx, out=np.zeros_like(dx), where=dx != 0)
         # Columns whose window [c + 0.5 − half, c + 0.5 + half] meets the piece.
-        first = np.maximum(np.ceil(np.minimum(xa, xb) - 0.5 - half), 0).astype(np.int64)
-        last = np.minimum(np.floor(np.maximum(xa, xb) - 0.5 + half), self.width - 1).astype(np.int64)
+        first = np.maximum(np.ceil(lo_x - 0.5 - half), 0).astype(np.int64)
+        last = np.minimum(np.floor(hi_x - 0.5 + half), self.width - 1).astype(np.int64)
         count = np.maximum(last - first + 1, 0)
         piece = np.repeat(np.arange(len(xa)), count)
         if piece.size == 0:
             return
         col = first[piece] + (np.arange(piece.size) - np.repeat(np.cumsum(count) - count, count))
         # The piece's y at the window's ends (clipped to the piece): its extent inside the window.
-        lo_x, hi_x = np.minimum(xa, xb)[piece], np.maximum(xa, xb)[piece]
-        dx = xb[piece] - xa[piece]
-        slope = np.divide(yb[piece] - ya[piece], dx, out=np.zeros_like(dx), where=dx != 0)
-        y0 = ya[piece] + slope * (np.clip(col + 0.5 - half, lo_x, hi_x) - xa[piece])
-        y1 = ya[piece] + slope * (np.clip(col + 0.5 + half, lo_x, hi_x) - xa[piece])
+        lo_x, hi_x, xa, ya, slope = lo_x[piece], hi_x[piece], xa[piece], ya[piece], slope[piece]
+        y0 = ya + slope * (np.minimum(np.maximum(col + 0.5 - half, lo_x), hi_x) - xa)
+        y1 = ya + slope * (np.minimum(np.maximum(col + 0.5 + half, lo_x), hi_x) - xa)
         # Per column, the least and greatest y of its pieces (sorted by column, reduced per run).
         order = np.argsort(col, kind="stable")
         col = col[order]
