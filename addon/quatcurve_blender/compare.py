@@ -185,7 +185,7 @@ class SourceResult:
             "max_deviation_frame": _num(m["max_deviation_time"]),
             "mean_deviation_deg": _deg(m["mean_deviation"]),
             "speed_ratio": _num(m["speed_ratio"]),
-            "segment_speed_ratios": [_num(r) for r in m["segment_speed_ratios"]],
+            "segment_speed_ratios": _nums(m["segment_speed_ratios"]),
             "path_length_deg": _deg(m["path_length"]),
             "key_path_length_deg": _deg(m["key_path_length"]),
             "path_length_ratio": _num(m["path_length_ratio"]),
@@ -197,7 +197,7 @@ class SourceResult:
         }
         if self.gimbal is not None:
             out["gimbal"] = {"order": self.euler_order, "closest_deg": _deg(self.gimbal[0]),
-                             "frames": [_num(f) for f in self.gimbal[1]]}
+                             "frames": _nums(self.gimbal[1])}
         return out
 
 
@@ -253,14 +253,14 @@ class TargetComparison:
             "rotation_mode": self.rotation_mode,
             "frames": {"start": _num(self.frames[0]), "end": _num(self.frames[-1]), "step": step,
                        "count": int(len(self.frames))},
-            "key_frames": [_num(f) for f in self.key_frames],
+            "key_frames": _nums(self.key_frames),
             "cyclic": self.loop is not None,
             "period": _num(self.loop.period) if self.loop is not None else None,
             "reference": REFERENCE_METHOD,
             "sources": {name: s.to_json() for name, s in self.sources.items()},
-            "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": [_num(f) for f in frames]}
+            "euler_orders": {order: {"closest_gimbal_deg": _deg(d), "frames": _nums(frames)}
                              for order, (d, frames) in self.euler_orders.items()},
-            "keyed_speed_ratios": [_num(r) for r in self.keyed_speed_ratios],
+            "keyed_speed_ratios": _nums(self.keyed_speed_ratios),
             "path_rule": [b.to_json() for b in self.path_rule],
             "recommendation": dict(self.recommendation),
             "plot": self.plot_file,
@@ -314,6 +314,15 @@ def _num(x):
     """A JSON number (float), None for inf/NaN (JSON has neither; null reads as 'unbounded')."""
     x = float(x)
     return x if math.isfinite(x) else None
+
+
+def _nums(values):
+    """[_num(x) for x in values], in bulk (a report holds ~100 k of them)."""
+    values = np.asarray(values, dtype=np.float64).reshape(-1)
+    out = values.tolist()
+    if not np.isfinite(values).all():
+        out = [x if math.isfinite(x) else None for x in out]
+    return out
 
 
 # Speed ratios above this mean the path comes to a stop inside a segment — as Blender's auto-clamped
@@ -690,24 +699,33 @@ def plot_path(report_path, target_name):
 
 
 def save_plots(report, report_path):
-    """Saves each target's plot as a PNG beside `report_path` (see plot_path): Blender writes its image
-    datablock (plot_image; `filepath_raw`, `file_format = 'PNG'`, `image.save()`) and then packs it
-    from that file, so it is saved with the .blend too. Returns the PNG paths."""
+    """Saves each target's plot as a PNG beside `report_path` (see plot_path) and makes it the target's
+    image datablock: the PNG is encoded here (plot.png_bytes; worker threads draw and encode the
+    targets while this thread writes the ones done), then Blender loads the file as the image
+    (image_name(target), with a fake user, replacing an older one of that name) and packs it from
+    that file, so it is saved with the .blend too. The image's pixels are the drawn ones exactly
+    (bytes / 255), as when Blender encodes them. Returns the PNG paths."""
     folder = os.path.dirname(os.path.abspath(report_path))
     os.makedirs(folder, exist_ok=True)
     pngs = []
-    for t in report.targets:
-        path = plot_path(report_path, t.name)
-        image = plot_image(t)
-        image.filepath_raw = path
-        image.file_format = "PNG"
-        try:
-            image.save()
-        except RuntimeError as error:
-            raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, str(error).strip())) from None
-        image.pack()
-        t.plot_file = os.path.basename(path)
-        pngs.append(path)
+    encoded = parallel_imap(lambda t: plot.png_bytes(t.render_plot()), report.targets)
+    try:
+        for t, data in zip(report.targets, encoded):
+            path = plot_path(report_path, t.name)
+            try:
+                with open(path, "wb") as f:
+                    f.write(data)
+            except OSError as error:
+                raise OSError("%s: writing the plot %s failed: %s" % (t.name, path, error.strerror or error)) from None
+            _remove_plot_image(t)
+            image = bpy.data.images.load(path, check_existing=False)
+            image.name = image_name(t.name)
+            image.use_fake_user = True
+            image.pack()
+            t.image_name, t.plot_file = image.name, os.path.basename(path)
+            pngs.append(path)
+    finally:
+        encoded.close()  # an error: stop the workers now
     return pngs
 
 
@@ -747,16 +765,21 @@ def plot_image(comparison):
     image = bpy.data.images.get(comparison.image_name) if comparison.image_name else None
     if image is not None:
         return image
-    name = image_name(comparison.name)
-    old = bpy.data.images.get(name)
-    if old is not None:
-        bpy.data.images.remove(old)
+    _remove_plot_image(comparison)
     pixels = comparison.render_plot()
-    image = bpy.data.images.new(name, pixels.shape[1], pixels.shape[0], alpha=True)
+    image = bpy.data.images.new(image_name(comparison.name), pixels.shape[1], pixels.shape[0], alpha=True)
     image.pixels.foreach_set(_BYTE_TO_FLOAT[pixels[::-1]].ravel())  # one gather, float32 straight away
     image.use_fake_user = True
     comparison.image_name = image.name
     return image
+
+
+def _remove_plot_image(comparison):
+    """Removes the image datablock of an older plot of the comparison's target (image_name), if any."""
+    old = bpy.data.images.get(image_name(comparison.name))
+    if old is not None:
+        bpy.data.images.remove(old)
+    comparison.image_name = None
 
 
 def make_images(report):

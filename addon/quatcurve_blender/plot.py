@@ -5,8 +5,9 @@ context; blf draws into image buffers only from 4.x on).
 `render_comparison` draws two panels — angular speed over frames per source, and the deviation from
 SLERP over frames per source — with axes, tick labels, titles, axis labels and a legend with colour
 swatches, into an RGBA uint8 array of the documented fixed size WIDTH × HEIGHT (1200 × 800, rows top
-to bottom). Images and PNG files are Blender's business: compare.py hands the array to an image
-datablock (`image.pixels.foreach_set`) and saves it with `image.save()`.
+to bottom). `png_bytes` encodes such an array as a PNG file (8-bit RGBA, zlib), which compare.py writes
+and Blender loads as the image datablock; without a file, compare.py hands the array to an image
+datablock (`image.pixels.foreach_set`).
 
 Text uses the 7×13 "fixed" bitmap font of the X Window System (misc-fixed, public domain: "Public
 domain font. Share and enjoy."), embedded below for printable ASCII plus the degree sign, drawn at
@@ -14,6 +15,9 @@ scale 1 for ticks and legend and 2 for the title. Series are functions of the fr
 drawn a pixel column at a time, every column at once (Canvas.trace): the polyline's vertical extent
 over the column, anti-aliased at its ends.
 """
+
+import struct
+import zlib
 
 import numpy as np
 
@@ -146,6 +150,12 @@ class Canvas:
     def _mix(self, index, coverage, colour):
         """pixel = rint(pixel·(1 − a) + colour·a) for the pixels at flat `index` (row·width + column),
         a = coverage (float32 arithmetic); whole pixels are gathered and scattered (alpha stays)."""
+        # Fully covered pixels (a line's inside, text) become the colour itself, as the formula gives
+        # (pixel·0 + colour·1): one 32-bit word each; only the partly covered ones are mixed.
+        full = coverage >= 1.0
+        words = self.pixels.reshape(-1).view(np.uint32)
+        words[index[full]] = _rgba_word(colour)
+        index, coverage = index[~full], coverage[~full]
         flat = self.pixels.reshape(-1, 4)
         a = coverage.astype(np.float32)[:, None]
         under = flat[index]
@@ -177,29 +187,30 @@ class Canvas:
         if not ok.any():
             return
         half = max(width / 2.0, 0.5)
-        run = np.cumsum(~ok)  # points of one finite run share a value; a non-finite point starts a new one
         idx = np.flatnonzero(ok)
-        # Pieces: the segments between consecutive finite points of one run, and every finite point on
-        # its own (so a lone point is drawn too); each piece spans [xa, xb] with ya, yb at its ends.
-        seg = idx[:-1][(np.diff(idx) == 1) & (run[idx[:-1]] == run[idx[1:]])]
+        # Pieces: the segments between consecutive finite points (neighbours in the series: no
+        # non-finite point between them), and every finite point on its own (so a lone point is drawn
+        # too); each piece spans [xa, xb] with ya, yb at its ends.
+        seg = idx[:-1][np.diff(idx) == 1]
         xa = np.concatenate([xs[idx], xs[seg]])
         xb = np.concatenate([xs[idx], xs[seg + 1]])
         ya = np.concatenate([ys[idx], ys[seg]])
         yb = np.concatenate([ys[idx], ys[seg + 1]])
+        lo_x, hi_x = np.minimum(xa, xb), np.maximum(xa, xb)
+        dx = xb - xa
+        slope = np.divide(yb - ya, dx, out=np.zeros_like(dx), where=dx != 0)
         # Columns whose window [c + 0.5 − half, c + 0.5 + half] meets the piece.
-        first = np.maximum(np.ceil(np.minimum(xa, xb) - 0.5 - half), 0).astype(np.int64)
-        last = np.minimum(np.floor(np.maximum(xa, xb) - 0.5 + half), self.width - 1).astype(np.int64)
+        first = np.maximum(np.ceil(lo_x - 0.5 - half), 0).astype(np.int64)
+        last = np.minimum(np.floor(hi_x - 0.5 + half), self.width - 1).astype(np.int64)
         count = np.maximum(last - first + 1, 0)
         piece = np.repeat(np.arange(len(xa)), count)
         if piece.size == 0:
             return
         col = first[piece] + (np.arange(piece.size) - np.repeat(np.cumsum(count) - count, count))
         # The piece's y at the window's ends (clipped to the piece): its extent inside the window.
-        lo_x, hi_x = np.minimum(xa, xb)[piece], np.maximum(xa, xb)[piece]
-        dx = xb[piece] - xa[piece]
-        slope = np.divide(yb[piece] - ya[piece], dx, out=np.zeros_like(dx), where=dx != 0)
-        y0 = ya[piece] + slope * (np.clip(col + 0.5 - half, lo_x, hi_x) - xa[piece])
-        y1 = ya[piece] + slope * (np.clip(col + 0.5 + half, lo_x, hi_x) - xa[piece])
+        lo_x, hi_x, xa, ya, slope = lo_x[piece], hi_x[piece], xa[piece], ya[piece], slope[piece]
+        y0 = ya + slope * (np.minimum(np.maximum(col + 0.5 - half, lo_x), hi_x) - xa)
+        y1 = ya + slope * (np.minimum(np.maximum(col + 0.5 + half, lo_x), hi_x) - xa)
         # Per column, the least and greatest y of its pieces (sorted by column, reduced per run).
         order = np.argsort(col, kind="stable")
         col = col[order]
@@ -319,9 +330,18 @@ def legend_labels(series):
 
 
 def _same_curves(a, b):
-    for key in ("speed_frames", "speed", "frames", "deviation"):
+    """Whether two series coincide within 1e-6 at every point (NaN matching NaN, inf the same inf):
+    np.allclose(rtol=0, atol=1e-6, equal_nan=True), the values first (the frames are usually one
+    shared array) and without allclose's overhead (a figure compares every pair of its series)."""
+    for key in ("speed", "deviation", "speed_frames", "frames"):
+        if a[key] is b[key]:
+            continue
         x, y = np.asarray(a[key], float), np.asarray(b[key], float)
-        if x.shape != y.shape or not np.allclose(x, y, rtol=0.0, atol=1e-6, equal_nan=True):
+        if x.shape != y.shape:
+            return False
+        with np.errstate(invalid="ignore"):
+            close = (np.abs(x - y) <= 1e-6) | (x == y) | (np.isnan(x) & np.isnan(y))
+        if not close.all():
             return False
     return True
 
@@ -396,3 +416,27 @@ def render_comparison(title, series, key_frames=(), subtitle="", titles=PANEL_TI
             canvas.fill_rect(legend_left + 26, yy, legend_left + 27, yy + 4, KEY_LINE)
         canvas.text(legend_left + 50, y + 7, "key frames", valign="middle")
     return canvas.pixels
+
+
+# ---- PNG ------------------------------------------------------------------------------------------------
+PNG_LEVEL = 1  # zlib level: as fast as Blender's own PNG writer (15 % compression), about the same size
+
+
+def png_bytes(pixels):
+    """The PNG file (bytes) of RGBA uint8 `pixels` (height, width, 4), rows top to bottom: 8 bits per
+    channel, colour type 6 (RGBA), no filter, one zlib stream (level PNG_LEVEL). Any PNG reader gets
+    the same bytes back (Blender's image loader included: its pixels are those bytes / 255).
+    Touches no Blender data and releases the GIL while compressing, so worker threads may encode."""
+    pixels = np.ascontiguousarray(pixels, dtype=np.uint8)
+    height, width, channels = pixels.shape
+    if channels != 4:
+        raise ValueError("png_bytes: expected RGBA pixels (height, width, 4), got %s" % (pixels.shape,))
+    rows = np.zeros((height, 1 + 4 * width), np.uint8)  # each row: filter type 0 (none), then its pixels
+    rows[:, 1:] = pixels.reshape(height, -1)
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)  # 8-bit RGBA, deflate, no interlace
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+            + chunk(b"IDAT", zlib.compress(rows.tobytes(), PNG_LEVEL)) + chunk(b"IEND", b""))

@@ -5,6 +5,8 @@
     ~/.cache/quatcurve/bpy-5.0.1/bin/python tests/bench/bench_speed.py
     … -- --repeat 5 --profile     (more runs; cProfile of one bake and one reduce, by own time)
     … -- --threads 1              (worker threads of bake and reduce; default one per core)
+    … -- --bake-only              (the bake, the limit and the bake's stages: no reduce, nla.bake or
+                                   mocap counts, which take minutes)
     … -- --smoke                  (tests/bench/smoke.py: 2 bones x 101 frames, one run, nla.bake
                                    over 20 frames, 1 MiB settled, the profiles printed)
 
@@ -73,7 +75,7 @@ def options():
     argv = smoke.script_args()
     repeat = int(argv[argv.index("--repeat") + 1]) if "--repeat" in argv else (1 if smoke.SMOKE else 3)
     threads = int(argv[argv.index("--threads") + 1]) if "--threads" in argv else None
-    return repeat, "--profile" in argv or smoke.SMOKE, threads
+    return repeat, "--profile" in argv or smoke.SMOKE, threads, "--bake-only" in argv
 
 
 def clear_scene():
@@ -304,7 +306,7 @@ def bake_stages(rig, original, repeat):
 
 
 def main():
-    repeat, want_profile, threads = options()
+    repeat, want_profile, threads, bake_only = options()
     workers.THREADS = threads
     quatcurve_blender.register()
     clear_scene()
@@ -324,23 +326,27 @@ def main():
         seconds, with_update = run_limit(rig, original, arrays, ipo, n)
         limits.append(seconds)
         updated_limits.append(with_update)
-        seconds, reduced_keys = run_reduce(rig, baked)
-        reduces.append(seconds)
+        if not bake_only:
+            seconds, reduced_keys = run_reduce(rig, baked)
+            reduces.append(seconds)
     assert keys == 4 * BONES * n, keys
     if want_profile:
         drop(baked)
         profile("bake", lambda: run_bake(rig, original))
         baked = fcurves.active_action(rig)
-        profile("reduce", lambda: run_reduce(rig, baked))
+        if not bake_only:
+            profile("reduce", lambda: run_reduce(rig, baked))
     drop(baked)
     own_staged, stages = bake_stages(rig, original, repeat)
-    baked = run_bake(rig, original)[3]  # the reduce's source again
+    if not bake_only:
+        baked = run_bake(rig, original)[3]  # the reduce's source again
     del arrays
-    bake_s, own_s, limit_s, updated_s, reduce_s = (min(bakes), min(owns), min(limits), min(updated_limits),
-                                                   min(reduces))
-    theirs_s, theirs_bf = run_nla_bake()
-    nla_ratio = (BONES * n / bake_s) / (theirs_bf / theirs_s)
-    mocap = mocap_key_counts()
+    bake_s, own_s, limit_s, updated_s = min(bakes), min(owns), min(limits), min(updated_limits)
+    if not bake_only:
+        reduce_s = min(reduces)
+        theirs_s, theirs_bf = run_nla_bake()
+        nla_ratio = (BONES * n / bake_s) / (theirs_bf / theirs_s)
+        mocap = mocap_key_counts()
 
     print("Blender %s, quatcurve %s; %d bones x %s frames, SQUAD -> QUATERNION, %s keys; best of %d; %s"
           % (bpy.app.version_string, native.require().__version__, BONES, f"{n:,}", f"{keys:,}", repeat,
@@ -349,9 +355,10 @@ def main():
     print("  %-34s %9s   %s" % ("stage", "seconds", "runs"))
     rows = (("bake (quatcurve.bake)", bake_s, bakes), ("  its own work (before the update)", own_s, owns),
             ("limit (add + foreach_set co, ipo)", limit_s, limits),
-            ("limit + new action + scene update", updated_s, updated_limits),
-            ("reduce (0.1 deg, BEZIER per channel)", reduce_s, reduces),
-            ("nla.bake, %d bones x %d frames" % (BONES, NLA_FRAMES), theirs_s, [theirs_s]))
+            ("limit + new action + scene update", updated_s, updated_limits))
+    if not bake_only:
+        rows += (("reduce (0.1 deg, BEZIER per channel)", reduce_s, reduces),
+                 ("nla.bake, %d bones x %d frames" % (BONES, NLA_FRAMES), theirs_s, [theirs_s]))
     for name, best, runs in rows:
         print("  %-34s %9.3f   %s" % (name, best, " ".join("%.3f" % r for r in runs)))
     print("  bake / limit:         %.2f   (target <= 1.2; the limit's keys written, not yet evaluated, "
@@ -364,6 +371,9 @@ def main():
         repeat, own_staged, ", ".join("%s %.3f" % kv for kv in stages.items())))
     print("    reading + copying + the limit's writes: %.2f x the limit (the floor of the bake's own work)"
           % ((stages["read"] + stages["copy"] + limit_s) / limit_s))
+    if bake_only:
+        quatcurve_blender.unregister()
+        return
     print("  bake vs nla.bake:     %.0fx  (bone-frames per second)" % nla_ratio)
     print("  reduce / bake:        %.2f   (target <= 1.0); %s keys -> %s"
           % (reduce_s / bake_s, f"{keys:,}", f"{reduced_keys:,}"))

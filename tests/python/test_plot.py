@@ -1,11 +1,13 @@
 """The comparison plot's drawing (addon/quatcurve_blender/plot.py), outside Blender: pixel values
 checked against the data — a series' line lies at the row its value maps to, in its colour; axes,
-grid and legend in theirs. Images and PNG files are Blender's (tests/blender/test_compare.py reads
-them back through Blender).
+grid and legend in theirs; the PNG encoding read back with zlib. Images are Blender's
+(tests/blender/test_compare.py reads the PNGs and images back through Blender).
 """
 
 import importlib.util
 import os
+import struct
+import zlib
 
 import numpy as np
 import pytest
@@ -148,3 +150,37 @@ def test_legend_names_coinciding_series():
     series = example_series()[:3]
     series[2] = dict(series[0], name="COPY")
     assert plot.legend_labels(series) == ["BLENDER", "BLENDER_EULER_XYZ", "COPY =BLENDER"]
+
+
+def test_legend_tells_series_within_a_millionth_of_a_degree_and_nan_alike():
+    series = example_series()[:3]
+    series[1] = dict(series[0], name="NEAR", speed=series[0]["speed"] + 0.9e-6)
+    series[2] = dict(series[0], name="FAR", deviation=series[0]["deviation"] + 1.1e-6)
+    assert plot.legend_labels(series) == ["BLENDER", "NEAR =BLENDER", "FAR"]
+    gaps = [dict(s, speed=np.where(np.arange(len(s["speed"])) % 7 == 0, np.nan, s["speed"])) for s in series[:2]]
+    gaps[1]["name"] = "GAPS"
+    assert plot.legend_labels(gaps) == ["BLENDER", "GAPS =BLENDER"]
+    gaps[1]["speed"] = gaps[1]["speed"].copy()
+    gaps[1]["speed"][7] = 1.0  # a value where the other has NaN
+    assert plot.legend_labels(gaps) == ["BLENDER", "GAPS"]
+
+
+def test_png_bytes_hold_the_pixels():
+    rng = np.random.default_rng(7)
+    pixels = rng.integers(0, 256, size=(5, 3, 4), dtype=np.uint8)
+    data = plot.png_bytes(pixels)
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks, at = {}, 8
+    while at < len(data):
+        length, tag = struct.unpack(">I4s", data[at:at + 8])
+        body = data[at + 8:at + 8 + length]
+        assert struct.unpack(">I", data[at + 8 + length:at + 12 + length])[0] == zlib.crc32(tag + body)
+        chunks[tag] = body
+        at += 12 + length
+    assert list(chunks) == [b"IHDR", b"IDAT", b"IEND"]
+    assert struct.unpack(">IIBBBBB", chunks[b"IHDR"]) == (3, 5, 8, 6, 0, 0, 0)
+    rows = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), np.uint8).reshape(5, 1 + 3 * 4)
+    assert (rows[:, 0] == 0).all()  # no filter
+    np.testing.assert_array_equal(rows[:, 1:].reshape(5, 3, 4), pixels)
+    with pytest.raises(ValueError, match="RGBA"):
+        plot.png_bytes(pixels[:, :, :3])
