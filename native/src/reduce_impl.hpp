@@ -324,6 +324,11 @@ private:
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
                                      double limit, std::size_t budget = kNone);
 
+// Drops the inserted keys of `keys` (the channels' current keys, their fits committed) whose
+// neighbours one segment within `limit` joins; returns the keys kept, their fits committed.
+std::vector<std::size_t> remove_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
+                                     double limit, const std::vector<std::size_t>& keys);
+
 // ---- stage 4: verification and repair (reduce_verify.cpp) ------------------------------------------
 
 // The F-curves of the State's keys, every sample evaluated as Blender does, failing segments refitted
