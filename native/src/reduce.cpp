@@ -10,7 +10,8 @@
 //                       in M, then iterative reweighting toward the minimax fit) and tests the exact
 //                       rotation error at every sample inside;
 //   reduce_select.cpp   select_keys picks keys greedily (farthest feasible end by exponential +
-//                       binary search) and then removes keys whose neighbours join;
+//                       binary search) and then removes keys whose neighbours join; remove_keys
+//                       repeats that removal once the other channels are final;
 //   reduce_verify.cpp   verify_and_repair evaluates every sample exactly as Blender does
 //                       (blender_eval.hpp) and refits or splits failing segments.
 #include "quatcurve/reduce.hpp"
@@ -43,15 +44,17 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         verify_angle - std::min(kFitMarginAbs, kFitMarginRel * verify_angle);
     const double verify_tan2 = tan2_half(verify_angle);
 
-    // `beat`: a per-channel run gives up (returns false) as soon as its keys cannot come out fewer
-    // than `beat` — verification only ever adds keys, and every channel keeps at least the forced
-    // samples (the first and last included) — so the result is the one a full run would lose with.
-    // (When the synchronized result keeps only the forced keys, no per-channel run starts at all.)
+    // `beat` (synchronized runs): the run gives up (returns false) as soon as its keys in total
+    // cannot come out fewer than `beat` — verification only ever adds keys, and every channel keeps
+    // at least the forced samples (the first and last included) — so the result is the one a full
+    // run would lose with. (A per-channel run always runs to the end: its removal pass below may
+    // still drop keys of the channels chosen first.)
     std::size_t forced = 0;
     for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
-    auto run = [&](bool sync, std::size_t beat, ReducedKeys& out) {
-        // Nothing to build when the forced keys alone cannot beat the synchronized result.
-        if (!sync && forced * static_cast<std::size_t>(C) >= beat) return false;
+    // `forced_only` (synchronized runs): one segment from each forced key to the next, or none.
+    auto run = [&](bool sync, std::size_t beat, ReducedKeys& out, bool forced_only = false) {
+        // Nothing to build when the forced keys alone cannot beat the other result.
+        if (forced * static_cast<std::size_t>(C) >= beat) return false;
         State s = empty_state(p, !sync);
         Fitter fitter(p, ipo, s);
         std::vector<std::vector<int>> groups;
@@ -69,8 +72,20 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
             std::vector<int> all(C);
             for (int c = 0; c < C; ++c) all[c] = c;
             groups.push_back(all);
-            const std::vector<std::size_t> keys =
-                select_keys(p, fitter, all.data(), C, tan2_half(fit_angle));
+            // Every channel keeps these keys: fewer than `beat` in total is fewer than this each.
+            const std::size_t budget = beat == kNone ? kNone : (beat + C - 1) / C;
+            std::vector<std::size_t> keys;
+            if (forced_only) {
+                keys.push_back(0);
+                for (std::size_t k = 1; k < p.n; ++k) {
+                    if (!p.is_forced(k)) continue;
+                    if (!fitter.fit(keys.back(), k, all.data(), C, tan2_half(fit_angle), false)) return false;
+                    keys.push_back(k);
+                }
+            } else {
+                keys = select_keys(p, fitter, all.data(), C, tan2_half(fit_angle), budget);
+                if (keys.empty()) return false;
+            }
             for (int c = 0; c < C; ++c) s.keys[c] = keys;
         } else {
             // One channel after the other, each fitted against the already fitted ones (the rest
@@ -79,18 +94,17 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
             // for axis-angle) goes first.
             static const double kQuatShare[4] = {0.6, 0.75, 0.9, 1.0};
             static const double kEulerShare[3] = {0.7, 0.85, 1.0};
-            std::size_t chosen = 0;
             for (int c = 0; c < C; ++c) {
                 groups.push_back({c});
                 const double share = C == 4 ? kQuatShare[c] : kEulerShare[c];
-                // The channel's keys may reach no further than this (the later channels keep at
-                // least the forced ones); select_keys gives up as soon as they would.
-                const std::size_t budget = beat - chosen - forced * static_cast<std::size_t>(C - 1 - c);
-                s.keys[c] = select_keys(p, fitter, &c, 1, tan2_half(share * fit_angle), budget);
-                if (s.keys[c].empty()) return false;
-                chosen += s.keys[c].size();
-                if (chosen + forced * static_cast<std::size_t>(C - 1 - c) >= beat) return false;
+                s.keys[c] = select_keys(p, fitter, &c, 1, tan2_half(share * fit_angle));
             }
+            // The channels chosen under a share of the tolerance, once more under all of it against
+            // the others' final fits: a key whose neighbours one segment now joins is dropped. Every
+            // fit tests the rotation of all channels, so each sample stays within the limit whatever
+            // is dropped (the last channel was chosen under the whole tolerance already).
+            for (int c = 0; c + 1 < C; ++c)
+                s.keys[c] = remove_keys(p, fitter, &c, 1, tan2_half(fit_angle), s.keys[c]);
         }
         out.interpolation = ipo;
         out.synchronized = sync;
@@ -105,15 +119,29 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         return true;
     };
 
+    // Synchronized with the forced keys alone cannot be beaten: tried first (one fit per range
+    // between forced keys; motionless bones pass), and when it passes it is the synchronized
+    // result even where verification adds keys. Otherwise per channel (on motion capture it has the
+    // fewer keys on most bones), then synchronized, which gives up as soon as it cannot come out
+    // with as few keys in total (it wins ties: glTF export and hand editing want shared keys). A
+    // per-channel result that misses the tolerance (a segment that no candidate sample can split:
+    // forced keys closer than min_gap to the failing sample) is kept only with fewer keys than a
+    // synchronized one that misses no more.
     ReducedKeys best;
-    run(true, kNone, best);
-    ReducedKeys per_channel;
-    if (!synchronized && p.n > 2 && tolerance > 0.0 && run(false, best.key_count(), per_channel)) {
-        // Fewer keys wins, unless it misses a bound the synchronized result meets (a segment that
-        // no candidate sample can split: forced keys closer than min_gap to the failing sample).
-        const bool meets = per_channel.max_error <= std::max(tolerance, best.max_error);
-        if (per_channel.key_count() < best.key_count() && meets) best = std::move(per_channel);
+    if (synchronized || p.n <= 2 || tolerance == 0.0) {
+        run(true, kNone, best);
+        return best;
     }
+    const std::size_t least = forced * static_cast<std::size_t>(C);
+    const bool forced_only = run(true, kNone, best, true);
+    if (forced_only && best.key_count() <= least) return best;
+    ReducedKeys per_channel;
+    run(false, kNone, per_channel);
+    const bool meets = per_channel.max_error <= tolerance;
+    if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best)) return per_channel;
+    if (per_channel.key_count() < best.key_count() &&
+        per_channel.max_error <= std::max(tolerance, best.max_error))
+        best = std::move(per_channel);
     return best;
 }
 

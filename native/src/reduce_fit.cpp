@@ -143,7 +143,9 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
                 kappa = 4.0 - kRadialWeight;
             }
             for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
-            const int iterations = nc == 1 ? kReweightIterationsSingle : kReweightIterations;
+            const int iterations = nc != 1                  ? kReweightIterations
+                                   : p_.kind == Kind::QUAT ? kReweightIterationsQuatChannel
+                                                           : kReweightIterationsSingle;
             for (int it = 0; it <= iterations; ++it) {
                 solve_handles(i, j, chans, nc, kappa, p1, p2);
                 // The last round keeps the first round's bound: over the limit it fails anyway,

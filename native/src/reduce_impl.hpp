@@ -42,10 +42,14 @@ constexpr double kVerifyMargin = 2e-6;
 constexpr double kFitMarginRel = 2e-3;
 constexpr double kFitMarginAbs = 5e-6;
 // Reweighting rounds for fits of all channels together, and for one channel among fitted others
-// (per-channel mode fits four times as many segments; two rounds keep it within the speed target
-// at a cost of ~1 % more keys).
+// (per-channel mode fits four times as many segments): three for a quaternion channel — on the
+// motion-capture clips at 0.1° (reduce_keys_proved) 1.1 % and 0.9 % fewer keys than two for 8 %
+// and 5 % more instructions; four gave 0.3 % and 0.1 % fewer again for 3 % and 1 % more — and two
+// for an Euler or axis-angle channel (a third let Euler channels keyed apart near gimbal lock swing
+// between samples further than fit_through_keys' proof allows: FitProof.EulerKeyAtGimbalLock…).
 constexpr int kReweightIterations = 4;
 constexpr int kReweightIterationsSingle = 2;
+constexpr int kReweightIterationsQuatChannel = 3;
 // A fit whose worst sample after reweighting round r (0: the plain least-squares fit) is above
 // kHopeless[r] × the limit (in tan²(θ/2); 4 is twice the angle) is rejected without further rounds.
 // Each round lowers the worst sample by less than the one before, and half of all rounds went to
@@ -323,6 +327,11 @@ private:
 // `budget`.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
                                      double limit, std::size_t budget = kNone);
+
+// Drops the inserted keys of `keys` (the channels' current keys, their fits committed) whose
+// neighbours one segment within `limit` joins; returns the keys kept, their fits committed.
+std::vector<std::size_t> remove_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
+                                     double limit, const std::vector<std::size_t>& keys);
 
 // ---- stage 4: verification and repair (reduce_verify.cpp) ------------------------------------------
 

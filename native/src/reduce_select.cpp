@@ -11,12 +11,11 @@ namespace quatcurve::reduce_impl {
 // Greedy within a range: from key i the farthest feasible end, bracketed around the previous
 // segment's length (growing or shrinking by doubling steps) and then pinned down by binary search;
 // an end that is not a candidate (too close to a forced key) steps back to the nearest candidate.
-// Then one pass drops an inserted key wherever the segment joining its neighbours passes. A probe
-// that passes commits its fit, and the ends only grow, so the chosen segment's fit is the one held.
-// The ranges share nothing but the greedy's last segment length (a fit reads and commits only the
-// samples of its own range; the forced keys keep their values), so each range's removal pass runs
-// as soon as its greedy keys are chosen: from then on its keys are final, and with the forced keys
-// still ahead they bound the result from below (`budget`).
+// A second pass, one key behind the greedy, drops an inserted key wherever the segment joining its
+// neighbours passes. A probe that passes commits its fit, and the ends only grow, so the chosen
+// segment's fit is the one held. The keys that pass kept are final, and with the forced keys still
+// ahead they bound the result from below: as soon as that bound reaches `budget`, the choice gives
+// up (a per-channel or synchronized run that cannot beat the other stops early).
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
                                      double limit, std::size_t budget) {
     const std::size_t n = p.n;
@@ -116,18 +115,41 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         keys.push_back(good);
         last_len = good - i;
         i = good;
-        if (good != end) continue;
-        // The range is chosen. Removal pass over its keys: join neighbours where one segment
-        // suffices (never across a forced key). A failed probe changes nothing, so the fits already
-        // committed stay valid.
+        // Removal pass over the keys chosen so far, up to the one before the newest: join
+        // neighbours where one segment suffices (never across a forced key). It runs as the greedy
+        // goes — its probes end at keys already chosen and commit only segments before the greedy's
+        // start, whose fits the greedy never reads — so the keys it keeps are final at once and,
+        // with the forced samples ahead, bound the result from below (`budget`). A failed probe
+        // changes nothing, so the fits already committed stay valid.
         for (; next + 1 < keys.size(); ++next) {
             if (!p.is_forced(keys[next]) && !failed_before(kept.back(), keys[next + 1]) &&
                 probe(kept.back(), keys[next + 1]))
                 continue;
             kept.push_back(keys[next]);
         }
+        if (good != end) {
+            // The keys between kept.back() and the range's end may all go; the forced ones stay.
+            if (kept.size() + forced_ahead >= budget) return {};
+            continue;
+        }
         --forced_ahead;  // `end`, the next range's start, is the last key and counts as kept below
         if (kept.size() + 1 + forced_ahead >= budget) return {};
+    }
+    kept.push_back(keys.back());
+    return kept;
+}
+
+// Drops every inserted key of `keys` (the channels' current keys, fitted) whose neighbours can be
+// joined by one segment within `limit`, in one pass from the start; a joined segment's fit is
+// committed, a failed probe commits nothing, so the fits kept stay those of the keys kept.
+std::vector<std::size_t> remove_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
+                                     double limit, const std::vector<std::size_t>& keys) {
+    if (keys.size() < 3) return keys;
+    std::vector<std::size_t> kept{keys[0]};
+    for (std::size_t a = 1; a + 1 < keys.size(); ++a) {
+        if (!p.is_forced(keys[a]) && fitter.fit(kept.back(), keys[a + 1], chans, nc, limit, false))
+            continue;
+        kept.push_back(keys[a]);
     }
     kept.push_back(keys.back());
     return kept;

@@ -43,8 +43,10 @@
 // binary search), then a pass that removes keys whose neighbours can be joined. synchronized = true
 // keeps the same frames on every channel (what glTF export and hand editing want); false gives each
 // channel its own keys, fitted one channel after the other (quaternions w, x, y, z; Euler X, Y, Z),
-// each against the others' fitted curves under a growing share of the tolerance, and returns that
-// or the synchronized result, whichever has fewer keys in total.
+// each against the others' fitted curves under a growing share of the tolerance, then once more
+// removes the keys of the channels chosen first whose neighbours join under the whole tolerance
+// against the others' final curves, and returns that or the synchronized result, whichever has
+// fewer keys in total (the synchronized one on a tie).
 #pragma once
 
 #include <cstddef>
