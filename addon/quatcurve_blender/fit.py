@@ -643,15 +643,23 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
     turns = np.asarray(turns, float)
     if keys.loop is not None:
         ease_in, ease_out = seam_eases(ease_in, ease_out)
-    curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
-    # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys,
-    # and the proof of the bound at every instant (KeyFit.proof).
+    options = curve_options(settings, ease_in, ease_out, turns)
+    if keys.loop is not None:
+        options["cyclic"] = True
+    # One native call without the GIL (quatcurve.fit_channels): the curve as curve_of builds it, the
+    # key signs it reaches them with, samples, channel values joining the keys as keyed, fit_keys, and
+    # the proof of the bound at every instant (KeyFit.proof).
     try:
-        kf = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode, subframes=int(settings.subframes),
-                                 tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP,
-                                 previous=previous)
+        kf = qc.fit_channels(keys.frames, keys.values, keys.mode, settings.method,
+                             subframes=int(settings.subframes), tolerance=math.radians(settings.tolerance),
+                             min_gap=MIN_KEY_GAP, previous=previous, **options)
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.name, e)) from None
+        try:  # a zero quaternion or axis: curve_of's message, naming the frame
+            targets.refuse_zero_rotations(keys.mode, keys.values, keys.name, keys.frames)
+        except TargetError as zero:
+            raise FitError(str(zero)) from None
+        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
+    curve = kf.curve
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
     channels, generated = [], 0
