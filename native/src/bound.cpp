@@ -56,6 +56,13 @@ PlaybackMotion::PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolatio
         throw InvalidArgument("channels: " + std::to_string(channels_.size()) + " F-curves for a rotation of " +
                               std::to_string(channel_count(mode_)) + " channels");
     for (const FCurveKeys& ch : channels_) check_fcurve_keys(ch, interpolation_);
+    shared_frames_ = channels_.size() > 1;
+    for (std::size_t c = 1; c < channels_.size() && shared_frames_; ++c) {
+        const std::vector<double>& a = channels_[0].frames;
+        const std::vector<double>& b = channels_[c].frames;
+        shared_frames_ = a.size() == b.size();
+        for (std::size_t k = 0; k < a.size() && shared_frames_; ++k) shared_frames_ = float(a[k]) == float(b[k]);
+    }
 }
 
 void PlaybackMotion::values(double t, double* out) const {
@@ -68,7 +75,13 @@ void PlaybackMotion::values(double t, double* out) const {
             std::copy(c.values, c.values + C, out);
             return;
         }
-    for (std::size_t c = 0; c < C; ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    if (shared_frames_) {
+        const FCurveKeys* channels[4];
+        for (std::size_t c = 0; c < C; ++c) channels[c] = &channels_[c];
+        blender_evaluate_shared(channels, static_cast<int>(C), interpolation_, frame, out);
+    } else {
+        for (std::size_t c = 0; c < C; ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    }
     Cached& slot = cache_[next_++ % kCache];
     slot.frame = frame;
     slot.valid = true;

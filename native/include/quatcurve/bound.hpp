@@ -192,6 +192,9 @@ private:
     std::vector<FCurveKeys> channels_;
     KeyInterpolation interpolation_;
     RotationMode mode_;
+    // Every channel holds the same key frames (as float32), as the fit's and the reducer's synchronized
+    // keys do: values() evaluates them together (blender_evaluate_shared).
+    bool shared_frames_ = false;
 };
 
 struct PlaybackBound {
