@@ -200,9 +200,11 @@ private:
     std::vector<FCurveKeys> channels_;
     KeyInterpolation interpolation_;
     RotationMode mode_;
-    // Every channel holds the same key frames (as float32), as the fit's and the reducer's synchronized
-    // keys do: values() evaluates them together (blender_evaluate_shared).
+    // Every channel holds the same key frames, as the fit's and the reducer's synchronized keys do:
+    // values() evaluates them together (blender_evaluate_shared), bounds() finds their segment once
+    // and bounds their frame parameter once per handle frames (all_channel_bounds).
     bool shared_frames_ = false;
+    void all_channel_bounds(double t0, double t1, double* rate, double* curvature) const;
 };
 
 struct PlaybackBound {
