@@ -263,18 +263,22 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
                 rate[c] = std::fmax(rate[c], std::fabs(float(channels_[c].values[j + 1]) - float(channels_[c].values[j])) / (f1 - f0));
             continue;
         }
-        double known[4] = {0.0, 0.0, 0.0, 0.0};  // the frames `f` was computed for
+        if (controls_segment_ != j) {
+            for (std::size_t c = 0; c < C; ++c)
+                controls_[c].bezier = segment_controls(channels_[c], j, controls_[c].x, controls_[c].y);
+            controls_segment_ = j;
+        }
+        const double* known = nullptr;  // the frames `f` was computed for
         FrameBounds f{};
-        bool have = false;
         for (std::size_t c = 0; c < C; ++c) {
-            double x[4], y[4], r, k;
-            if (!segment_controls(channels_[c], j, x, y)) continue;
-            if (!have || !std::equal(x, x + 4, known)) {
-                f = frame_bounds(x, std::fmax(lo, f0), std::fmin(hi, f1));
-                std::copy(x, x + 4, known);
-                have = true;
+            const SegmentControls& s = controls_[c];
+            double r, k;
+            if (!s.bezier) continue;
+            if (known == nullptr || !std::equal(s.x, s.x + 4, known)) {
+                f = frame_bounds(s.x, std::fmax(lo, f0), std::fmin(hi, f1));
+                known = s.x;
             }
-            value_bounds(f, y, r, k);
+            value_bounds(f, s.y, r, k);
             rate[c] = std::fmax(rate[c], r);
             curvature[c] = std::fmax(curvature[c], k);
         }

@@ -205,6 +205,14 @@ private:
     // and bounds their frame parameter once per handle frames (all_channel_bounds).
     bool shared_frames_ = false;
     void all_channel_bounds(double t0, double t1, double* rate, double* curvature) const;
+    // The control points of every channel on the segment all_channel_bounds asked for last (the proof
+    // bounds many intervals of one segment in a row).
+    struct SegmentControls {
+        bool bezier = false;  // false: Blender's flat-segment shortcut
+        double x[4], y[4];
+    };
+    mutable std::size_t controls_segment_ = static_cast<std::size_t>(-1);
+    mutable SegmentControls controls_[4];
 };
 
 struct PlaybackBound {
