@@ -629,6 +629,14 @@ def curve_of(keys, settings, ease_in=None, ease_out=None, turns=None):
 def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previous=None):
     """The fitted keys of one target (nothing written). Fewer than two keys: None. previous: the
     target's last KeyFit (last_fit), whose unchanged key segments are kept."""
+    fitted = fit_target(keys, settings, ease_in, ease_out, turns, previous)
+    return None if fitted is None else plan_of(fitted)
+
+
+def fit_target(keys, settings, ease_in=None, ease_out=None, turns=None, previous=None):
+    """plan_target's native fit: (keys, settings, KeyFit, ease_in, ease_out, turns), for plan_of; None
+    for fewer than two keys. Raises FitError. Live mode runs it on worker threads, where it holds the
+    GIL only around its one native call, and plan_of on the main thread."""
     qc = native.require()
     K = len(keys.frames)
     if K < 2:
@@ -643,15 +651,30 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
     turns = np.asarray(turns, float)
     if keys.loop is not None:
         ease_in, ease_out = seam_eases(ease_in, ease_out)
-    curve, key_values = curve_of(keys, settings, ease_in, ease_out, turns)
-    # One native call without the GIL: samples, channel values joining the keys as keyed, fit_keys,
-    # and the proof of the bound at every instant (KeyFit.proof).
+    options = curve_options(settings, ease_in, ease_out, turns)
+    if keys.loop is not None:
+        options["cyclic"] = True
+    # One native call without the GIL (quatcurve.fit_channels): the curve as curve_of builds it, the
+    # key signs it reaches them with, samples, channel values joining the keys as keyed, fit_keys, and
+    # the proof of the bound at every instant (KeyFit.proof).
     try:
-        kf = qc.fit_through_keys(curve, keys.frames, key_values, keys.mode, subframes=int(settings.subframes),
-                                 tolerance=math.radians(settings.tolerance), min_gap=MIN_KEY_GAP,
-                                 previous=previous)
+        kf = qc.fit_channels(keys.frames, keys.values, keys.mode, settings.method,
+                             subframes=int(settings.subframes), tolerance=math.radians(settings.tolerance),
+                             min_gap=MIN_KEY_GAP, previous=previous, **options)
     except ValueError as e:
-        raise FitError("%s: %s" % (keys.name, e)) from None
+        try:  # a zero quaternion or axis: curve_of's message, naming the frame
+            targets.refuse_zero_rotations(keys.mode, keys.values, keys.name, keys.frames)
+        except TargetError as zero:
+            raise FitError(str(zero)) from None
+        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
+    return keys, settings, kf, ease_in, ease_out, turns
+
+
+def plan_of(fitted):
+    """The FitPlan of fit_target's result: each channel's keys with their types (the animator's keys'
+    own, GENERATED for the inserted ones), the figures and the notes."""
+    keys, settings, kf, ease_in, ease_out, turns = fitted
+    K = len(keys.frames)
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
     channels, generated = [], 0
@@ -678,7 +701,7 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
     # The samples (kf.times, a copy when asked for): the last key is the last of them.
     return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, int(forced[-1]) + 1,
-                   ease_in, ease_out, notes + path_notes(keys.name, curve, keys.frames, settings.method), turns, kf)
+                   ease_in, ease_out, notes + path_notes(keys.name, kf.curve, keys.frames, settings.method), turns, kf)
 
 
 def seam_eases(ease_in, ease_out):

@@ -270,8 +270,9 @@ def _refit_action(action):
     t0 = time.perf_counter()
     found = fit.fitted_targets(action)
     STATS.add("targets", time.perf_counter() - t0)
-    # Read and compare on the main thread, plan the changed targets on worker threads (native work
-    # without the GIL) while the next ones are read, write on the main thread as the plans come in
+    # Read and compare on the main thread, fit the changed targets on worker threads (one native call
+    # each, without the GIL) while the next ones are read, plan and write on the main thread as the fits
+    # come in
     # (workers.parallel_imap). A target whose raw digest is the one its last full check found fitted
     # is not read again; two objects playing one action's rotation channels (same slot and mode) are
     # refitted once.
@@ -283,8 +284,12 @@ def _refit_action(action):
         plans = parallel_imap(_plan, itertools.chain(first, changed))
     t2, reads = time.perf_counter(), _read_seconds()
     for target, result in plans:
+        # The wait for this fit (the reads parallel_imap asked for meanwhile count as reads), and its
+        # plan's Python: on the main thread, which holds the GIL anyway (workers that ran it too would
+        # take the GIL from it once more per target).
+        if result is not None and not isinstance(result, fit.FitError):
+            result = fit.plan_of(result)
         t3 = time.perf_counter()
-        # The wait for this plan; the reads parallel_imap asked for meanwhile count as reads.
         STATS.add("plan", t3 - t2 - (_read_seconds() - reads))
         reads = _read_seconds()
         if isinstance(result, fit.FitError):
@@ -346,11 +351,11 @@ def _changed_targets(action, found):
 
 
 def _plan(item):
-    """(target, its FitPlan, its FitError or None) of a changed target (worker thread: the target is
-    only handed back, no Blender data is read)."""
+    """(target, its fit (fit.fit_target), its FitError or None) of a changed target (worker thread: the
+    target is only handed back, no Blender data is read)."""
     target, keys, settings, eases, previous = item
     try:
-        return target, fit.plan_target(keys, settings, *eases, previous=previous)
+        return target, fit.fit_target(keys, settings, *eases, previous=previous)
     except fit.FitError as error:
         return target, error
 

@@ -13,6 +13,7 @@
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/euler.hpp"
+#include "quatcurve/fit.hpp"
 
 namespace quatcurve::bindings {
 
@@ -400,6 +401,26 @@ void bind_curve(py::module_& m) {
                                     owner);
             return py::make_tuple(std::move(keys), breaks_array(baked.path_rule_breaks));
         });
+
+    m.def(
+        "fit_channels",
+        [](py::handle key_frames, py::handle key_values, const std::string& mode_name, const std::string& method,
+           int subframes, double tolerance, double min_gap, const KeyFit* previous, const py::kwargs& kwargs) {
+            const RotationMode mode = parse_rotation_mode(mode_name);
+            const Method meth = parse_method(method);
+            const CurveOptions options = to_options(meth, kwargs);
+            const std::vector<double> t = key_times(key_frames);
+            const Batch v = key_rows(key_values, static_cast<py::ssize_t>(channel_count(mode)), "key_values");
+            const std::vector<double> keys(v.data(), v.data() + v.count * channel_count(mode));
+            py::gil_scoped_release release;
+            return fit_channels(t, keys, mode, meth, options, subframes, tolerance, min_gap, previous);
+        },
+        py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::arg("method"), py::kw_only(),
+        py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01, py::arg("previous") = nullptr,
+        "A target's whole fit in one call without the GIL: Curve.from_channels(key_frames, key_values, mode, "
+        "method, **options), quaternion keys given the sign the curve reaches them with, then "
+        "fit_through_keys(curve, key_frames, those keys, mode, subframes=, tolerance=, min_gap=, previous=). "
+        "A KeyFit; its curve and key_values are the curve and the keys as the fit writes them.");
 }
 
 }  // namespace quatcurve::bindings

@@ -318,6 +318,19 @@ reaches (emulated), above `tolerance` only where no key could be inserted.)doc")
                                    return vector_array(b);
                                },
                                "(K-1,) the proved bound of each key segment (radians)")
+        .def_property_readonly("curve", [](const KeyFit& f) -> py::object {
+                                   if (!f.curve) return py::none();
+                                   return py::cast(Curve(*f.curve));
+                               },
+                               "a copy of the curve the keys were fitted to (None for a default KeyFit)")
+        .def_property_readonly("key_values",
+                               [](const KeyFit& f) {
+                                   const std::size_t K = f.key_frames.size(), C = K ? f.key_values.size() / K : 0;
+                                   DArray a({static_cast<py::ssize_t>(K), static_cast<py::ssize_t>(C)});
+                                   std::copy(f.key_values.begin(), f.key_values.end(), a.mutable_data());
+                                   return a;
+                               },
+                               "(K, C) the keys' channel values as the fit writes them")
         .def_readonly("refitted", &KeyFit::refitted,
                       "key segments this call fitted; the others are the previous fit's (fit_through_keys' previous)")
         .def("__repr__", [](const KeyFit& f) {

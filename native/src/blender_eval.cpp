@@ -261,6 +261,65 @@ float blender_evaluate(const FCurveKeys& ch, KeyInterpolation interpolation, flo
     return berekeny(v1[1], v2[1], v3[1], v4[1], opl[0]);
 }
 
+// blender_evaluate's steps, the search and the root finder shared between the channels.
+void blender_evaluate_shared(const FCurveKeys* const* channels, int count, KeyInterpolation interpolation,
+                             float evaltime, double* out) {
+    const std::size_t C = static_cast<std::size_t>(count);
+    const std::vector<double>& frames = channels[0]->frames;
+    const std::size_t n = frames.size();
+    if (n == 0) {
+        for (std::size_t c = 0; c < C; ++c) out[c] = 0.0;
+        return;
+    }
+    if (evaltime <= float(frames[0]) || float(frames[n - 1]) <= evaltime) {
+        const std::size_t k = evaltime <= float(frames[0]) ? 0 : n - 1;
+        for (std::size_t c = 0; c < C; ++c) out[c] = float(channels[c]->values[k]);
+        return;
+    }
+    bool exact = false;
+    const int a = binary_search(frames, evaltime, exact);
+    const int prev = a > 0 ? a - 1 : a;
+    const float bx = float(frames[a]), px = float(frames[prev]);
+    const float duration = bx - px, time = evaltime - px;
+    const float flt_eps = 1.1920928955078125e-07f;  // FLT_EPSILON
+    bool found = false, root = false;  // the root found last, and the handle frames it was found for
+    float u = 0.0f, q1 = 0.0f, q2 = 0.0f;
+    for (std::size_t c = 0; c < C; ++c) {
+        const FCurveKeys& ch = *channels[c];
+        const float by = float(ch.values[a]), py = float(ch.values[prev]);
+        if (exact) {
+            out[c] = by;
+        } else if (std::fabs(bx - evaltime) < kKeyEps) {
+            out[c] = by;
+        } else if (evaltime < px || bx < evaltime) {
+            out[c] = 0.0f;
+        } else if (duration == 0) {
+            out[c] = py;
+        } else if (interpolation == KeyInterpolation::LINEAR) {
+            out[c] = (by - py) * time / duration + py;
+        } else {
+            float v1[2] = {px, py};
+            float v2[2] = {float(ch.handle_right[2 * prev]), float(ch.handle_right[2 * prev + 1])};
+            float v3[2] = {float(ch.handle_left[2 * a]), float(ch.handle_left[2 * a + 1])};
+            float v4[2] = {bx, by};
+            if (std::fabs(v1[1] - v4[1]) < flt_eps && std::fabs(v2[1] - v3[1]) < flt_eps &&
+                std::fabs(v3[1] - v4[1]) < flt_eps) {
+                out[c] = v1[1];  // Blender's flat-segment shortcut
+                continue;
+            }
+            correct_bezpart(v1, v2, v3, v4);
+            if (!found || v2[0] != q1 || v3[0] != q2) {
+                float opl[32];
+                root = findzero(evaltime, v1[0], v2[0], v3[0], v4[0], opl) != 0;
+                if (root) u = opl[0];
+                q1 = v2[0], q2 = v3[0];
+                found = true;
+            }
+            out[c] = root ? berekeny(v1[1], v2[1], v3[1], v4[1], u) : 0.0f;
+        }
+    }
+}
+
 void blender_evaluate(const FCurveKeys& channel, KeyInterpolation interpolation,
                       const std::vector<double>& frames, std::vector<double>& out) {
     if (std::is_sorted(frames.begin(), frames.end())) {

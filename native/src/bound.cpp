@@ -49,6 +49,13 @@ Quat CurveMotion::at(double t) const {
     return from_wxyz(q);
 }
 
+void CurveMotion::at_many(const double* t, std::size_t n, Quat* out) const {
+    // Curve::sample gives a time the same bits alone or in a batch (curve_simd.hpp).
+    std::vector<double> q(4 * n);
+    curve_.sample(t, n, q.data());
+    for (std::size_t i = 0; i < n; ++i) out[i] = from_wxyz(&q[4 * i]);
+}
+
 PlaybackMotion::PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolation interpolation,
                                const RotationMode& mode)
     : channels_(std::move(channels)), interpolation_(interpolation), mode_(mode) {
@@ -56,6 +63,13 @@ PlaybackMotion::PlaybackMotion(std::vector<FCurveKeys> channels, KeyInterpolatio
         throw InvalidArgument("channels: " + std::to_string(channels_.size()) + " F-curves for a rotation of " +
                               std::to_string(channel_count(mode_)) + " channels");
     for (const FCurveKeys& ch : channels_) check_fcurve_keys(ch, interpolation_);
+    shared_frames_ = channels_.size() > 1;
+    for (std::size_t c = 1; c < channels_.size() && shared_frames_; ++c) {
+        const std::vector<double>& a = channels_[0].frames;
+        const std::vector<double>& b = channels_[c].frames;
+        shared_frames_ = a.size() == b.size();
+        for (std::size_t k = 0; k < a.size() && shared_frames_; ++k) shared_frames_ = a[k] == b[k];
+    }
 }
 
 void PlaybackMotion::values(double t, double* out) const {
@@ -68,7 +82,13 @@ void PlaybackMotion::values(double t, double* out) const {
             std::copy(c.values, c.values + C, out);
             return;
         }
-    for (std::size_t c = 0; c < C; ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    if (shared_frames_) {
+        const FCurveKeys* channels[4];
+        for (std::size_t c = 0; c < C; ++c) channels[c] = &channels_[c];
+        blender_evaluate_shared(channels, static_cast<int>(C), interpolation_, frame, out);
+    } else {
+        for (std::size_t c = 0; c < C; ++c) out[c] = blender_evaluate(channels_[c], interpolation_, frame);
+    }
     Cached& slot = cache_[next_++ % kCache];
     slot.frame = frame;
     slot.valid = true;
@@ -127,7 +147,19 @@ bool segment_controls(const FCurveKeys& ch, std::size_t j, double x[4], double y
 // Bounds of |dy/dt| and |d²y/dt²| of the Bezier (x(u), y(u)) over the frames [a, b] of it: the
 // hodographs' control values over the curve parameters of [a, b] (the whole segment when Blender's
 // root finder finds none); y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
-void bezier_bounds(const double x[4], const double y[4], double a, double b, double& rate, double& curvature) {
+// max |p0 + (p1 − p0)·u| on [u0, u1]
+double linear_max(double p0, double p1, double u0, double u1) {
+    return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
+}
+
+// What bezier_bounds takes from the frames of a Bezier segment's controls over [a, b]: the curve
+// parameters' range, the frame hodograph's control values there and |x''|'s bound. The same for
+// every channel whose segment has these frames (channels keyed together).
+struct FrameBounds {
+    double u0, u1, xmin, xmax, xx;
+};
+
+FrameBounds frame_bounds(const double x[4], double a, double b) {
     double u0, u1;
     const double len = x[3] - x[0];
     if (std::fabs(x[1] - (x[0] + len / 3.0)) <= 1e-5 * len && std::fabs(x[2] - (x[0] + 2.0 * len / 3.0)) <= 1e-5 * len) {
@@ -146,24 +178,34 @@ void bezier_bounds(const double x[4], const double y[4], double a, double b, dou
     u0 = std::clamp(u0, 0.0, 1.0);
     u1 = std::clamp(u1, 0.0, 1.0);
     const double dx[3] = {3 * (x[1] - x[0]), 3 * (x[2] - x[1]), 3 * (x[3] - x[2])};
-    const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
-    double bx[3], by[3];
+    double bx[3];
     blossom(dx, u0, u1, bx);
+    FrameBounds f;
+    f.u0 = u0;
+    f.u1 = u1;
+    f.xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
+    f.xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
+    f.xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]), u0, u1);
+    return f;
+}
+
+void value_bounds(const FrameBounds& f, const double y[4], double& rate, double& curvature) {
+    const double u0 = f.u0, u1 = f.u1;
+    const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
+    double by[3];
     blossom(dy, u0, u1, by);
-    const double xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
-    const double xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
     const double ymax = std::fmax(std::fabs(by[0]), std::fmax(std::fabs(by[1]), std::fabs(by[2])));
-    auto linear_max = [&](double p0, double p1) {  // |p0 + (p1 − p0)·u| on [u0, u1]
-        return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
-    };
-    const double xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]));
-    const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]));
-    if (!(xmin > 0.0)) {
+    const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]), u0, u1);
+    if (!(f.xmin > 0.0)) {
         rate = curvature = ymax > 0.0 ? HUGE_VAL : 0.0;
         return;
     }
-    rate = ymax / xmin;
-    curvature = (yy * xmax + ymax * xx) / (xmin * xmin * xmin);
+    rate = ymax / f.xmin;
+    curvature = (yy * f.xmax + ymax * f.xx) / (f.xmin * f.xmin * f.xmin);
+}
+
+void bezier_bounds(const double x[4], const double y[4], double a, double b, double& rate, double& curvature) {
+    value_bounds(frame_bounds(x, a, b), y, rate, curvature);
 }
 
 // The segment of `ch` holding [lo, hi] whole (no key strictly inside), or −1.
@@ -197,6 +239,49 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
         bezier_bounds(x, y, std::fmax(lo, f0), std::fmin(hi, f1), r, k);
         rate = std::fmax(rate, r);
         curvature = std::fmax(curvature, k);
+    }
+}
+
+// channel_bounds of every channel, for channels with the same key frames: the segments found once,
+// and each segment's frame bounds computed once for the channels whose handle frames agree (the same
+// numbers channel_bounds computes for each).
+void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, double* curvature) const {
+    const std::size_t C = channels_.size();
+    const std::vector<double>& frames = channels_[0].frames;
+    const std::size_t n = frames.size();
+    std::fill(rate, rate + C, 0.0);
+    std::fill(curvature, curvature + C, 0.0);
+    if (n < 2) return;
+    const double lo = std::fmax(t0, frames.front()), hi = std::fmin(t1, frames.back());
+    if (lo > hi) return;  // constant extrapolation
+    std::size_t j = static_cast<std::size_t>(std::upper_bound(frames.begin(), frames.end(), lo) - frames.begin());
+    j = j == 0 ? 0 : std::min(j - 1, n - 2);
+    for (; j + 1 < n && frames[j] <= hi; ++j) {
+        const double f0 = frames[j], f1 = frames[j + 1];
+        if (interpolation_ == KeyInterpolation::LINEAR) {
+            for (std::size_t c = 0; c < C; ++c)
+                rate[c] = std::fmax(rate[c], std::fabs(float(channels_[c].values[j + 1]) - float(channels_[c].values[j])) / (f1 - f0));
+            continue;
+        }
+        if (controls_segment_ != j) {
+            for (std::size_t c = 0; c < C; ++c)
+                controls_[c].bezier = segment_controls(channels_[c], j, controls_[c].x, controls_[c].y);
+            controls_segment_ = j;
+        }
+        const double* known = nullptr;  // the frames `f` was computed for
+        FrameBounds f{};
+        for (std::size_t c = 0; c < C; ++c) {
+            const SegmentControls& s = controls_[c];
+            double r, k;
+            if (!s.bezier) continue;
+            if (known == nullptr || !std::equal(s.x, s.x + 4, known)) {
+                f = frame_bounds(s.x, std::fmax(lo, f0), std::fmin(hi, f1));
+                known = s.x;
+            }
+            value_bounds(f, s.y, r, k);
+            rate[c] = std::fmax(rate[c], r);
+            curvature[c] = std::fmax(curvature[c], k);
+        }
     }
 }
 
@@ -361,7 +446,11 @@ std::vector<double> PlaybackMotion::raw_keys() const {
 
 void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) const {
     double r[4] = {0.0, 0.0, 0.0, 0.0}, k[4] = {0.0, 0.0, 0.0, 0.0};
-    for (std::size_t c = 0; c < channels_.size(); ++c) channel_bounds(c, t0, t1, r[c], k[c]);
+    if (shared_frames_) {
+        all_channel_bounds(t0, t1, r, k);
+    } else {
+        for (std::size_t c = 0; c < channels_.size(); ++c) channel_bounds(c, t0, t1, r[c], k[c]);
+    }
     switch (mode_.kind) {
         case RotationMode::Kind::euler: {
             // Each axis' rotation turns at its own angle's rate, whatever frame it acts in; the axes
@@ -591,12 +680,23 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
                                  : a.jump_bound(p0.t, p1.t, va) + b.jump_bound(p0.t, p1.t, vb);
         return std::fmin(first, second) + jumps + kArithmeticSlack;
     };
+    // b at every time of the list at once (a curve samples four at a time); a, whose last few values
+    // bound the intervals (PlaybackMotion's cache), as the sweep reaches each time.
+    std::vector<Quat> b_at(times.size());
+    b.at_many(times.data(), times.size(), b_at.data());
+    auto evaluate_listed = [&](std::size_t i) {
+        ++r.evaluations;
+        Point p{times[i], 0.0, a.at(times[i]), b_at[i]};
+        p.d = angle_between(p.qa, p.qb);
+        if (p.d > r.max_evaluated) r.max_evaluated = p.d;
+        return p;
+    };
     std::vector<std::pair<Point, Point>> stack;
-    Point prev = evaluate(times.front());
+    Point prev = evaluate_listed(0);
     reach(prev.d, prev.t);
     if (prev.d > tolerance) r.violations.push_back(prev.t);
     for (std::size_t i = 1; i < times.size(); ++i) {
-        const Point next = evaluate(times[i]);
+        const Point next = evaluate_listed(i);
         reach(next.d, next.t);
         if (next.d > tolerance) r.violations.push_back(next.t);
         stack.emplace_back(prev, next);

@@ -394,6 +394,25 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
     return fit;
 }
 
+KeyFit fit_channels(const std::vector<double>& key_frames, const std::vector<double>& key_values,
+                    const RotationMode& mode, Method method, const CurveOptions& options, int subframes,
+                    double tolerance, double min_gap, const KeyFit* previous) {
+    const Curve curve = curve_from_channels(key_frames, key_values, mode, method, options);
+    if (mode.kind != RotationMode::Kind::quaternion)
+        return fit_through_keys(curve, key_frames, key_values, mode, subframes, tolerance, min_gap, previous);
+    // Each quaternion key in the sign the curve reaches it with (the curve's output is sign-continuous).
+    const std::size_t K = key_frames.size();
+    std::vector<double> at(4 * K), signed_values(key_values);
+    curve.sample(key_frames.data(), K, at.data());
+    for (std::size_t k = 0; k < K; ++k) {
+        const double* q = &at[4 * k];
+        double* v = &signed_values[4 * k];
+        if (q[0] * v[0] + q[1] * v[1] + q[2] * v[2] + q[3] * v[3] < 0.0)
+            for (int c = 0; c < 4; ++c) v[c] = -v[c];
+    }
+    return fit_through_keys(curve, key_frames, signed_values, mode, subframes, tolerance, min_gap, previous);
+}
+
 namespace {
 
 // One fit at the samples fit.times (every key among them): the channel values along the curve that

@@ -10,9 +10,9 @@ view_layer.update() — the depsgraph handler refits inside it, as in background
 - nothing relevant changed (a location key): the signature checks alone.
 Each case is run REPEAT times (the changed value alternates), the median printed. Stages come from
 live.STATS (targets: finding the fitted targets; read: the animator keys; signature; plan: the main
-thread's wait for the plans — curve, sampling and the native fitter on worker threads, beside the
-reads and writes; write: keys into Blender); `native` is the CPU time spent inside the quatcurve
-module (Curve, sample, fit_through_keys) summed over the threads, measured by wrapping it
+thread's wait for the fits — one native fit_channels per target on worker threads, beside the reads
+and writes — and each fit's plan (fit.plan_of); write: keys into Blender); `native` is the CPU time
+spent inside the quatcurve module (fit_channels, Curve) summed over the threads, measured by wrapping it
 (time.thread_time: a worker waiting for the GIL to return from a call does not count); `cpu` is the
 process's CPU time over the update (every thread: what the refit costs, less sensitive than the
 wall time to other jobs on the machine).

@@ -285,8 +285,8 @@ def test_channels_keyed_separately_take_the_union_of_frames(scene):
         np.testing.assert_array_equal(frames, [1, 10, 20])
 
 
-@pytest.mark.parametrize("case", ["nan", "tolerance", "driver", "duplicate", "zero_axis", "axis_angle_nan",
-                                  "modifier"])
+@pytest.mark.parametrize("case", ["nan", "tolerance", "driver", "duplicate", "zero_quaternion", "zero_axis",
+                                  "axis_angle_nan", "modifier"])
 def test_bad_input_is_refused_and_changes_nothing(scene, case):
     obj = add_empty("Bad", "QUATERNION")
     key(obj, "rotation_quaternion", QUAT_KEYS[:3], interpolation="BEZIER")
@@ -300,6 +300,10 @@ def test_bad_input_is_refused_and_changes_nothing(scene, case):
     elif case == "tolerance":
         kwargs["tolerance"] = 0.0
         expect = "tolerance"
+    elif case == "zero_quaternion":  # the native fit refuses it; the message names the frame
+        for c in range(4):
+            fcurves.Channels.of(obj).find(obj.path_from_id("rotation_quaternion"), c).keyframe_points[1].co[1] = 0.0
+        expect = r"Bad: the quaternion is zero at frame 5"
     elif case == "driver":
         obj.driver_add("rotation_quaternion", 2)
         expect = r"rotation_quaternion\[2\] is driven by a driver"

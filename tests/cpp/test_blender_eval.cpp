@@ -112,7 +112,7 @@ TEST(BlenderEval, SortedSweepEqualsPointwiseEvaluation) {
     }
 }
 
-TEST(BlenderEval, SharedSweepEqualsEachChannelOnItsOwn) {
+TEST(BlenderEval, SharedSweepAndPointEqualEachChannelOnItsOwn) {
     // Three channels on the same key frames: values and handle values differ, one channel is flat
     // on some segments (Blender's shortcut), and the third has other (long) handle frames on one
     // segment, so its parameter must be found on its own there.
@@ -157,6 +157,14 @@ TEST(BlenderEval, SharedSweepEqualsEachChannelOnItsOwn) {
             blender_evaluate_sorted(chans[c], ipo, at, alone);
             for (std::size_t k = 0; k < at.size(); ++k)
                 ASSERT_EQ(shared[3 * k + c], alone[k]) << "channel " << c << ", frame " << at[k];
+        }
+        // The pointwise form (PlaybackMotion's), in any order: each frame as blender_evaluate.
+        for (std::size_t k = at.size(); k-- > 0;) {
+            double point[3];
+            blender_evaluate_shared(ptrs, 3, ipo, float(at[k]), point);
+            for (int c = 0; c < 3; ++c)
+                ASSERT_EQ(point[c], double(blender_evaluate(chans[c], ipo, float(at[k]))))
+                    << "channel " << c << ", frame " << at[k];
         }
     }
 }

@@ -42,7 +42,7 @@ import quatcurve as qc
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
-                 "fit_through_keys": 0.5,
+                 "fit_through_keys": 0.5, "fit_channels": 0.5,
                  "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5,
                  "smooth_rotations": 0.5, "clean_rotations": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
@@ -1221,10 +1221,11 @@ def build_fit(fn, d):
                 ((t, v, forced, tol), kwargs))
 
 
-def build_fit_through_keys(fn, d):
+def build_fit_through_keys(fn, d, channels=False):
     """fit_through_keys: a curve of any method through a few keys of any rotation mode, fitted; the
     samples are the subframe grid plus the keys, the keys stay keys of every channel with their
-    values (as float32), and bad arguments are refused."""
+    values (as float32), and bad arguments are refused. channels: fit_channels, which builds the
+    curve and signs the quaternion keys itself (KeyFit.key_values: the keys as signed here)."""
     rng = d.rng
     euler = d.chance(0.35, "euler")
     axis_angle = not euler and d.chance(0.35, "axis_angle")
@@ -1238,6 +1239,7 @@ def build_fit_through_keys(fn, d):
     else:
         values = rng.normal(size=(k, 4)) * rng.uniform(0.3, 2.0, (k, 1))
     method = d.pick(tuple(m for m in qc.METHODS if m != "EULER" or euler), "method")
+    raw = values
     if euler:
         curve = qc.Curve.from_euler(frames, values, order=mode, method=method)
     elif axis_angle:
@@ -1250,6 +1252,8 @@ def build_fit_through_keys(fn, d):
     tol = d.pick((0.0, 1e-4, 1e-3, 0.01, 0.1, -1.0, NAN), "tolerance")
     must_fail = needs(subframes >= 1, f"subframes {subframes}") or needs(tol > 0, f"tolerance {tol!r}")
     args = [curve, frames, values, mode]
+    if channels:  # fit_channels(key_frames, key_values, mode, method): the curve and the signs are its own
+        args = [None, frames, raw, mode]
     form = d.pick(("ok", "ok", "ok", "one_key", "unsorted", "wide", "mode"), "form")
     if form == "one_key":
         args[1], args[2] = frames[:1], values[:1]
@@ -1283,8 +1287,18 @@ def build_fit_through_keys(fn, d):
             kept = ch.values[at]
             expect(np.array_equal(kept.astype(np.float32), values[:, c].astype(np.float32)),
                    f"channel {c}: a key's value changed")
+        if channels:
+            expect(np.array_equal(out.key_values, values), "key_values are not the keys signed as the curve")
 
+    if channels:
+        return Case(lambda: fn(*args[1:], method, **kwargs), 100 * k * max(subframes, 1), check, must_fail, 0,
+                    (args[1:] + [method], kwargs))
     return Case(lambda: fn(*args, **kwargs), 100 * k * max(subframes, 1), check, must_fail, 0, (args, kwargs))
+
+
+def build_fit_channels(fn, d):
+    """fit_channels: as fit_through_keys, from the keys alone (build_fit_through_keys)."""
+    return build_fit_through_keys(fn, d, channels=True)
 
 
 # ---- Blender's F-curve evaluation, emulated --------------------------------------------------------
@@ -2649,6 +2663,7 @@ REGISTRY.update({
     "axis_angle_span": build_axis_angle_span,
     "fit_keys": build_fit,
     "fit_through_keys": build_fit_through_keys,
+    "fit_channels": build_fit_channels,
     "blender_evaluate": build_blender_evaluate,
     "BakeJob": build_bake_job,
     "BakeQueue": build_bake_queue,

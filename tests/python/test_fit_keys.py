@@ -184,3 +184,53 @@ def test_refit_reuses_unchanged_segments(method):
             np.testing.assert_array_equal(new.handle_left[a], old.handle_left[b])
     with pytest.raises(TypeError):
         qc.fit_through_keys(curve, kf, moved, "QUATERNION", subframes=4, tolerance=tol, previous="first")
+
+
+@pytest.mark.parametrize("mode", ["QUATERNION", "XYZ", "AXIS_ANGLE"])
+def test_fit_channels_is_the_curve_the_signs_and_fit_through_keys(mode):
+    """fit_channels(keys): Curve.from_channels, quaternion keys in the sign the curve reaches them with,
+    then fit_through_keys — the same keys, handles, samples and proof bit for bit, with and without a
+    previous fit; a bad key or option is refused as Curve.from_channels refuses it."""
+    rng = np.random.default_rng(11)
+    kf = np.arange(1.0, 200.0, 10.0)
+    if mode == "QUATERNION":
+        v = np.cumsum(rng.normal(scale=0.15, size=(len(kf), 4)), axis=0) + [1, 0, 0, 0]
+        v /= np.linalg.norm(v, axis=1, keepdims=True)
+        v[::3] *= -1  # stored with either sign
+    elif mode == "XYZ":
+        v = np.cumsum(rng.normal(scale=0.3, size=(len(kf), 3)), axis=0)
+    else:
+        v = np.column_stack([np.cumsum(rng.normal(scale=0.3, size=len(kf))) + 1.0, rng.normal(size=(len(kf), 3))])
+    tol = 0.05 * DEG
+
+    def by_hand(values, previous=None):
+        curve = qc.Curve.from_channels(kf, values, mode, "SQUAD")
+        if mode == "QUATERNION":
+            values = values * np.where(np.sum(curve.sample(kf) * values, axis=1) < 0, -1.0, 1.0)[:, None]
+        return values, qc.fit_through_keys(curve, kf, values, mode, subframes=4, tolerance=tol, previous=previous)
+
+    def same(a, b):
+        np.testing.assert_array_equal(a.times, b.times)
+        assert a.proof.bound == b.proof.bound and a.refitted == b.refitted
+        for x, y in zip(a.keys.channels, b.keys.channels):
+            for name in ("indices", "frames", "values", "handle_left", "handle_right"):
+                np.testing.assert_array_equal(getattr(x, name), getattr(y, name))
+
+    signed, expected = by_hand(v)
+    first = qc.fit_channels(kf, v, mode, "SQUAD", subframes=4, tolerance=tol)
+    same(first, expected)
+    np.testing.assert_array_equal(first.key_values, signed)
+    assert first.curve.method == "SQUAD" and len(first.curve.times) == len(kf)
+    moved = v.copy()
+    moved[8, 1] += 0.05
+    _, again = by_hand(moved, previous=expected)
+    refit = qc.fit_channels(kf, moved, mode, "SQUAD", subframes=4, tolerance=tol, previous=first)
+    same(refit, again)
+    assert 0 < refit.refitted < len(kf) - 1
+    with pytest.raises(ValueError, match="tension"):
+        qc.fit_channels(kf, v, mode, "SQUAD", subframes=4, tolerance=tol, tension=0.5)
+    if mode == "QUATERNION":
+        zero = v.copy()
+        zero[4] = 0.0
+        with pytest.raises(ValueError, match="zero"):
+            qc.fit_channels(kf, zero, mode, "SQUAD", subframes=4, tolerance=tol)

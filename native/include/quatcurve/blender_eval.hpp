@@ -79,6 +79,13 @@ void blender_evaluate_sorted_shared(const FCurveKeys* const* channels, int count
                                     KeyInterpolation interpolation, const std::vector<double>& frames,
                                     double* out, std::size_t stride);
 
+// blender_evaluate of `count` channels that share their key frames (as float32) at one frame, into
+// out[c]: Blender's binary search once for all of them, and the Bezier curve parameter found once
+// for the channels whose segment's handle frames agree (recomputed for one whose do not).
+// Bit-identical to blender_evaluate of each channel.
+void blender_evaluate_shared(const FCurveKeys* const* channels, int count, KeyInterpolation interpolation,
+                             float frame, double* out);
+
 // The curve parameter Blender's root finder returns for `frame` in a Bezier segment whose key and
 // handle frames are q0, q1, q2, q3 (after correct_bezpart; findzero's first root); -1 when it finds
 // none.

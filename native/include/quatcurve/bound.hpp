@@ -67,6 +67,11 @@ public:
     virtual ~Motion() = default;
     // The unit quaternion at t, sign-continuous in t.
     virtual Quat at(double t) const = 0;
+    // at() at each of n times into out: the same bits, computed together where the motion can (a
+    // Curve samples four times at a time).
+    virtual void at_many(const double* t, std::size_t n, Quat* out) const {
+        for (std::size_t i = 0; i < n; ++i) out[i] = at(t[i]);
+    }
     // Upper bounds of |ω| (radians per frame) and |q̈| (per frame²) at every time in [t0, t1], t0 ≤ t1
     // (a corner at a break inside the interval is not covered: prove_within splits there).
     virtual void bounds(double t0, double t1, double& speed, double& accel) const = 0;
@@ -104,6 +109,7 @@ class CurveMotion : public Motion {
 public:
     explicit CurveMotion(const Curve& curve) : curve_(curve) {}
     Quat at(double t) const override;
+    void at_many(const double* t, std::size_t n, Quat* out) const override;
     void bounds(double t0, double t1, double& speed, double& accel) const override {
         curve_.motion_bounds(t0, t1, speed, accel);
     }
@@ -121,6 +127,7 @@ public:
     OwnedCurveMotion(const OwnedCurveMotion&) = delete;
     OwnedCurveMotion& operator=(const OwnedCurveMotion&) = delete;
     Quat at(double t) const override { return motion_.at(t); }
+    void at_many(const double* t, std::size_t n, Quat* out) const override { motion_.at_many(t, n, out); }
     void bounds(double t0, double t1, double& speed, double& accel) const override {
         motion_.bounds(t0, t1, speed, accel);
     }
@@ -138,6 +145,7 @@ class KeptBreaks : public Motion {
 public:
     explicit KeptBreaks(const Motion& m) : m_(m), breaks_(m.breaks()) {}
     Quat at(double t) const override { return m_.at(t); }
+    void at_many(const double* t, std::size_t n, Quat* out) const override { m_.at_many(t, n, out); }
     void bounds(double t0, double t1, double& speed, double& accel) const override { m_.bounds(t0, t1, speed, accel); }
     double jump_bound(double t0, double t1, double speed) const override { return m_.jump_bound(t0, t1, speed); }
     bool float32_frames() const override { return m_.float32_frames(); }
@@ -192,6 +200,19 @@ private:
     std::vector<FCurveKeys> channels_;
     KeyInterpolation interpolation_;
     RotationMode mode_;
+    // Every channel holds the same key frames, as the fit's and the reducer's synchronized keys do:
+    // values() evaluates them together (blender_evaluate_shared), bounds() finds their segment once
+    // and bounds their frame parameter once per handle frames (all_channel_bounds).
+    bool shared_frames_ = false;
+    void all_channel_bounds(double t0, double t1, double* rate, double* curvature) const;
+    // The control points of every channel on the segment all_channel_bounds asked for last (the proof
+    // bounds many intervals of one segment in a row).
+    struct SegmentControls {
+        bool bezier = false;  // false: Blender's flat-segment shortcut
+        double x[4], y[4];
+    };
+    mutable std::size_t controls_segment_ = static_cast<std::size_t>(-1);
+    mutable SegmentControls controls_[4];
 };
 
 struct PlaybackBound {

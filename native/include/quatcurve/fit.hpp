@@ -95,4 +95,16 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
                         const std::vector<double>& key_values, const RotationMode& mode, int subframes,
                         double tolerance, double min_gap = 0.01, const KeyFit* previous = nullptr);
 
+// A target's whole fit in one call (the add-on's fit and live refit run it on worker threads, without
+// the GIL): the curve of `method` through keys given as channel values of `mode` (curve_from_channels,
+// K rows of channel_count(mode) values as stored), then fit_through_keys. Quaternion keys are first
+// given the sign the curve reaches them with — a key whose 4-vector dot product with the curve at its
+// frame is below 0 is negated (the same rotation; Blender lerps the stored channels, so the sign
+// decides the path between keys) — Euler and axis-angle keys are fitted as keyed (their turns are the
+// curve's). KeyFit::curve and KeyFit::key_values are that curve and the keys as the fit writes them.
+// Throws InvalidArgument as curve_from_channels and fit_through_keys do.
+KeyFit fit_channels(const std::vector<double>& key_frames, const std::vector<double>& key_values,
+                    const RotationMode& mode, Method method, const CurveOptions& options, int subframes,
+                    double tolerance, double min_gap = 0.01, const KeyFit* previous = nullptr);
+
 }  // namespace quatcurve
