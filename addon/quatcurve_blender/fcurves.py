@@ -605,12 +605,32 @@ def _enum_fill(value, n, dtype):
     return buf
 
 
-def read_keys_together(curves):
+def read_co_types(curves):
+    """(co (C, 2N) float32, types (C, N) as Blender stores them, KEY_ENUM_READ_DTYPE) of C F-curves
+    holding N keys each, in two bulk reads per F-curve into shared arrays (a key type left unread
+    keeps the no-value fill, which read_keys_together checks) — or None when one is missing or they
+    hold different key counts or none."""
+    if not curves or any(curve is None for curve in curves):
+        return None
+    n = len(curves[0].keyframe_points)
+    if not n or any(len(curve.keyframe_points) != n for curve in curves):
+        return None
+    co = np.empty((len(curves), 2 * n), dtype=np.float32)
+    types = np.full((len(curves), n), _NO_ENUM, dtype=KEY_ENUM_READ_DTYPE)
+    for c, curve in enumerate(curves):
+        points = curve.keyframe_points
+        points.foreach_get("co", co[c])
+        points.foreach_get("type", types[c])
+    return co, types
+
+
+def read_keys_together(curves, read=None):
     """(co (C, 2N) float32, types (C, N) int64, selected (C, N) bool) of C F-curves holding N keys each
     (the rotation channels of a target keyed together), in three bulk reads per F-curve into shared
     arrays — or None when one is missing, they hold different key counts or none, or Blender cannot
     read key types in bulk here (then read them one by one: read_keys, read_key_types,
-    read_key_selection)."""
+    read_key_selection). read: read_co_types(curves) when the caller has it (nothing changed keys
+    since): only the selection is read then."""
     if not curves or any(curve is None for curve in curves):
         return None
     n = len(curves[0].keyframe_points)
@@ -620,18 +640,18 @@ def read_keys_together(curves):
         return None  # 3.4 reads enums of a linked action's keys wrong in bulk (_get_enum)
     if not _BULK_ENUM.get("get type", True):
         return None
-    C = len(curves)
-    co = np.empty((C, 2 * n), dtype=np.float32)
-    types = np.full((C, n), _NO_ENUM, dtype=KEY_ENUM_READ_DTYPE)
-    selected = np.empty((C, n), dtype=bool)
+    if read is None or read[1].shape != (len(curves), n):
+        read = read_co_types(curves)
+    co, types = read
+    selected = np.empty((len(curves), n), dtype=bool)
     for c, curve in enumerate(curves):
-        points = curve.keyframe_points
-        points.foreach_get("co", co[c])
-        points.foreach_get("type", types[c])
-        points.foreach_get("select_control_point", selected[c])
+        curve.keyframe_points.foreach_get("select_control_point", selected[c])
     if (types == _NO_ENUM).any():
         return None
     return co, types.astype(np.int64), selected
+
+
+_BEZIER_FREE_FILLS = {}  # key count → (BEZIER interpolation, FREE handle type) buffers of rewrite_handles
 
 
 def rewrite_handles(fcurve, co, handle_left, handle_right):
@@ -644,9 +664,19 @@ def rewrite_handles(fcurve, co, handle_left, handle_right):
     n = len(points)
     if co is not None:
         points.foreach_set("co", co)
-    points.foreach_set("interpolation", _enum_fill(_enum_value(bpy.types.Keyframe, "interpolation", "BEZIER"), n,
-                                                   KEY_ENUM_DTYPE))
-    if _BULK_ENUM.get("handle_left_type") is False:  # 3.4: key by key, only those not FREE already
+    fills = _BEZIER_FREE_FILLS.get(n)
+    if fills is None:
+        if len(_BEZIER_FREE_FILLS) >= 256:
+            _BEZIER_FREE_FILLS.clear()
+        fills = _BEZIER_FREE_FILLS[n] = (
+            _enum_fill(_enum_value(bpy.types.Keyframe, "interpolation", "BEZIER"), n, KEY_ENUM_DTYPE),
+            _enum_fill(_enum_value(bpy.types.Keyframe, "handle_left_type", "FREE"), n, KEY_ENUM_READ_DTYPE))
+    points.foreach_set("interpolation", fills[0])
+    bulk = _BULK_ENUM.get("handle_left_type")
+    if bulk:  # 4.x, 5.x: known to take handle types in bulk
+        points.foreach_set("handle_left_type", fills[1])
+        points.foreach_set("handle_right_type", fills[1])
+    elif bulk is False:  # 3.4: key by key, only those not FREE already
         for point in points:
             if point.handle_left_type != "FREE":
                 point.handle_left_type = "FREE"

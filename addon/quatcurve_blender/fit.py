@@ -137,6 +137,10 @@ _record_index = None
 # longer what they hold).
 _target_keys = None
 _written = None
+# Also inside record_index() only: (action name, slot, data path) → the rotation F-curves
+# read_animator_keys found there, taken by the target's write_plan (F-curves are only added inside
+# the block, never removed: a reference found stays valid).
+_found = None
 # The last fit written for each target, by (action name, slot, owner path): the next fit of the same
 # target reuses its unchanged key segments (native fit_through_keys' previous). Memory only, cleared
 # when a file loads; the native side checks every reused segment against the new keys and curve, so
@@ -180,15 +184,15 @@ def record_index():
     target: 26 µs each). Inside the block only store_record may change records (it adds; slots and
     owner paths never change); the index is made again when the action's record count changes, and
     a record found must still carry the target's slot and path. Main thread only, like all bpy use."""
-    global _record_index, _target_keys, _written
+    global _record_index, _target_keys, _written, _found
     outer = _record_index
     if outer is None:
-        _record_index, _target_keys, _written = {}, {}, set()
+        _record_index, _target_keys, _written, _found = {}, {}, set(), {}
     try:
         yield
     finally:
         if outer is None:
-            _record_index = _target_keys = _written = None
+            _record_index = _target_keys = _written = _found = None
 
 
 def find_record(action, target):
@@ -418,12 +422,16 @@ class AnimatorKeys:
         return self._signature
 
 
-def read_animator_keys(target):
+def read_animator_keys(target, curves=None, read=None):
     """AnimatorKeys of `target` in its current rotation mode, from its active action, with the loop its
     Cycles modifiers make (cycles.target_loop). Raises FitError (naming target, channel and frame)
     for no active action, no rotation keys, F-curve modifiers other than a loop's Cycles (naming the
     modifier), a loop whose ends are not animator keys or whose Repeat with Offset is not whole turns,
-    NaN/infinite keys, two different keys on one frame, drivers, protected data."""
+    NaN/infinite keys, two different keys on one frame, drivers, protected data.
+
+    curves, read: the target's rotation F-curves in its active action and their
+    fcurves.read_co_types, when the caller just read them (live mode's raw digest): they are not
+    looked up and read again. Inside record_index() the F-curves found are kept for write_plan."""
     try:
         targets.check_editable(target, new_action=False)
     except TargetError as e:
@@ -444,14 +452,17 @@ def read_animator_keys(target):
         raise FitError("%s: no active action%s: fit works on the action the target plays (enter tweak "
                        "mode on the strip, or make its action active)"
                        % (target.name, " (only NLA strips)" if strips else ""))
-    channels = fcurves.Channels.of(target.id_data)
-    curves = channels.find_all(path, count) if channels is not None else [None] * count
+    if curves is None:
+        channels = fcurves.Channels.of(target.id_data)
+        curves = channels.find_all(path, count) if channels is not None else [None] * count
+    if _found is not None:
+        _found[(action.name, target_key(target)[0], path)] = curves
     try:
         loop = cycles.target_loop(target.name, prop, curves, mode, action)
     except TargetError as e:
         raise FitError(str(e)) from None
     if loop is None:
-        keys = _keys_together(target.name, mode, prop, path, fcurves.read_keys_together(curves))
+        keys = _keys_together(target.name, mode, prop, path, fcurves.read_keys_together(curves, read))
         if keys is not None:
             return keys
     per_channel = []
@@ -597,6 +608,7 @@ class FitPlan:
     notes: list = field(default_factory=list)
     turns: np.ndarray = None
     fit: object = None        # the native KeyFit (the next refit's `previous`)
+    synchronized: bool = False  # every channel has the same key frames and types
 
 
 def path_notes(name, curve, frames, method):
@@ -677,9 +689,19 @@ def plan_of(fitted):
     K = len(keys.frames)
     forced, fitted = kf.forced, kf.keys
     notes = euler_notes(keys, kf)
-    channels, generated = [], 0
+    channels, generated, synchronized = [], 0, False
     shared = None  # (indices, types, generated) of the channel before: synchronized channels share them
-    for ch in fitted.channels:
+    chans = fitted.channels
+    if fitted.synchronized and chans:  # every channel has the same key indices: their types are found once
+        indices = chans[0].indices
+        types = np.full(len(indices), KEY_TYPE_GENERATED, dtype=np.int64)
+        at = np.searchsorted(forced, indices)
+        is_key = (at < K) & (forced[np.minimum(at, K - 1)] == indices)
+        types[is_key] = keys.types[at[is_key]]
+        generated = (len(indices) - int(np.count_nonzero(is_key))) * len(chans)
+        channels = [(ch.frames, ch.values, ch.handle_left, ch.handle_right, types.copy()) for ch in chans]
+        chans, synchronized = (), True
+    for ch in chans:
         indices = ch.indices
         if shared is not None and np.array_equal(shared[0], indices):
             types = shared[1].copy()
@@ -701,7 +723,8 @@ def plan_of(fitted):
             if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
     # The samples (kf.times, a copy when asked for): the last key is the last of them.
     return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, int(forced[-1]) + 1,
-                   ease_in, ease_out, notes + path_notes(keys.name, kf.curve, keys.frames, settings.method), turns, kf)
+                   ease_in, ease_out, notes + path_notes(keys.name, kf.curve, keys.frames, settings.method), turns, kf,
+                   synchronized)
 
 
 def seam_eases(ease_in, ease_out):
@@ -740,12 +763,17 @@ def write_plan(plan, target):
     F-curves end up holding exactly the fitted keys, with BEZIER interpolation and FREE handles."""
     keys = plan.keys
     action = fcurves.active_action(target.id_data)
-    channels = fcurves.Channels.of(target.id_data, action, create=True)
-    found = channels.find_all(keys.path, len(plan.channels))
     where = (action.name, target_key(target)[0], keys.path)
+    found = _found.pop(where, None) if _found is not None else None
+    channels = None
+    if found is None or len(found) != len(plan.channels) or any(curve is None for curve in found):
+        channels = fcurves.Channels.of(target.id_data, action, create=True)
+        found = channels.find_all(keys.path, len(plan.channels))
     if _rewrite_kept(plan, found, where):
         action.update_tag()  # foreach_set tags nothing: the action's evaluated copy must be made again
     else:
+        if channels is None:
+            channels = fcurves.Channels.of(target.id_data, action, create=True)
         group = False  # the group of the channels' F-curves, read when a missing one is made
         for c, (frames, values, left, right, types) in enumerate(plan.channels):
             curve = found[c]
@@ -780,31 +808,42 @@ def _rewrite_kept(plan, curves, where):
     channel whose keys changed bit for bit, and every channel's interpolation, handle types and
     handles (fcurves.rewrite_handles). All channels at once; False (nothing written) otherwise."""
     keys, chans, written = plan.keys, plan.channels, _written
-    if keys.stored is None or written is None or any(curve is None for curve in curves):
+    if keys.stored is None or written is None or where in written:
         return False
     co_was, types_was, selected_was = keys.stored
     C, n = types_was.shape
-    if len(chans) != C or any(len(ch[0]) != n for ch in chans):
+    if len(chans) != C or len(curves) != C:
         return False
-    if where in written or any(fcurves.key_count(curve) != n for curve in curves):
+    for curve in curves:
+        if curve is None or len(curve.keyframe_points) != n:
+            return False
+    if any(len(ch[0]) != n for ch in chans):
         return False
-    if not np.array_equal(np.array([ch[4] for ch in chans]), types_was):
+    if plan.synchronized:  # one set of frames and types for every channel (plan_of)
+        frames = chans[0][0]
+        if not (types_was == chans[0][4]).all():
+            return False
+    else:
+        if not np.array_equal(np.array([ch[4] for ch in chans]), types_was):
+            return False
+        stacked = np.array([ch[0] for ch in chans])
+        if not (stacked == stacked[0]).all():
+            return False
+        frames = stacked[0]
+    if not (frames[1:] > frames[:-1]).all():
         return False
-    frames = np.array([ch[0] for ch in chans])
-    if not (frames == frames[0]).all() or not (frames[0, 1:] > frames[0, :-1]).all():
-        return False
-    if n == len(keys.frames) and np.array_equal(frames[0], keys.frames):
+    if n == len(keys.frames) and (frames == keys.frames).all():
         chosen = keys.selected  # no generated key: every key is the animator's
     else:
-        at = np.searchsorted(keys.frames, frames[0])
-        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames[0])
+        at = np.searchsorted(keys.frames, frames)
+        on_key = (at < len(keys.frames)) & (keys.frames[np.minimum(at, len(keys.frames) - 1)] == frames)
         chosen = np.zeros((C, n), dtype=bool)
         chosen[:, on_key] = keys.selected[:, at[on_key]]
-    if not np.array_equal(chosen, selected_was):
+    if not (chosen == selected_was).all():
         return False
     co = np.empty((C, n, 2), dtype=np.float32)
     co[:, :, 0] = frames
-    co[:, :, 1] = np.array([ch[1] for ch in chans])
+    co[:, :, 1] = [ch[1] for ch in chans]
     co = co.reshape(C, 2 * n)
     changed = (co.view(np.uint32) != co_was.view(np.uint32)).any(axis=1)
     left = np.array([ch[2] for ch in chans], dtype=np.float32).reshape(C, 2 * n)

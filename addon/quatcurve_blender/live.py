@@ -115,12 +115,30 @@ def raw_digest(target):
     """A digest of what the fit reads of `target` as Blender stores it — rotation mode, and per
     rotation channel its keys' frames, values and types, its modifiers (count, and the loop they make) — plus the ID's driver
     count, taken with two bulk reads per channel: equal digests mean nothing the fit reads changed."""
+    return _raw_read(target)[0]
+
+
+def _raw_read(target):
+    """(raw_digest, the rotation F-curves it read, their fcurves.read_co_types or None): a changed
+    target's full read (fit.read_animator_keys) takes the F-curves and arrays instead of finding and
+    reading them again. Channels keyed together (the usual case) are read into shared arrays and
+    hashed at once."""
     mode = target.owner.rotation_mode
     prop, count = fcurves.rotation_property(mode)
     anim = target.id_data.animation_data
     h = hashlib.blake2b(("%s %d" % (mode, len(anim.drivers) if anim is not None else 0)).encode(), digest_size=16)
     channels = fcurves.Channels.of(target.id_data)
     curves = channels.find_all(target.data_path(prop), count) if channels is not None else [None] * count
+    read = fcurves.read_co_types(curves)
+    if read is not None:
+        modifiers = [len(curve.modifiers) for curve in curves]
+        h.update(b"together %d %r|" % (read[1].shape[1], modifiers))
+        for curve, m in zip(curves, modifiers):
+            if m:  # a Cycles modifier's settings make the target a loop or refuse it
+                h.update(repr(cycles.channel_cycle(curve)).encode())
+        h.update(read[0].tobytes())
+        h.update(read[1].tobytes())
+        return h.digest(), curves, read
     for curve in curves:
         if curve is None:
             h.update(b"-")
@@ -136,7 +154,7 @@ def raw_digest(target):
             h.update(repr(cycles.channel_cycle(curve)).encode())
         h.update(co.tobytes())
         h.update(types.tobytes())
-    return h.digest()
+    return h.digest(), curves, None
 
 
 def _fitted_action_names(depsgraph):
@@ -326,14 +344,14 @@ def _changed_targets(action, found):
             continue
         seen.add(channels)
         known = _unchanged.pop(key, None)
-        raw = raw_digest(target) if known is not None else None
-        if known is not None and raw == known:
+        raw, curves, read = _raw_read(target)
+        if raw == known:
             _unchanged[key] = raw
             STATS.checks += 1
             STATS.add("read", time.perf_counter() - t0)
             continue
         try:
-            keys = fit.read_animator_keys(target)
+            keys = fit.read_animator_keys(target, curves, read)
         except fit.FitError as error:
             STATS.errors.append(str(error))
             continue
@@ -344,7 +362,7 @@ def _changed_targets(action, found):
         STATS.add("read", t1 - t0)
         STATS.add("signature", t2 - t1)
         if same:
-            _unchanged[key] = raw if raw is not None else raw_digest(target)
+            _unchanged[key] = raw
         else:
             yield (target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record),
                    fit.last_fit(action, target))

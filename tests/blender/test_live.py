@@ -212,7 +212,7 @@ def test_unchanged_targets_are_not_read_again(fitted, monkeypatch):
     from quatcurve_blender import fit
     reads = []
     real = fit.read_animator_keys
-    monkeypatch.setattr(fit, "read_animator_keys", lambda target: (reads.append(target.name), real(target))[1])
+    monkeypatch.setattr(fit, "read_animator_keys", lambda target, *read: (reads.append(target.name), real(target, *read))[1])
     for frame in (9, 10, 11):
         fitted.location = (frame, 2, 3)
         fitted.keyframe_insert("location", frame=frame)
