@@ -647,9 +647,26 @@ def plan_target(keys, settings, ease_in=None, ease_out=None, turns=None, previou
 
 def fit_target(keys, settings, ease_in=None, ease_out=None, turns=None, previous=None):
     """plan_target's native fit: (keys, settings, KeyFit, ease_in, ease_out, turns), for plan_of; None
-    for fewer than two keys. Raises FitError. Live mode runs it on worker threads, where it holds the
-    GIL only around its one native call, and plan_of on the main thread."""
-    qc = native.require()
+    for fewer than two keys. Raises FitError."""
+    job = fit_job(keys, settings, ease_in, ease_out, turns)
+    if job is None:
+        return None
+    options, used = job
+    # One native call without the GIL (quatcurve.fit_channels): the curve as curve_of builds it, the
+    # key signs it reaches them with, samples, channel values joining the keys as keyed, fit_keys, and
+    # the proof of the bound at every instant (KeyFit.proof).
+    try:
+        kf = native.require().fit_channels(keys.frames, keys.values, keys.mode, settings.method, previous=previous,
+                                           **options)
+    except ValueError as e:
+        raise fit_error(keys, e) from None
+    return (keys, settings, kf) + used
+
+
+def fit_job(keys, settings, ease_in=None, ease_out=None, turns=None):
+    """fit_target's native call without its keys: (the keyword arguments of quatcurve.fit_channels
+    after key frames, values, mode and method — FitQueue.push takes the same —, (ease_in, ease_out,
+    turns) as the fit uses them); None for fewer than two keys."""
     K = len(keys.frames)
     if K < 2:
         return None
@@ -666,20 +683,19 @@ def fit_target(keys, settings, ease_in=None, ease_out=None, turns=None, previous
     options = curve_options(settings, ease_in, ease_out, turns)
     if keys.loop is not None:
         options["cyclic"] = True
-    # One native call without the GIL (quatcurve.fit_channels): the curve as curve_of builds it, the
-    # key signs it reaches them with, samples, channel values joining the keys as keyed, fit_keys, and
-    # the proof of the bound at every instant (KeyFit.proof).
+    options.update(subframes=int(settings.subframes), tolerance=math.radians(settings.tolerance),
+                   min_gap=MIN_KEY_GAP)
+    return options, (ease_in, ease_out, turns)
+
+
+def fit_error(keys, error):
+    """The FitError of a native fit's ValueError, naming the target (and the frame of a zero
+    quaternion or axis: curve_of's message)."""
     try:
-        kf = qc.fit_channels(keys.frames, keys.values, keys.mode, settings.method,
-                             subframes=int(settings.subframes), tolerance=math.radians(settings.tolerance),
-                             min_gap=MIN_KEY_GAP, previous=previous, **options)
-    except ValueError as e:
-        try:  # a zero quaternion or axis: curve_of's message, naming the frame
-            targets.refuse_zero_rotations(keys.mode, keys.values, keys.name, keys.frames)
-        except TargetError as zero:
-            raise FitError(str(zero)) from None
-        raise FitError("%s: %s" % (keys.name, turns_message(str(e), keys.frames))) from None
-    return keys, settings, kf, ease_in, ease_out, turns
+        targets.refuse_zero_rotations(keys.mode, keys.values, keys.name, keys.frames)
+    except TargetError as zero:
+        return FitError(str(zero))
+    return FitError("%s: %s" % (keys.name, turns_message(str(error), keys.frames)))
 
 
 def plan_of(fitted):

@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import cycles, fcurves, fit
-from .workers import parallel_imap
+from . import cycles, fcurves, fit, native
+from .workers import thread_count
 
 DEBOUNCE = 0.3   # seconds without a key change before Blender 3.4 refits (it cannot see a drag)
 POLL = 0.1       # seconds between checks while a drag runs (4.2+)
@@ -288,31 +288,46 @@ def _refit_action(action):
     t0 = time.perf_counter()
     found = fit.fitted_targets(action)
     STATS.add("targets", time.perf_counter() - t0)
-    # Read and compare on the main thread, fit the changed targets on worker threads (one native call
-    # each, without the GIL) while the next ones are read, plan and write on the main thread as the fits
-    # come in
-    # (workers.parallel_imap). A target whose raw digest is the one its last full check found fitted
-    # is not read again; two objects playing one action's rotation channels (same slot and mode) are
-    # refitted once.
+    # Read and compare on the main thread; each changed target goes to a quatcurve.FitQueue as soon as
+    # it is read, whose native worker threads fit it (fit_channels) without ever needing the GIL while
+    # the main thread reads the next ones; then, in order, each fit's plan (fit.plan_of) and write on
+    # the main thread. A target whose raw digest is the one its last full check found fitted is not
+    # read again; two objects playing one action's rotation channels (same slot and mode) are refitted
+    # once.
     changed = _changed_targets(action, found)
     first = list(itertools.islice(changed, 2))
-    if len(first) < 2:  # one refit (an edit of one target): no worker threads to start
-        plans = (_plan(item) for item in first)
-    else:
-        plans = parallel_imap(_plan, itertools.chain(first, changed))
+    # One refit (an edit of one target): no worker threads to start, the fit runs when it is taken.
+    queue = native.require().FitQueue(threads=thread_count() if len(first) == 2 else 0)
+    pending = []  # (target, (keys, settings, eases) or the FitError or None), in push order
+    for target, keys, settings, eases, previous in itertools.chain(first, changed):
+        job = fit.fit_job(keys, settings, *eases)
+        if job is None:  # fewer than two keys: nothing to fit, the record waits for more
+            pending.append((target, None))
+            continue
+        options, used = job
+        try:
+            queue.push(keys.frames, keys.values, keys.mode, settings.method, previous=previous, **options)
+        except ValueError as error:
+            pending.append((target, fit.fit_error(keys, error)))
+            continue
+        pending.append((target, (keys, settings, used)))
+    queue.close()
     t2, reads = time.perf_counter(), _read_seconds()
-    for target, result in plans:
-        # The wait for this fit (the reads parallel_imap asked for meanwhile count as reads), and its
-        # plan's Python: on the main thread, which holds the GIL anyway (workers that ran it too would
-        # take the GIL from it once more per target).
-        if result is not None and not isinstance(result, fit.FitError):
-            result = fit.plan_of(result)
+    for target, job in pending:
+        # The wait for this fit, and its plan's Python.
+        result = job
+        if isinstance(job, tuple):
+            keys, settings, used = job
+            try:
+                result = fit.plan_of((keys, settings, next(queue)) + used)
+            except ValueError as error:
+                result = fit.fit_error(keys, error)
         t3 = time.perf_counter()
         STATS.add("plan", t3 - t2 - (_read_seconds() - reads))
         reads = _read_seconds()
         if isinstance(result, fit.FitError):
             STATS.errors.append(str(result))
-        elif result is not None:  # None: fewer than two keys, nothing to fit, the record waits for more
+        elif result is not None:
             _busy = True
             try:
                 fit.write_plan(result, target)
@@ -366,16 +381,6 @@ def _changed_targets(action, found):
         else:
             yield (target, keys, fit.settings_of(record), fit.refit_eases(keys, target, record),
                    fit.last_fit(action, target))
-
-
-def _plan(item):
-    """(target, its fit (fit.fit_target), its FitError or None) of a changed target (worker thread: the
-    target is only handed back, no Blender data is read)."""
-    target, keys, settings, eases, previous = item
-    try:
-        return target, fit.fit_target(keys, settings, *eases, previous=previous)
-    except fit.FitError as error:
-        return target, error
 
 
 _handlers = (

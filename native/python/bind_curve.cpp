@@ -2,6 +2,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <utility>
@@ -92,6 +93,31 @@ DArray read_only(DArray a) {
     py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
     return a;
 }
+
+// fit_channels' arguments as a FitJob (fit_channels and FitQueue.push).
+FitJob fit_job(py::handle key_frames, py::handle key_values, const std::string& mode_name, const std::string& method,
+               int subframes, double tolerance, double min_gap, const KeyFit* previous, const py::kwargs& kwargs) {
+    FitJob j;
+    j.mode = parse_rotation_mode(mode_name);
+    j.method = parse_method(method);
+    j.options = to_options(j.method, kwargs);
+    j.key_frames = key_times(key_frames);
+    const Batch v = key_rows(key_values, static_cast<py::ssize_t>(channel_count(j.mode)), "key_values");
+    j.key_values.assign(v.data(), v.data() + v.count * channel_count(j.mode));
+    j.subframes = subframes;
+    j.tolerance = tolerance;
+    j.min_gap = min_gap;
+    j.previous = previous;
+    return j;
+}
+
+// A FitQueue and the Python objects of its jobs' `previous` fits, kept until each job is taken
+// (declared first: released after the queue has joined its workers).
+struct PyFitQueue {
+    PyFitQueue(std::size_t threads, std::size_t window) : queue(threads, window) {}
+    std::deque<py::object> previous;
+    FitQueue queue;
+};
 
 }  // namespace
 
@@ -404,16 +430,12 @@ void bind_curve(py::module_& m) {
 
     m.def(
         "fit_channels",
-        [](py::handle key_frames, py::handle key_values, const std::string& mode_name, const std::string& method,
+        [](py::handle key_frames, py::handle key_values, const std::string& mode, const std::string& method,
            int subframes, double tolerance, double min_gap, const KeyFit* previous, const py::kwargs& kwargs) {
-            const RotationMode mode = parse_rotation_mode(mode_name);
-            const Method meth = parse_method(method);
-            const CurveOptions options = to_options(meth, kwargs);
-            const std::vector<double> t = key_times(key_frames);
-            const Batch v = key_rows(key_values, static_cast<py::ssize_t>(channel_count(mode)), "key_values");
-            const std::vector<double> keys(v.data(), v.data() + v.count * channel_count(mode));
+            const FitJob j = fit_job(key_frames, key_values, mode, method, subframes, tolerance, min_gap, previous, kwargs);
             py::gil_scoped_release release;
-            return fit_channels(t, keys, mode, meth, options, subframes, tolerance, min_gap, previous);
+            return fit_channels(j.key_frames, j.key_values, j.mode, j.method, j.options, j.subframes, j.tolerance,
+                                j.min_gap, j.previous);
         },
         py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::arg("method"), py::kw_only(),
         py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01, py::arg("previous") = nullptr,
@@ -421,6 +443,42 @@ void bind_curve(py::module_& m) {
         "method, **options), quaternion keys given the sign the curve reaches them with, then "
         "fit_through_keys(curve, key_frames, those keys, mode, subframes=, tolerance=, min_gap=, previous=). "
         "A KeyFit; its curve and key_values are the curve and the keys as the fit writes them.");
+
+    py::class_<PyFitQueue>(m, "FitQueue",
+                           "FitQueue(threads=0, window=1024): fit_channels of each job pushed (push takes "
+                           "fit_channels' arguments), run on `threads` native worker threads (0: each when it is "
+                           "taken), at most `window` finished ahead of the taker, taken in push order by "
+                           "iterating after close(): each gives a KeyFit. The same results bit for bit whatever "
+                           "the thread count; a job's error (ValueError) is raised when it is taken. The workers "
+                           "never need the GIL, so the taker may hold it (reading the next targets, writing "
+                           "keys) while they run; a job's `previous` is kept alive until it is taken.")
+        .def(py::init([](std::size_t threads, std::size_t window) { return std::make_unique<PyFitQueue>(threads, window); }),
+             py::arg("threads") = 0, py::arg("window") = 1024)
+        .def(
+            "push",
+            [](PyFitQueue& q, py::handle key_frames, py::handle key_values, const std::string& mode,
+               const std::string& method, int subframes, double tolerance, double min_gap, py::object previous,
+               const py::kwargs& kwargs) {
+                const KeyFit* prev = previous.is_none() ? nullptr : &previous.cast<const KeyFit&>();
+                FitJob job = fit_job(key_frames, key_values, mode, method, subframes, tolerance, min_gap, prev, kwargs);
+                q.queue.push(std::move(job));
+                q.previous.push_back(std::move(previous));
+            },
+            py::arg("key_frames"), py::arg("key_values"), py::arg("mode"), py::arg("method"), py::kw_only(),
+            py::arg("subframes"), py::arg("tolerance"), py::arg("min_gap") = 0.01, py::arg("previous") = py::none(),
+            "Adds a job: fit_channels' arguments (checked now: a bad argument raises here, a fit's own error when "
+            "the job is taken).")
+        .def("close", [](PyFitQueue& q) { q.queue.close(); }, "No more jobs: iterating ends after the last one.")
+        .def("__len__", [](const PyFitQueue& q) { return q.queue.size(); })
+        .def_property_readonly("remaining", [](const PyFitQueue& q) { return q.queue.remaining(); })
+        .def("__iter__", [](py::object self) { return self; })
+        .def("__next__", [](PyFitQueue& q) {
+            if (q.queue.remaining() == 0) throw py::stop_iteration();
+            py::object previous = std::move(q.previous.front());  // released once its job is done
+            q.previous.pop_front();
+            py::gil_scoped_release release;
+            return q.queue.next();
+        });
 }
 
 }  // namespace quatcurve::bindings

@@ -413,6 +413,13 @@ KeyFit fit_channels(const std::vector<double>& key_frames, const std::vector<dou
     return fit_through_keys(curve, key_frames, signed_values, mode, subframes, tolerance, min_gap, previous);
 }
 
+FitQueue::FitQueue(std::size_t threads, std::size_t window)
+    : queue_([](const FitJob& j) {
+                 return fit_channels(j.key_frames, j.key_values, j.mode, j.method, j.options, j.subframes, j.tolerance,
+                                     j.min_gap, j.previous);
+             },
+             threads, window) {}
+
 namespace {
 
 // One fit at the samples fit.times (every key among them): the channel values along the curve that

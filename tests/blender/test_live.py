@@ -482,3 +482,52 @@ def test_two_objects_playing_one_actions_channels_are_refitted_once(fitted):
     frames, values = animator_keys(fitted)
     assert_plays_method(fitted, frames.astype(float), values)
     assert_plays_method(twin, frames.astype(float), values)
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_many_targets_refit_on_native_workers_as_one_by_one(live_scene, monkeypatch, threads):
+    """A refit of several bones at once (a quatcurve.FitQueue's workers fit them while the next are
+    read): each bone's keys and handles are those a refit of that bone alone writes; a bone whose
+    edited key cannot be fitted (a zero quaternion) is named and left as it was, the others written."""
+    from quatcurve_blender import workers
+    monkeypatch.setattr(workers, "THREADS", threads)
+    names = ("A", "B", "C", "D")
+    rigs_ = []
+    for name in ("Together", "Alone"):
+        rig = add_rig(name, bones=names)
+        for pb in rig.pose.bones:
+            key(pb, "rotation_quaternion", QUAT_KEYS, interpolation="BEZIER")
+        select_bones(rig, names)
+        assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
+        rigs_.append(rig)
+    live_scene.quatcurve_fit.live = True
+    update()
+    live.STATS.reset()
+
+    def edit(rig, bone, zero=False):
+        chans = fcurves.Channels.of(rig)
+        for i in range(4):
+            curve = chans.find(rig.pose.bones[bone].path_from_id("rotation_quaternion"), i)
+            point = next(p for p in curve.keyframe_points if p.co[0] == 6)
+            point.co[1] = 0.0 if zero else point.co[1] + 0.03 * (i + 1)
+
+    def state(rig, bone):
+        chans = fcurves.Channels.of(rig)
+        return [fcurves.fcurve_digest(chans.find(rig.pose.bones[bone].path_from_id("rotation_quaternion"), i)).hexdigest()
+                for i in range(4)]
+
+    together, alone = rigs_
+    for bone in ("A", "B", "D"):
+        edit(together, bone)
+    edit(together, "C", zero=True)
+    left = state(together, "C")
+    update()
+    assert live.STATS.refits == 3, live.STATS
+    assert live.STATS.errors == ["Together/C: the quaternion is zero at frame 6 (no rotation defined)"], live.STATS.errors
+    assert state(together, "C") == left
+    for bone in ("A", "B", "D"):  # the same edit, one bone at a time
+        live.STATS.reset()
+        edit(alone, bone)
+        update()
+        assert live.STATS.refits == 1 and not live.STATS.errors, live.STATS
+        assert state(alone, bone) == state(together, bone), bone

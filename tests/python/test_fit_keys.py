@@ -234,3 +234,54 @@ def test_fit_channels_is_the_curve_the_signs_and_fit_through_keys(mode):
         zero[4] = 0.0
         with pytest.raises(ValueError, match="zero"):
             qc.fit_channels(kf, zero, mode, "SQUAD", subframes=4, tolerance=tol)
+
+
+@pytest.mark.parametrize("threads", [0, 1, 2])
+def test_fit_queue_gives_fit_channels_in_push_order(threads):
+    """FitQueue: each job pushed is fit_channels of its arguments bit for bit, taken in push order
+    (pushed while the workers run), with a previous fit the caller no longer holds; a job's error
+    comes with it alone; bad arguments are refused at push, a push after close() too; a queue dropped
+    with jobs running returns."""
+    rng = np.random.default_rng(5)
+    kf = np.arange(1.0, 120.0, 10.0)
+    tol = 0.05 * DEG
+    values = []
+    for _ in range(6):
+        v = np.cumsum(rng.normal(scale=0.15, size=(len(kf), 4)), axis=0) + [1, 0, 0, 0]
+        values.append(v / np.linalg.norm(v, axis=1, keepdims=True))
+    firsts = [qc.fit_channels(kf, v, "QUATERNION", "SQUAD", subframes=4, tolerance=tol) for v in values]
+    moved = [v.copy() for v in values]
+    for m in moved:
+        m[5, 2] += 0.04
+    moved[3][7] = 0.0  # a zero quaternion: this job's error alone
+    queue = qc.FitQueue(threads=threads, window=2)
+    for i, m in enumerate(moved):
+        queue.push(kf, m, "QUATERNION", "SQUAD", subframes=4, tolerance=tol, previous=qc.fit_channels(
+            kf, values[i], "QUATERNION", "SQUAD", subframes=4, tolerance=tol))  # held by the queue alone
+    with pytest.raises(ValueError, match="key_values"):
+        queue.push(kf, np.ones((len(kf), 3)), "QUATERNION", "SQUAD", subframes=4, tolerance=tol)
+    with pytest.raises(ValueError, match="method"):
+        queue.push(kf, moved[0], "QUATERNION", "CUBIC", subframes=4, tolerance=tol)
+    assert len(queue) == 6 and queue.remaining == 6
+    queue.close()
+    with pytest.raises(ValueError, match="closed"):
+        queue.push(kf, moved[0], "QUATERNION", "SQUAD", subframes=4, tolerance=tol)
+    for i, m in enumerate(moved):
+        if i == 3:
+            with pytest.raises(ValueError, match="zero"):
+                next(queue)
+            continue
+        got = next(queue)
+        want = qc.fit_channels(kf, m, "QUATERNION", "SQUAD", subframes=4, tolerance=tol, previous=firsts[i])
+        assert 0 < got.refitted < len(kf) - 1 and got.refitted == want.refitted
+        np.testing.assert_array_equal(got.times, want.times)
+        assert got.proof.bound == want.proof.bound
+        for x, y in zip(got.keys.channels, want.keys.channels):
+            for name in ("indices", "frames", "values", "handle_left", "handle_right"):
+                np.testing.assert_array_equal(getattr(x, name), getattr(y, name))
+    assert queue.remaining == 0
+    assert list(queue) == []
+    dropped = qc.FitQueue(threads=threads)
+    for v in values:
+        dropped.push(kf, v, "QUATERNION", "SQUAD", subframes=4, tolerance=tol)
+    del dropped

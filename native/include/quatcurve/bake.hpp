@@ -12,16 +12,12 @@
 // Blender's order semantics, axis-angle keys (angle, x, y, z), radians, time in frames.
 #pragma once
 
-#include <condition_variable>
 #include <cstddef>
-#include <exception>
-#include <mutex>
-#include <thread>
-#include <utility>
 #include <vector>
 
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
+#include "quatcurve/work_queue.hpp"
 
 namespace quatcurve {
 
@@ -50,47 +46,23 @@ struct BakedKeys {
 // or a value that is not finite in float32.
 BakedKeys bake_keys(const BakeJob& job, const std::vector<double>& frames);
 
-// Jobs run on worker threads, taken in order by one consumer.
-//
-// threads: worker threads (0: each job runs in next(), on the caller's thread). window: how many
-// jobs the workers may finish ahead of the consumer (≥ 1; bounds the memory of finished keys). A
-// job's error is rethrown by the next() that takes it; the other jobs are unaffected. The
-// destructor lets running jobs finish, starts no more, and joins the workers, so a consumer may stop
-// early (an error while writing) and drop the queue.
+// Jobs run on worker threads, taken in order by one consumer (WorkQueue: threads 0 runs each job in
+// next(); at most `window` ≥ 1 finished ahead of the consumer; a job's error is rethrown by the next()
+// that takes it; the destructor lets running jobs finish and joins the workers).
 class BakeQueue {
 public:
     BakeQueue(std::vector<double> frames, std::vector<BakeJob> jobs, std::size_t threads, std::size_t window);
-    ~BakeQueue();
-    BakeQueue(const BakeQueue&) = delete;
-    BakeQueue& operator=(const BakeQueue&) = delete;
 
-    std::size_t size() const { return jobs_.size(); }
+    std::size_t size() const { return queue_.size(); }
     // Jobs not yet taken.
-    std::size_t remaining() const;
+    std::size_t remaining() const { return queue_.remaining(); }
     // The next job's result, in job order: waits for it (or computes it without workers). Throws
     // the job's error, or InvalidArgument when every job was taken already.
     BakedKeys next();
 
 private:
-    struct Slot {
-        bool done = false;
-        BakedKeys result;
-        std::exception_ptr error;
-    };
-    void work();
-    void stop();   // no more jobs started; running ones finish; workers joined
-
     const std::vector<double> frames_;
-    std::vector<BakeJob> jobs_;
-    std::vector<Slot> slots_;
-    const std::size_t window_;
-    mutable std::mutex mutex_;
-    std::condition_variable finished_;   // a slot is done (the consumer waits)
-    std::condition_variable room_;       // a job was taken, or the queue stops (workers wait)
-    std::size_t started_ = 0;            // jobs handed to workers so far
-    std::size_t taken_ = 0;              // jobs taken by next() so far
-    bool stopping_ = false;
-    std::vector<std::thread> workers_;
+    WorkQueue<BakeJob, BakedKeys> queue_;
 };
 
 }  // namespace quatcurve

@@ -14,6 +14,7 @@
 #include "quatcurve/channels.hpp"
 #include "quatcurve/curve.hpp"
 #include "quatcurve/reduce.hpp"
+#include "quatcurve/work_queue.hpp"
 
 namespace quatcurve {
 
@@ -106,5 +107,35 @@ KeyFit fit_through_keys(const Curve& curve, const std::vector<double>& key_frame
 KeyFit fit_channels(const std::vector<double>& key_frames, const std::vector<double>& key_values,
                     const RotationMode& mode, Method method, const CurveOptions& options, int subframes,
                     double tolerance, double min_gap = 0.01, const KeyFit* previous = nullptr);
+
+// One target of a FitQueue: fit_channels' arguments. `previous` must outlive the job (the queue's
+// owner keeps it until the job is taken).
+struct FitJob {
+    std::vector<double> key_frames, key_values;
+    RotationMode mode;
+    Method method = Method::SLERP;
+    CurveOptions options;
+    int subframes = 1;
+    double tolerance = 0.0, min_gap = 0.01;
+    const KeyFit* previous = nullptr;
+};
+
+// fit_channels of each job pushed, on worker threads, taken in push order (WorkQueue): a refit of
+// many targets hands each over as soon as it is read, and writes each result while the workers fit
+// the next ones. The results are fit_channels' bit for bit, whatever the thread count.
+class FitQueue {
+public:
+    FitQueue(std::size_t threads, std::size_t window);
+    void push(FitJob job) { queue_.push(std::move(job)); }
+    void close() { queue_.close(); }
+    std::size_t size() const { return queue_.size(); }
+    std::size_t remaining() const { return queue_.remaining(); }
+    // The next job's KeyFit: waits for it. Throws the job's error (fit_channels'), or InvalidArgument
+    // when every job pushed was taken already.
+    KeyFit next() { return queue_.next(); }
+
+private:
+    WorkQueue<FitJob, KeyFit> queue_;
+};
 
 }  // namespace quatcurve
