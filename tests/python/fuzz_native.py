@@ -42,7 +42,7 @@ import quatcurve as qc
 LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
-                 "fit_through_keys": 0.5, "fit_channels": 0.5,
+                 "fit_through_keys": 0.5, "fit_channels": 0.5, "FitQueue": 0.5,
                  "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5,
                  "smooth_rotations": 0.5, "clean_rotations": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
@@ -1299,6 +1299,61 @@ def build_fit_through_keys(fn, d, channels=False):
 def build_fit_channels(fn, d):
     """fit_channels: as fit_through_keys, from the keys alone (build_fit_through_keys)."""
     return build_fit_through_keys(fn, d, channels=True)
+
+
+def build_fit_queue(fn, d):
+    """A queue of 1-4 drawn fit_channels jobs (build_fit_through_keys' draws, some of them refits of
+    the job before) on 0-3 worker threads: each job must give what fit_channels gives, bit for bit
+    (keys, handles, samples, proof), or fail where it fails — at push for bad arguments, when taken
+    for a fit's own error."""
+    drawn = [build_fit_through_keys(qc.fit_channels, d, channels=True) for _ in range(d.pick((1, 2, 4), "jobs"))]
+    threads, window = d.pick((0, 1, 2, 3), "threads"), d.pick((1, 2, 8), "window")
+    refit = d.chance(0.5, "refit")
+
+    def outcome(call):
+        try:
+            return call()
+        except (ValueError, TypeError) as error:
+            return error
+
+    def call():
+        queue = fn(threads=threads, window=window)
+        pushed, results, last = [], [], None
+        for case in drawn:
+            args, kwargs = case.inputs
+            previous = last if refit else None  # the fit before, of these keys or others
+            want = outcome(lambda: qc.fit_channels(*args, previous=previous, **kwargs))
+            if not isinstance(want, Exception):
+                last = want
+            try:
+                queue.push(*args, previous=previous, **kwargs)
+            except (ValueError, TypeError) as error:
+                results.append((want, error))
+                continue
+            pushed.append((case, want))
+            results.append((want, None))
+        queue.close()
+        expect(len(queue) == len(pushed) and queue.remaining == len(pushed), "FitQueue length")
+        taken = iter(outcome(lambda: next(queue)) for _ in pushed)
+        out = [(want, refused if refused is not None else next(taken)) for want, refused in results]
+        expect(queue.remaining == 0, "FitQueue.remaining after every job")
+        expect(list(queue) == [], "FitQueue gave more results than jobs")
+        return out
+
+    def check(out):
+        for want, got in out:
+            if isinstance(want, Exception) or isinstance(got, Exception):
+                expect(isinstance(want, Exception) and isinstance(got, Exception),
+                       f"fit_channels gave {want!r}, the queue {got!r}")
+                continue
+            expect(np.array_equal(got.times, want.times) and got.proof.bound == want.proof.bound and
+                   got.refitted == want.refitted, "the queue's fit differs from fit_channels'")
+            for x, y in zip(got.keys.channels, want.keys.channels):
+                for name in ("indices", "frames", "values", "handle_left", "handle_right"):
+                    expect(np.array_equal(getattr(x, name), getattr(y, name)), f"channel {name} differs")
+
+    return Case(call, sum(c.rows for c in drawn), check, "", 0, {"jobs": [c.inputs for c in drawn],
+                                                                  "threads": threads, "refit": refit})
 
 
 # ---- Blender's F-curve evaluation, emulated --------------------------------------------------------
@@ -2664,6 +2719,7 @@ REGISTRY.update({
     "fit_keys": build_fit,
     "fit_through_keys": build_fit_through_keys,
     "fit_channels": build_fit_channels,
+    "FitQueue": build_fit_queue,
     "blender_evaluate": build_blender_evaluate,
     "BakeJob": build_bake_job,
     "BakeQueue": build_bake_queue,
