@@ -138,7 +138,7 @@ def measure(label, rig, bone_names, change=True, expect=None):
         total, cpu, main = time.perf_counter() - t, time.process_time() - cpu, time.thread_time() - main
         if profile is not None:
             profile.disable()
-            pstats.Stats(profile).sort_stats("tottime").print_stats(22)
+            pstats.Stats(profile).sort_stats(os.environ.get("QC_SORT", "tottime")).print_stats(int(os.environ.get("QC_ROWS", "22")))
         assert not live.STATS.errors, (label, live.STATS)
         if expect is not None:
             assert live.STATS.refits == expect, (label, live.STATS)
