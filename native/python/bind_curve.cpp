@@ -94,6 +94,14 @@ DArray read_only(DArray a) {
     return a;
 }
 
+// Key frames (K,) and K rows of channel_count(mode) values, as a job keeps them (BakeJob, FitJob).
+void mode_keys(py::handle times, py::handle values, const RotationMode& mode, const char* name,
+               std::vector<double>& t, std::vector<double>& v) {
+    t = key_times(times);
+    const Batch rows = key_rows(values, static_cast<py::ssize_t>(channel_count(mode)), name);
+    v.assign(rows.data(), rows.data() + rows.count * channel_count(mode));
+}
+
 // fit_channels' arguments as a FitJob (fit_channels and FitQueue.push).
 FitJob fit_job(py::handle key_frames, py::handle key_values, const std::string& mode_name, const std::string& method,
                int subframes, double tolerance, double min_gap, const KeyFit* previous, const py::kwargs& kwargs) {
@@ -101,9 +109,7 @@ FitJob fit_job(py::handle key_frames, py::handle key_values, const std::string& 
     j.mode = parse_rotation_mode(mode_name);
     j.method = parse_method(method);
     j.options = to_options(j.method, kwargs);
-    j.key_frames = key_times(key_frames);
-    const Batch v = key_rows(key_values, static_cast<py::ssize_t>(channel_count(j.mode)), "key_values");
-    j.key_values.assign(v.data(), v.data() + v.count * channel_count(j.mode));
+    mode_keys(key_frames, key_values, j.mode, "key_values", j.key_frames, j.key_values);
     j.subframes = subframes;
     j.tolerance = tolerance;
     j.min_gap = min_gap;
@@ -368,9 +374,7 @@ void bind_curve(py::module_& m) {
                  job.method = parse_method(method);
                  job.output = parse_rotation_mode(mode);
                  job.options = to_options(job.method, kwargs);
-                 job.times = key_times(times);
-                 const Batch v = key_rows(values, static_cast<py::ssize_t>(channel_count(job.keys_mode)), "values");
-                 job.values.assign(v.data(), v.data() + v.count * channel_count(job.keys_mode));
+                 mode_keys(times, values, job.keys_mode, "values", job.times, job.values);
                  if (!reference.is_none()) {
                      const std::size_t nc = channel_count(job.output);
                      const Batch ref = as_batch(reference, {static_cast<py::ssize_t>(nc)}, "reference");
