@@ -44,7 +44,7 @@ import bpy
 import numpy as np
 
 from . import cycles, fcurves, methods, native, path_rule, targets
-from .workers import parallel_map
+from .workers import thread_count
 from .targets import TargetError
 
 METHODS = methods.CURVE_METHODS
@@ -986,8 +986,8 @@ def fit(found, settings, only_changed=False):
     check_settings(settings)
     start = time.perf_counter()
     result = FitResult(settings)
-    # Blender is read on the main thread; the planning (native curve, sampling, fit_keys without the
-    # GIL) runs on worker threads over targets (workers.parallel_map: same results on any count).
+    # Blender is read on the main thread; the fits (native curve, sampling, fit_keys and the proof)
+    # run on native worker threads (_fit: same results on any count).
     with record_index():
         _fit(found, settings, only_changed, result)
     result.seconds = time.perf_counter() - start
@@ -995,22 +995,36 @@ def fit(found, settings, only_changed=False):
 
 
 def _fit(found, settings, only_changed, result):
+    # Each target to fit goes to a quatcurve.FitQueue as soon as it is read: its native workers fit it
+    # while the main thread reads the next ones; the fits are taken in order, and the first that
+    # fails raises before anything is written.
+    found = list(found)
+    queue = native.require().FitQueue(threads=thread_count() if len(found) > 1 else 0)
     work = []
     for target in found:
         keys = read_animator_keys(target)
-        record = find_record(fcurves.active_action(target.id_data), target)
+        action = fcurves.active_action(target.id_data)
+        record = find_record(action, target)
         if only_changed and record is not None and record.signature == keys.signature():
             continue
-        work.append((target, keys, refit_eases(keys, target, record),
-                     last_fit(fcurves.active_action(target.id_data), target)))
-    planned = parallel_map(lambda item: plan_target(item[1], settings, *item[2], previous=item[3]), work)
+        job = fit_job(keys, settings, *refit_eases(keys, target, record))
+        if job is not None:
+            queue.push(keys.frames, keys.values, keys.mode, settings.method, previous=last_fit(action, target),
+                       **job[0])
+        work.append((target, keys, job))
+    queue.close()
     plans = []
-    for (target, keys, _, _), plan in zip(work, planned):
-        if plan is None:
+    for target, keys, job in work:
+        if job is None:
             result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), 0, 0.0,
                                                skipped="%d rotation key%s: nothing to fit" % (
                                                    len(keys.frames), "" if len(keys.frames) == 1 else "s")))
             continue
+        try:
+            kf = next(queue)
+        except ValueError as error:
+            raise fit_error(keys, error) from None
+        plan = plan_of((keys, settings, kf) + job[1])
         plans.append((plan, target))
         result.targets.append(TargetResult(keys.name, keys.mode, len(keys.frames), plan.generated_count,
                                            math.degrees(plan.max_error), notes=plan.notes))

@@ -1,4 +1,4 @@
-"""Worker threads (issue 15): the bake's and the reduction's native work runs on
+"""Worker threads (issue 15): the bake's, the reduction's and the fit's native work runs on
 workers.thread_count() threads, one target per task; the written keys must be the same, bit for bit,
 whatever the thread count. Blender data is only touched on the main thread."""
 
@@ -8,7 +8,7 @@ import bpy
 import numpy as np
 import pytest
 
-from quatcurve_blender import bake, fcurves, reduce, targets, workers
+from quatcurve_blender import bake, fcurves, fit, reduce, targets, workers
 
 import rigs
 
@@ -48,6 +48,30 @@ def test_bake_is_the_same_on_any_thread_count(scene, threads, tolerance):
         assert fcurves.active_action(rig) != original
         digests.append(_digests(rig))
     assert digests[0] == digests[1] == digests[2]
+
+
+def test_fit_is_the_same_on_any_thread_count(scene, threads):
+    """The fit's targets go to a FitQueue's native workers as they are read; one bone's zero quaternion
+    key fails the whole fit, naming that bone, on any thread count, before anything is written."""
+    digests = []
+    for count in (1, 2, 5):
+        workers.THREADS = count
+        rig = _rig("Rig%d" % count)
+        found = [targets.Target(rig, pb.name) for pb in rig.pose.bones]
+        result = fit.fit(found, fit.FitSettings(method="CATMULL_ROM", tolerance=0.05))
+        assert len(result.targets) == len(found) and not any(t.skipped for t in result.targets)
+        digests.append(_digests(rig))
+    assert digests[0] == digests[1] == digests[2]
+    for count in (1, 3):
+        workers.THREADS = count
+        rig = _rig("Bad%d" % count)
+        bone = rig.pose.bones[3]
+        for i in range(4):
+            fcurves.Channels.of(rig).find(bone.path_from_id("rotation_quaternion"), i).keyframe_points[2].co[1] = 0.0
+        before = _digests(rig)
+        with pytest.raises(fit.FitError, match=r"Bad%d/%s: the quaternion is zero at frame" % (count, bone.name)):
+            fit.fit([targets.Target(rig, pb.name) for pb in rig.pose.bones], fit.FitSettings(method="SQUAD"))
+        assert _digests(rig) == before
 
 
 def test_reduce_is_the_same_on_any_thread_count(scene, threads):
