@@ -312,19 +312,20 @@ def _refit_action(action):
             continue
         pending.append((target, (keys, settings, used)))
     queue.close()
-    t2, reads = time.perf_counter(), _read_seconds()
+    t2 = time.perf_counter()
     for target, job in pending:
         # The wait for this fit, and its plan's Python.
         result = job
         if isinstance(job, tuple):
             keys, settings, used = job
             try:
-                result = fit.plan_of((keys, settings, next(queue)) + used)
+                kf = next(queue)
             except ValueError as error:
                 result = fit.fit_error(keys, error)
+            else:
+                result = fit.plan_of((keys, settings, kf) + used)
         t3 = time.perf_counter()
-        STATS.add("plan", t3 - t2 - (_read_seconds() - reads))
-        reads = _read_seconds()
+        STATS.add("plan", t3 - t2)
         if isinstance(result, fit.FitError):
             STATS.errors.append(str(result))
         elif result is not None:
@@ -338,10 +339,6 @@ def _refit_action(action):
         t2 = time.perf_counter()
         STATS.add("write", t2 - t3)
     return done
-
-
-def _read_seconds():
-    return STATS.seconds.get("read", 0.0) + STATS.seconds.get("signature", 0.0)
 
 
 def _changed_targets(action, found):
