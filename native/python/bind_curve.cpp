@@ -463,6 +463,9 @@ void bind_curve(py::module_& m) {
             [](PyFitQueue& q, py::handle key_frames, py::handle key_values, const std::string& mode,
                const std::string& method, int subframes, double tolerance, double min_gap, py::object previous,
                const py::kwargs& kwargs) {
+                if (!previous.is_none() && !py::isinstance<KeyFit>(previous))
+                    throw py::type_error("previous: expected a quatcurve.KeyFit or None, got " +
+                                         py::str(py::type::of(previous).attr("__name__")).cast<std::string>());
                 const KeyFit* prev = previous.is_none() ? nullptr : &previous.cast<const KeyFit&>();
                 FitJob job = fit_job(key_frames, key_values, mode, method, subframes, tolerance, min_gap, prev, kwargs);
                 q.queue.push(std::move(job));

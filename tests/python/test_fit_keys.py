@@ -262,6 +262,8 @@ def test_fit_queue_gives_fit_channels_in_push_order(threads):
         queue.push(kf, np.ones((len(kf), 3)), "QUATERNION", "SQUAD", subframes=4, tolerance=tol)
     with pytest.raises(ValueError, match="method"):
         queue.push(kf, moved[0], "QUATERNION", "CUBIC", subframes=4, tolerance=tol)
+    with pytest.raises(TypeError, match="previous: expected a quatcurve.KeyFit or None, got str"):
+        queue.push(kf, moved[0], "QUATERNION", "SQUAD", subframes=4, tolerance=tol, previous="first")
     assert len(queue) == 6 and queue.remaining == 6
     queue.close()
     with pytest.raises(ValueError, match="closed"):
