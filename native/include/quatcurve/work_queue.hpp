@@ -51,8 +51,13 @@ public:
         {
             std::lock_guard<std::mutex> lock(mutex_);
             if (closed_) throw InvalidArgument("the queue is closed: no job can be added");
-            jobs_.push_back(std::move(job));
-            slots_.emplace_back();
+            slots_.emplace_back();  // first: a worker finds a slot for every job it sees
+            try {
+                jobs_.push_back(std::move(job));
+            } catch (...) {  // no memory: the queue stays as it was
+                slots_.pop_back();
+                throw;
+            }
         }
         room_.notify_one();
     }
