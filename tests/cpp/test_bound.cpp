@@ -177,6 +177,45 @@ TEST(FitProof, ProvedBoundHoldsDenserThanChecked) {
     EXPECT_GE(fitted, 18) << refused << " refused";
 }
 
+// Keys closer than the fit can follow (170° in 0.02 frames, where generated keys keep 0.01 frames
+// apart): the fit says it has not proved the tolerance, and the bound it gives holds at 16,384 points
+// per frame and as many random times and is within 10 % of the largest distance found, not the
+// whole bound of an interval left at a violation (up to 180°).
+TEST(FitProof, UnreachableToleranceGivesATightBound) {
+    std::mt19937 rng(5);
+    const double tol = 0.05 * kDeg;
+    const RotationMode mode = parse_rotation_mode("QUATERNION");
+    const std::vector<double> t = {1.0, 1.02, 1.05, 1.5, 3.25};
+    const Vec3 axes[] = {{1, 0, 0}, {0, 0, 1}, {1, 1, 0}, {0, 1, 1}, {1, 0, 1}};
+    const double degrees[] = {0, 170, 10, 179, 90};
+    int failed = 0;
+    for (Method method : kFitMethods) {
+        std::vector<double> values;
+        for (std::size_t k = 0; k < t.size(); ++k) {
+            const Quat q = glm::angleAxis(degrees[k] * kDeg, glm::normalize(axes[k]));
+            for (double c : {q.w, q.x, q.y, q.z}) values.push_back(static_cast<float>(c));
+        }
+        const Curve curve = curve_from_channels(t, values, mode, method, {});
+        const std::vector<Quat> at = curve.sample(t);  // the sign the curve reaches each key with
+        for (std::size_t k = 0; k < t.size(); ++k)
+            if (glm::dot(at[k], from_wxyz(&values[4 * k])) < 0)
+                for (std::size_t c = 0; c < 4; ++c) values[4 * k + c] = -values[4 * k + c];
+        const KeyFit fit = fit_through_keys(curve, t, values, mode, 4, tol);
+        const double dense = dense_max(curve, fit.keys, mode, t.front(), t.back(), 16384 * 9 / 4, rng);
+        EXPECT_LE(dense, fit.proof.bound + 1e-6) << method_name(method);
+        if (fit.proof.proven()) continue;
+        ++failed;
+        EXPECT_GT(dense, tol) << method_name(method);
+        // The largest distance found: the dense points', or one the proof evaluated (such as beside
+        // a key's snap zone, 1e-4 frame wide, which an even grid may step over).
+        const double found = std::fmax(dense, fit.proof.max_evaluated);
+        EXPECT_LE(fit.proof.bound, 1.1 * found + 1e-5) << method_name(method) << ": " << fit.proof.bound / kDeg
+                                                        << "° against " << found / kDeg << "° found";
+        for (const PlaybackBound& p : fit.segment_proofs) EXPECT_LE(p.bound, fit.proof.bound) << method_name(method);
+    }
+    EXPECT_GE(failed, 3);
+}
+
 // The seed's example: Euler XYZ keys (0°, 90°, 0°) at frame 1 and (90°, 45°, 90°) at frame 4 (and a
 // key at the lock at the end). The keys keep their values; the channels change branch beside the
 // keys at the lock, and the playback stays within the proved bound at 64 points per frame and at
