@@ -299,7 +299,12 @@ def _refit_action(action):
     # One refit (an edit of one target): no worker threads to start, the fit runs when it is taken.
     queue = native.require().FitQueue(threads=thread_count() if len(first) == 2 else 0)
     pending = []  # (target, (keys, settings, eases) or the FitError or None), in push order
+    # The fits the new ones replace are freed once the workers are done: their memory comes from the
+    # workers' malloc arenas, and freeing it while they allocate waits on the arenas' locks (46 µs a
+    # fit inside the loop, bpy 5.0.1; 10–13 µs after it).
+    replaced = []
     for target, keys, settings, eases, previous in itertools.chain(first, changed):
+        replaced.append(previous)
         job = fit.fit_job(keys, settings, *eases)
         if job is None:  # fewer than two keys: nothing to fit, the record waits for more
             pending.append((target, None))
@@ -338,6 +343,8 @@ def _refit_action(action):
             done.append(target.name)
         t2 = time.perf_counter()
         STATS.add("write", t2 - t3)
+    del queue
+    replaced.clear()
     return done
 
 
