@@ -732,15 +732,45 @@ def plan_of(fitted):
     proof = kf.proof
     if not proof.proven:
         notes.append("%s: the bound holds within %.4f° at every instant, ABOVE the tolerance near frame %.3f%s" % (
-            keys.name, math.degrees(proof.bound), proof.worst_time,
-            (" (a change of Euler branch: convert the target to quaternion for the method's exact path)"
-             if not keys.is_axis_angle else
-             " (a change of the angle's turn: convert the target to quaternion for the method's exact path)")
-            if len(kf.switches) else " (keys closer than %g frames would be needed)" % MIN_KEY_GAP))
+            keys.name, math.degrees(proof.bound), proof.worst_time, _above_cause(keys, kf, channels, proof.worst_time)))
     # The samples (kf.times, a copy when asked for): the last key is the last of them.
     return FitPlan(keys, settings, channels, proof.bound, K * len(channels), generated, int(forced[-1]) + 1,
                    ease_in, ease_out, notes + path_notes(keys.name, kf.curve, keys.frames, settings.method), turns, kf,
                    synchronized)
+
+
+# Blender plays a key's own value at frames within this of the key (its evaluation snaps to the key);
+# the proof evaluates both edges of that zone (docs/curves.md, "A bound at every instant").
+KEY_SNAP = 1e-4
+
+
+def _above_cause(keys, kf, channels, worst):
+    """Why a fit's bound stays above the tolerance near frame `worst`, for its note: a change of
+    Euler branch or of the angle's turn; Blender's snap to a key (a key written within KEY_SNAP of
+    `worst` on a channel moving so fast there that the snap's step, added to the fit's own error,
+    passes the tolerance: named with the step); else keys closer than MIN_KEY_GAP would be needed."""
+    if len(kf.switches):
+        return (" (a change of the angle's turn: convert the target to quaternion for the method's exact path)"
+                if keys.is_axis_angle else
+                " (a change of Euler branch: convert the target to quaternion for the method's exact path)")
+    best = None  # (step in degrees, channel, key frame)
+    for c, (frames, values, left, right, _) in enumerate(channels):
+        frames = np.asarray(frames, float)
+        for k in np.flatnonzero(np.abs(frames - worst) <= 1.5 * KEY_SNAP):
+            slopes = [(v - values[k]) / (f - frames[k]) for f, v in (left[k], right[k]) if f != frames[k]]
+            rate = max((abs(x) for x in slopes), default=0.0)  # per frame, in the channel's units
+            if keys.mode == "QUATERNION":
+                rate *= 2.0  # a unit quaternion's channel turns the rotation by up to twice its change
+            elif keys.is_axis_angle and c > 0:
+                continue  # an axis channel's change turns the rotation by sin(θ/2) of it: not a step in degrees
+            step = math.degrees(rate * KEY_SNAP)
+            if best is None or step > best[0]:
+                best = (step, c, float(frames[k]))
+    if best is not None:
+        return (" (Blender plays %s[%d]'s key at frame %.5f for every frame within %g of it; that channel moves "
+                "fast there, and the step, %.4f°, adds to the fit's own error)"
+                % (keys.prop, best[1], best[2], KEY_SNAP, best[0]))
+    return " (keys closer than %g frames would be needed)" % MIN_KEY_GAP
 
 
 def seam_eases(ease_in, ease_out):

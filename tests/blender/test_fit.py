@@ -128,6 +128,31 @@ def test_keys_too_close_to_follow_report_the_bound_blender_plays(scene, tmp_path
     assert bound <= 1.1 * err.max()
 
 
+def test_a_bound_above_the_tolerance_at_a_key_names_blenders_snap(scene):
+    """SPLINE_C2 through 65 unevenly spaced XYZ keys (gaps of 0.011 to 12 frames: the C2 path loops
+    between them, a path-rule break) moves Euler X by ~4 rad/frame where the fit writes a key at frame
+    27.46489. Blender plays that key's value for every frame within 1e-4 of it, a step of 0.023° on top
+    of the fit's own error: the note says so, naming channel, key and step — not that keys closer
+    than the minimum gap would be needed — and gives the bound it proved there."""
+    rng = np.random.default_rng(4)
+    gaps = np.r_[rng.uniform(0.02, 0.3, 30), rng.uniform(0.5, 3, 30), [0.011, 0.013, 7.5, 12.25]]
+    rng.shuffle(gaps)
+    frames = np.round((1 + np.r_[0, np.cumsum(gaps)]) * 1024) / 1024
+    angles = np.column_stack([50 * np.sin(frames / 9.0), 35 * np.sin(frames / 13.0 + 1), 60 * np.sin(frames / 11.0 + 2)])
+    angles += rng.normal(scale=2.0, size=angles.shape)
+    angles[:, 2] += 400 * (frames - 1) / (frames[-1] - 1)
+    obj = add_empty("Uneven", "XYZ")
+    key(obj, "rotation_euler", zip(frames.tolist(), angles.tolist()), interpolation="BEZIER", degrees=True)
+    result = fit.fit([fit.targets.Target(obj)], fit.FitSettings(method="SPLINE_C2", tolerance=TOL))
+    line = result.targets[0]
+    above = [n for n in line.notes if "ABOVE the tolerance" in n]
+    assert len(above) == 1 and line.max_error_deg > TOL, line.notes
+    assert "Blender plays rotation_euler[0]'s key at frame 27.46489 for every frame within 0.0001 of it" in above[0], above
+    assert "keys closer than" not in above[0] and "%.4f°" % line.max_error_deg in above[0], above
+    step = float(above[0].split("the step, ")[1].split("°")[0])
+    assert 0.01 < step < line.max_error_deg
+
+
 def test_refit_replaces_generated_keys_and_keeps_the_animators(quat_object):
     bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL)
     first = rotation_keys(quat_object)
