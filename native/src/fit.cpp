@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <memory>
 #include <string>
 
@@ -48,6 +49,8 @@ namespace {
 // The fit matches the method within this share of the tolerance at its samples: the rest is the
 // room the proof between samples needs (bound.hpp), which is what the tolerance promises.
 constexpr double kFitShare = 0.9;
+// A key segment the fit leaves unproved is fitted again alone at these shares (fit_span).
+constexpr double kRetryShares[] = {0.6, 0.3};
 // Rounds of "prove, add the times that failed as samples, fit again".
 constexpr int kProofRounds = 8;
 // The proof halves intervals down to this (frames): a change of Euler branch beside a key at gimbal
@@ -224,10 +227,11 @@ void tighten_failed_segments(const Motion& playback, const Motion& method, KeyFi
     sort_proof(fit.proof);
 }
 
-// The fit of the keys (all of fit_through_keys' keys, or a run of them) without reuse: samples,
-// rounds of fit_round and the proof of every key segment (tightened where it fails).
-KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
-                const RotationMode& mode, int subframes, double tolerance, double min_gap) {
+// The fit of the keys (all of fit_through_keys' keys, or a run of them) without reuse, matching the
+// method within `share` of the tolerance at the samples: rounds of fit_round and the proof of every
+// key segment (tightened where it fails).
+KeyFit fit_rounds(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
+                  const RotationMode& mode, int subframes, double tolerance, double min_gap, double share) {
     const std::size_t K = key_frames.size(), C = channel_count(mode);
     KeyFit fit;
     fit.times = fit_sample_frames(key_frames, subframes);
@@ -259,7 +263,7 @@ KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const
     const CurveMotion curve_motion(curve);
     const KeptBreaks method(curve_motion);
     for (int round = 0;; ++round) {
-        fit_round(curve, key_frames, key_values, mode, tolerance * kFitShare, min_gap, fit);
+        fit_round(curve, key_frames, key_values, mode, tolerance * share, min_gap, fit);
         std::vector<FCurveKeys> channels(fit.keys.channels.begin(), fit.keys.channels.end());
         const PlaybackMotion playback(std::move(channels), fit.keys.interpolation, mode);
         const KeptBreaks kept(playback);
@@ -372,6 +376,46 @@ void assemble(const std::vector<Source>& sources, std::size_t C, KeyFit& out) {
         }
     }
     sort_proof(out.proof);
+}
+
+// The fit of the keys (all of fit_through_keys' keys, or a run of them) without reuse: fit_rounds at
+// kFitShare; a key segment it leaves unproved is fitted again alone (key segments are independent:
+// the fitted keys' handles are broken at the animator's keys) at the smaller shares of kRetryShares,
+// which leave the proof more room between the samples — where Blender's snap to a key on a fast
+// channel adds a step, or the error between samples runs high —, and keeps the better of its fits
+// (proved, or with the lower bound). Segments proved the first time are as they were.
+KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
+                const RotationMode& mode, int subframes, double tolerance, double min_gap) {
+    KeyFit fit = fit_rounds(curve, key_frames, key_values, mode, subframes, tolerance, min_gap, kFitShare);
+    if (fit.proof.proven()) return fit;
+    const std::size_t S = key_frames.size() - 1, C = channel_count(mode);
+    std::vector<KeyFit> retries;
+    retries.reserve(S * std::size(kRetryShares));  // no reallocation: sources point into it
+    std::vector<Source> sources(S);
+    bool replaced = false;
+    for (std::size_t j = 0; j < S; ++j) {
+        sources[j] = {&fit, j};
+        if (fit.segment_proofs[j].proven()) continue;
+        const std::vector<double> frames(key_frames.begin() + static_cast<std::ptrdiff_t>(j),
+                                         key_frames.begin() + static_cast<std::ptrdiff_t>(j) + 2);
+        const std::vector<double> values(key_values.begin() + static_cast<std::ptrdiff_t>(C * j),
+                                         key_values.begin() + static_cast<std::ptrdiff_t>(C * (j + 2)));
+        for (double share : kRetryShares) {
+            KeyFit again = fit_rounds(curve, frames, values, mode, subframes, tolerance, min_gap, share);
+            const PlaybackBound& best = sources[j].fit->segment_proofs[sources[j].segment];
+            if (again.proof.proven() || again.proof.bound < best.bound) {
+                retries.push_back(std::move(again));
+                sources[j] = {&retries.back(), 0};
+                replaced = true;
+            }
+            if (sources[j].fit->segment_proofs[sources[j].segment].proven()) break;
+        }
+    }
+    if (!replaced) return fit;
+    KeyFit out;
+    assemble(sources, C, out);
+    out.refitted = S;
+    return out;
 }
 
 }  // namespace

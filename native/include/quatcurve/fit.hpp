@@ -64,9 +64,11 @@ struct KeyFit {
 // at the samples; the times where it fails (or cannot be proved) become samples and the fit runs
 // again, up to 8 rounds. fit.proof.bound is the proved bound, whatever the verdict (above the
 // tolerance only where keys closer than min_gap would be needed, or where Euler channels must change
-// branch between keys). A key segment left unproved is proved again just above the largest distance
-// evaluated on it, so its bound is within a few percent of what the playback does there, not the
-// bound of the interval the proof stopped at (fit.cpp, tighten_failed).
+// branch between keys). A key segment left unproved is fitted again alone at 60 % and 30 % of the
+// tolerance at the samples (more room for the proof between them), and where it still fails it is
+// proved again just above the largest distance evaluated on it, so its bound is within a few percent
+// of what the playback does there, not the bound of the interval the proof stopped at (fit.cpp:
+// fit_span, tighten_failed).
 //
 // Euler branches: each segment's channels follow the curve continuously from its first key (or
 // back from its second). Where that reaches the other key on another Euler branch, the channels
