@@ -768,7 +768,7 @@ def _above_cause(keys, kf, channels, worst):
                 best = (step, c, float(frames[k]))
     if best is not None:
         return (" (Blender plays %s[%d]'s key at frame %.5f for every frame within %g of it; that channel moves "
-                "fast there, and the step, %.4f°, adds to the fit's own error)"
+                "fast there, and the step, about %.3f°, adds to the fit's own error)"
                 % (keys.prop, best[1], best[2], KEY_SNAP, best[0]))
     return " (keys closer than %g frames would be needed)" % MIN_KEY_GAP
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iterator>
+#include <deque>
 #include <memory>
 #include <string>
 
@@ -389,8 +389,7 @@ KeyFit fit_span(const Curve& curve, const std::vector<double>& key_frames, const
     KeyFit fit = fit_rounds(curve, key_frames, key_values, mode, subframes, tolerance, min_gap, kFitShare);
     if (fit.proof.proven()) return fit;
     const std::size_t S = key_frames.size() - 1, C = channel_count(mode);
-    std::vector<KeyFit> retries;
-    retries.reserve(S * std::size(kRetryShares));  // no reallocation: sources point into it
+    std::deque<KeyFit> retries;  // sources point into it: a deque's elements stay put as it grows
     std::vector<Source> sources(S);
     bool replaced = false;
     for (std::size_t j = 0; j < S; ++j) {

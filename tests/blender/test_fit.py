@@ -146,7 +146,7 @@ def test_a_bound_above_the_tolerance_at_a_key_names_blenders_snap(scene):
     assert "Blender plays rotation_quaternion[" in above[0] and "'s key at frame 1.02000 for every frame within 0.0001" \
         in above[0], above
     assert "keys closer than" not in above[0] and "%.4f°" % line.max_error_deg in above[0], above
-    step = float(above[0].split("the step, ")[1].split("°")[0])
+    step = float(above[0].split("the step, about ")[1].split("°")[0])
     assert 0.5 * line.max_error_deg < step <= line.max_error_deg, above
 
 
