@@ -467,6 +467,36 @@ times: (N,) increasing frames; values: (N, C) the curve's rotations there as cha
 (quats_to_channels, with any reference; kept as given, quaternions made hemisphere-continuous); a
 sample the proof adds takes the curve's rotation as channel values continuous with the sample before.)doc");
 
+    m.def(
+        "convert_keys_proved",
+        [](py::sequence channels, const std::string& channel_interpolation, const std::string& from_name,
+           const std::string& to_name, py::handle times, py::handle values, py::handle forced, double tolerance,
+           double min_gap) {
+            const RotationMode from = parse_rotation_mode(from_name), to = parse_rotation_mode(to_name);
+            const KeyInterpolation original_ipo = parse_key_interpolation(channel_interpolation);
+            std::vector<FCurveKeys> original;
+            for (std::size_t c = 0; c < channels.size(); ++c) original.push_back(read_fcurve_keys(channels[c], c));
+            const std::vector<double> t = read_times(times);
+            const std::vector<double> v = read_channel_rows(values, to, t.size());
+            const std::vector<std::size_t> f = read_indices(forced, "forced");
+            py::gil_scoped_release release;
+            return convert_keys_proved(original, original_ipo, from, to, t, v, f, tolerance, min_gap);
+        },
+        py::arg("channels"), py::arg("channel_interpolation"), py::arg("from_mode"), py::arg("to_mode"),
+        py::arg("times"), py::arg("values"), py::arg("forced"), py::arg("tolerance"), py::arg("min_gap") = 0.01,
+        R"doc(Convert a rotation's keys to another rotation mode, proved against the original keys' own playback at
+every instant, in one call without the GIL: a ProvedKeys (BEZIER keys per channel of `to_mode`).
+
+channels: the original F-curves of `from_mode`, one per channel in order, as reduce_keys_proved takes
+them; channel_interpolation: 'LINEAR' or 'BEZIER', of every segment of every channel. times: (N,)
+increasing frames; values: (N, C) Blender's playback there as `to_mode`'s channels (quats_to_channels,
+continuous); forced: (F,) increasing indices into times that stay keys (the animator's frames), no
+inserted key within min_gap frames of them; tolerance: radians, > 0.
+
+Reduced at 90% of `tolerance` at the samples and proved between them as reduce_keys_proved does
+(the failing times become samples, up to 8 reductions); ProvedKeys.proof.bound holds at every time
+from times[0] to times[-1].)doc");
+
     py::class_<SlerpKeys>(m, "SlerpKeys", "Result of reduce_slerp: the kept samples as glTF LINEAR (slerp) keys.")
         .def_property_readonly("indices", [](const SlerpKeys& r) { return index_array(r.indices); },
                                "kept sample indices (int64), increasing; first and last included")

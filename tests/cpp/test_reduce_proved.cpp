@@ -497,3 +497,50 @@ TEST(ReduceProved, GimbalLockWithinAFrameGetsAKeyBetweenFrames) {
     const CurveMotion reference_motion(curve);
     EXPECT_LE(dense_max(r.keys, mode, reference_motion, dense_times(1.0, 44.0, 64, rng), {}), r.proof.bound);
 }
+
+// A change of rotation mode (convert_keys_proved): Euler XYZ keys whose BEZIER handles swing between
+// frames, converted to quaternion, ZXY and axis-angle with every tenth frame kept as a key. The
+// result is proved against the XYZ playback at every instant, and Blender's playback of the new keys
+// (emulated) stays within the proved bound at 64 points per frame and as many random times.
+TEST(ReduceProved, ConversionIsProvedAgainstTheOriginalModesPlayback) {
+    std::mt19937 rng(13);
+    const double tol = 0.05 * kDeg;
+    const RotationMode from = parse_rotation_mode("XYZ");
+    const Original o = make_original(21, from, 60, KeyInterpolation::BEZIER, 4.0);
+    const PlaybackMotion original(o.channels, o.interpolation, from);
+    std::vector<std::size_t> forced;
+    for (std::size_t i = 0; i < o.times.size(); i += 10) forced.push_back(i);
+    forced.push_back(o.times.size() - 1);
+    std::vector<Quat> q(o.times.size());
+    for (std::size_t i = 0; i < q.size(); ++i) q[i] = original.at(o.times[i]);
+    for (const char* name : {"QUATERNION", "ZXY", "AXIS_ANGLE"}) {
+        const RotationMode to = parse_rotation_mode(name);
+        const std::vector<double> values = quats_to_channels(q, to);
+        const ProvedKeys r = convert_keys_proved(o.channels, o.interpolation, from, to, o.times, values, forced, tol, 0.01);
+        EXPECT_TRUE(r.proof.proven()) << name << ": bound " << r.proof.bound / kDeg << "° at " << r.proof.worst_time;
+        EXPECT_LE(r.proof.bound, tol) << name;
+        EXPECT_TRUE(r.copied.empty()) << name;
+        for (const ReducedChannel& ch : r.keys.channels) {
+            for (std::size_t k : forced)
+                EXPECT_TRUE(std::binary_search(ch.frames.begin(), ch.frames.end(), o.times[k]))
+                    << name << ": no key at forced frame " << o.times[k];
+            for (std::size_t a = 1; a < ch.frames.size(); ++a)
+                EXPECT_GT(ch.frames[a] - ch.frames[a - 1], 0.0) << name;
+        }
+        double where = 0.0;
+        const double d = dense_max(r.keys, to, original, dense_times(o.times.front(), o.times.back(), 64, rng), {}, &where);
+        EXPECT_LE(d, r.proof.bound) << name << ": " << d / kDeg << "° at frame " << where;
+    }
+    const RotationMode quat = parse_rotation_mode("QUATERNION");
+    const std::vector<double> values = quats_to_channels(q, quat);
+    expect_invalid([&] { convert_keys_proved(o.channels, o.interpolation, from, quat, o.times, values, {3, 2}, tol, 0.01); },
+                   "forced[1]: sample 2 is not after the one before");
+    expect_invalid([&] { convert_keys_proved(o.channels, o.interpolation, from, quat, o.times, values, {0, 60}, tol, 0.01); },
+                   "forced[1]: sample 60 does not exist (60 samples)");
+    expect_invalid([&] { convert_keys_proved(o.channels, o.interpolation, from, quat, o.times, values, {}, 0.0, 0.01); },
+                   "tolerance: must be above 0");
+    expect_invalid([&] { convert_keys_proved(o.channels, o.interpolation, from, quat, o.times, values, {}, tol, -1.0); },
+                   "min_gap");
+    expect_invalid([&] { convert_keys_proved(o.channels, o.interpolation, quat, quat, o.times, values, {}, tol, 0.01); },
+                   "channels");
+}

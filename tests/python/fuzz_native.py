@@ -43,7 +43,7 @@ LONG = os.environ.get("QUATCURVE_FUZZ_LONG") == "1"
 EXAMPLES = int(os.environ.get("QUATCURVE_FUZZ_EXAMPLES", "20000" if LONG else "130"))
 EXAMPLE_SHARE = {"reduce_keys": 0.5, "reduce_keys_euler": 0.5, "reduce_keys_axis_angle": 0.5, "fit_keys": 0.5,
                  "fit_through_keys": 0.5, "fit_channels": 0.5, "FitQueue": 0.5,
-                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5,
+                 "reduce_keys_proved": 0.5, "reduce_curve_proved": 0.5, "convert_keys_proved": 0.5, "reduce_slerp_proved": 0.5, "Skeleton": 0.5,
                  "smooth_rotations": 0.5, "clean_rotations": 0.5}  # slower targets: fewer examples
 # The smoke run reports the first failing example as found (with its inputs); the long campaign,
 # or QUATCURVE_FUZZ_SHRINK=1, also shrinks it to a smaller one first.
@@ -1966,6 +1966,51 @@ def build_reduce_keys_proved(fn, d):
     return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
 
 
+def build_convert_keys_proved(fn, d):
+    """convert_keys_proved: random original F-curves of any mode (as reduce_keys_proved's), converted
+    to another mode with random forced samples, proved against the original's playback; checked by
+    dense evaluation of both (emulated), nowhere above the bound; every forced frame a key of every
+    channel."""
+    rng = d.rng
+    modes = ("QUATERNION", "AXIS_ANGLE") + ORDERS
+    source = d.pick(modes, "from_mode")
+    target = d.pick(tuple(m for m in modes if m != source), "to_mode")
+    channels, channel_ipo, times, sampled = draw_original(d, source)
+    values = qc.quats_to_channels(qc.channels_to_quats(sampled, source), target)
+    forced = np.unique(np.r_[0, len(times) - 1, rng.integers(0, len(times), int(rng.integers(0, 5)))]).astype(np.int64)
+    tol = float(d.pick((1e-4, 1e-3, 0.01, 0.05), "tolerance"))
+    form = d.pick(("ok",) * 6 + ("unsorted", "tolerance", "forced", "channels", "width"), "form")
+    args, must_fail = [channels, channel_ipo, source, target, times, values, forced, tol, 0.01], ""
+    if form == "unsorted" and len(times) > 1:
+        args[4] = times[::-1].copy()
+        must_fail = "unsorted times"
+    elif form == "tolerance":
+        args[7] = d.pick((0.0, -1.0, NAN, INF), "bad_tolerance")
+        must_fail = f"tolerance {args[7]!r}"
+    elif form == "forced":
+        args[6] = d.pick((forced[::-1].copy() if len(forced) > 1 else np.array([len(times)]),
+                          np.array([len(times) + 3])), "bad_forced")
+        must_fail = f"forced {args[6]!r}"
+    elif form == "channels":
+        args[0] = channels[:-1]
+        must_fail = "a channel missing"
+    elif form == "width":
+        args[5] = values[:, :-1]
+        must_fail = "values of the wrong width"
+
+    def reference(ts):
+        return playback_quats(channels, channel_ipo, source, ts)
+
+    def check(out):
+        proved_keys_checks(out, tol, target, "BEZIER", reference, times[0], times[-1], np.zeros((0, 2)), rng)
+        expect(len(out.copied) == 0, f"copied {out.copied!r} in a conversion")
+        for c, ch in enumerate(out.keys.channels):
+            missing = np.setdiff1d(times[forced], ch.frames)
+            expect(len(missing) == 0, lambda: f"channel {c}: no key at forced frames {missing!r}")
+
+    return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
+
+
 def build_reduce_curve_proved(fn, d):
     """reduce_curve_proved: samples of a method's curve through random keys as channel values of any
     mode, reduced and proved against the curve; checked by dense evaluation, nowhere above the bound."""
@@ -2731,6 +2776,7 @@ REGISTRY.update({
     "prove_playback": build_prove_playback,
     "reduce_keys_proved": build_reduce_keys_proved,
     "reduce_curve_proved": build_reduce_curve_proved,
+    "convert_keys_proved": build_convert_keys_proved,
     "reduce_slerp_proved": build_reduce_slerp_proved,
     "ProvedSlerpKeys": _not_constructible,
     "ProvedKeys": _not_constructible,

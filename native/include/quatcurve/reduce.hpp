@@ -201,4 +201,20 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
                                const std::vector<double>& values, double tolerance,
                                KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
 
+// A change of rotation mode proved at every instant (the add-on's convert): the samples (times,
+// values: n rows of channel_count(to) values, Blender's playback of `original` there turned into
+// `to`'s channels, continuous from sample to sample) reduced to BEZIER keys in mode `to` per channel,
+// with a key on every `forced` sample (indices into times, increasing; no inserted key within
+// min_gap frames of one), and their playback proved against the original's own (channel_count(from)
+// F-curves of mode `from`, every segment of `original_interpolation`) at every time from the first
+// sample to the last, round after round as reduce_keys_proved does; a sample the proof adds takes the
+// original's rotation there as `to`'s channels, continuous with the sample before. Nothing is
+// copied: Blender swings through a quaternion original's own sign flip, and the keys follow that swing
+// as far as the proof reaches (its bound says how far). Throws InvalidArgument as reduce_keys_proved,
+// for a tolerance that is not above 0 and for forced indices that do not increase within the samples.
+ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
+                               const RotationMode& from, const RotationMode& to, const std::vector<double>& times,
+                               const std::vector<double>& values, const std::vector<std::size_t>& forced,
+                               double tolerance, double min_gap);
+
 }  // namespace quatcurve
