@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import cycles, fcurves, fit, methods, native, targets
+from . import cycles, fcurves, fit, methods, native, reduce, targets
 from .workers import parallel_imap
 from .targets import TargetError
 
@@ -105,6 +105,8 @@ class Source:
     selected: np.ndarray
     source_keys: int
     loop: cycles.Loop = None
+    original: tuple = None  # reduce.read_original's (channels, interpolation): the playback the proof emulates
+    between: str = ""       # why the conversion is not proved between samples (original is None)
 
 
 def _where(target, action):
@@ -173,11 +175,16 @@ def read_source(target, action, channels, slot, mode, subframes):
         mine = on & (key_types != fit.KEY_TYPE_GENERATED)
         types[at[mine]] = key_types[mine]  # the first channel keyed there wins (read last)
         selected[at[on]] |= key_selected[on]
+    original, between = reduce.read_original(targets.Playback(target, mode, prop, curves, False), times)
+    if original is not None and loop is not None and any(
+            p is not None and (p[0][0] != keyed[0] or p[0][-1] != keyed[-1]) for p in per_channel):
+        original, between = None, "its loop's channels have different keyed ranges"
     # F-curves without a group go into the one Blender's keying would make (the bone's name, or
     # "Object Transforms"), where tools that look channels up by group (Rigify's) find them.
     group = channels.group_of(path, count) or (target.bone if target.bone is not None else "Object Transforms")
     return Source(target, target.name, where, action, channels, slot, mode, prop, path, group,
-                  times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys, loop)
+                  times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys, loop,
+                  original, between)
 
 
 def refuse_drivers(target, modes):
@@ -328,7 +335,9 @@ def _find_record(action, slot, owner_path):
 @dataclass(eq=False)
 class Plan:
     """What convert writes for one Source: per channel of the new mode (frames, values, handle_left,
-    handle_right, types, selected), and the fit's error (radians, Blender's evaluation emulated)."""
+    handle_right, types, selected), the fit's error at the samples (radians, Blender's evaluation
+    emulated) and the proof's bound at every instant from the first sample to the last (radians; None
+    when not proved: Source.between says why), with the frame where the bound is reached."""
     source: Source
     mode: str
     prop: str
@@ -336,6 +345,8 @@ class Plan:
     max_error: float
     keys: int
     generated: int
+    bound: float = None
+    worst_frame: float = None
 
 
 def plan(source, settings):
@@ -344,17 +355,26 @@ def plan(source, settings):
     mode = settings.rotation_mode
     prop, _ = fcurves.rotation_property(mode)
     reference = source.first if family(mode) == family(source.mode) else None
+    bound = worst = None
     try:
         values = qc.quats_to_channels(source.quats, mode, reference)
-        fitted = qc.fit_keys(source.times, values, source.forced, math.radians(settings.tolerance), mode=mode,
-                             interpolation="BEZIER", synchronized=False, min_gap=fit.MIN_KEY_GAP)
+        if source.original is not None:
+            channels_in, interpolation = source.original
+            proved = qc.convert_keys_proved(channels_in, interpolation, source.mode, mode, source.times, values,
+                                            source.forced, math.radians(settings.tolerance), fit.MIN_KEY_GAP)
+            fitted, bound, worst = proved.keys, proved.proof.bound, proved.proof.worst_time
+        else:
+            fitted = qc.fit_keys(source.times, values, source.forced, math.radians(settings.tolerance), mode=mode,
+                                 interpolation="BEZIER", synchronized=False, min_gap=fit.MIN_KEY_GAP)
     except ValueError as error:
         raise ConvertError("%s: %s" % (source.where, error)) from None
     channels, keys, generated = [], 0, 0
-    F = len(source.forced)
+    forced_frames = source.times[source.forced]
+    F = len(forced_frames)
     for ch in fitted.channels:
-        at = np.searchsorted(source.forced, ch.indices)
-        on = (at < F) & (source.forced[np.minimum(at, F - 1)] == ch.indices)
+        # By frame: the proof's added samples shift the fit's indices past source.times.
+        at = np.searchsorted(forced_frames, ch.frames)
+        on = (at < F) & (forced_frames[np.minimum(at, F - 1)] == ch.frames)
         types = np.full(len(ch.frames), fit.KEY_TYPE_GENERATED, dtype=np.int64)
         types[on] = source.types[at[on]]
         selected = np.zeros(len(ch.frames), dtype=bool)
@@ -363,7 +383,7 @@ def plan(source, settings):
         generated += int((types == fit.KEY_TYPE_GENERATED).sum())
         channels.append((ch.frames.copy(), ch.values.copy(), ch.handle_left.copy(), ch.handle_right.copy(),
                          types, selected))
-    return Plan(source, mode, prop, channels, fitted.max_error, keys, generated)
+    return Plan(source, mode, prop, channels, fitted.max_error, keys, generated, bound, worst)
 
 
 # ---- writing ------------------------------------------------------------------------------------------
@@ -436,7 +456,9 @@ class TargetResult:
     name: str
     from_mode: str
     to_mode: str
-    actions: list = field(default_factory=list)   # (action name, keys before, keys after, generated, max error °)
+    # (action name, keys before, keys after, generated, max error ° at the samples, bound ° at every
+    # instant or None, the frame of the bound, why not proved)
+    actions: list = field(default_factory=list)
     skipped: str = ""
     notes: list = field(default_factory=list)
 
@@ -446,10 +468,15 @@ class TargetResult:
         if not self.actions:
             return "%s: %s → %s, no rotation keys (the pose is kept)" % (self.name, self.from_mode, self.to_mode)
         parts = []
-        for action, before, after, generated, error in self.actions:
-            over = "" if error <= tolerance else " ABOVE the tolerance: keys too close to insert between"
-            parts.append("'%s' %d → %d keys (%d generated), max error %.4f°%s"
-                         % (action, before, after, generated, error, over))
+        for action, before, after, generated, error, bound, worst, between in self.actions:
+            if bound is None:
+                over = "" if error <= tolerance else " ABOVE the tolerance: keys too close to insert between"
+                how = "max error %.4f° at every checked point%s (not proved between them: %s)" % (error, over, between)
+            else:
+                over = ("" if bound <= tolerance else " ABOVE the tolerance near frame %s: 8 fits with the proof's "
+                        "failing times added as samples did not bring the keys within it there" % targets.num(worst))
+                how = "within %.4f° at every instant%s (max error %.4f° at the samples)" % (bound, over, error)
+            parts.append("'%s' %d → %d keys (%d generated), %s" % (action, before, after, generated, how))
         return "%s: %s → %s: %s" % (self.name, self.from_mode, self.to_mode, "; ".join(parts))
 
 
@@ -466,10 +493,15 @@ class ConvertResult:
     def summary(self):
         done = self.converted
         rows = [a for t in done for a in t.actions]
-        return ("Converted %d target%s to %s (%d action%s, %d → %d keys, %d generated, max error %.4f°) in %.2f s"
+        bounds = [a[5] for a in rows if a[5] is not None]
+        within = sum(b <= self.settings.tolerance for b in bounds)
+        above = len(bounds) - within
+        return ("Converted %d target%s to %s (%d action%s, %d → %d keys, %d generated, max error %.4f° at the "
+                "samples; %d of %d proved within the tolerance at every instant%s) in %.2f s"
                 % (len(done), "" if len(done) == 1 else "s", self.settings.rotation_mode, len({a[0] for a in rows}),
                    "" if len({a[0] for a in rows}) == 1 else "s", sum(a[1] for a in rows), sum(a[2] for a in rows),
-                   sum(a[3] for a in rows), max([a[4] for a in rows] or [0.0]), self.seconds))
+                   sum(a[3] for a in rows), max([a[4] for a in rows] or [0.0]), within, len(rows),
+                   ", %d ABOVE it (bound %.4f°)" % (above, max(bounds)) if above else "", self.seconds))
 
     def lines(self):
         return [t.line(self.settings.tolerance) for t in self.targets] + [n for t in self.targets for n in t.notes]
@@ -493,7 +525,8 @@ def convert(found, settings):
         for source in sources:
             p = next(plans)
             row.actions.append((source.action.name, source.source_keys, p.keys, p.generated,
-                                math.degrees(p.max_error)))
+                                math.degrees(p.max_error), None if p.bound is None else math.degrees(p.bound),
+                                p.worst_frame, source.between))
     plans = iter(planned)
     for target, row, sources in work:
         for _ in sources:
