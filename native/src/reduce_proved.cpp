@@ -10,6 +10,7 @@
 
 #include "quatcurve/channels.hpp"
 #include "quatcurve/errors.hpp"
+#include "quatcurve/euler.hpp"
 #include "quatcurve/reduce.hpp"
 #include "reduce_impl.hpp"
 
@@ -38,6 +39,9 @@ constexpr std::size_t kMinEvaluations = 65536;
 
 // The reference's channel values at t, continuous with `before` (the sample before t).
 using ValuesAt = std::function<void(double t, const double* before, double* out)>;
+// Makes the samples' rows one continuous lift again after samples were added between them (empty:
+// the rows are the reference's own channel values, kept as they are).
+using Relift = std::function<void(std::vector<double>& rows)>;
 
 // The samples of a reduction: the given ones (candidates for keys) and those added (checked, and keys
 // only where open_candidates opens them: a reduction keeps keys on the frames it was given).
@@ -365,7 +369,7 @@ bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double t
 ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_on, const ValuesAt& values_at,
                          const RotationMode& mode, const std::vector<double>& times, std::vector<double> values,
                          double tolerance, KeyInterpolation ipo, bool synchronized,
-                         std::vector<unsigned char> forced = {}, double min_gap = 0.0) {
+                         std::vector<unsigned char> forced = {}, double min_gap = 0.0, const Relift& relift = {}) {
     ProvedKeys out;
     const std::size_t C = channel_count(mode);
     Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1),
@@ -384,6 +388,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
     }
     std::vector<Piece> pieces = make_pieces(times, reference_on);
     add_midpoints(values_at, C, s);
+    if (relift) relift(s.values);
     for (int round = 1;; ++round) {
         out.keys = reduce_samples(s, mode, kReduceShare * tolerance, ipo, synchronized, min_gap);
         if (out.keys.max_error > kReduceShare * tolerance && open_candidates(out.keys, mode, kReduceShare * tolerance, s))
@@ -392,6 +397,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
         out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
         if (out.proof.proven() || round >= kProofRounds) break;
         if (add_samples(out.proof, values_at, C, s) == 0) break;
+        if (relift) relift(s.values);
     }
     if (!out.proof.proven()) out.proof = tighten_pieces(out.keys, mode, reference, s.times, pieces);
     out.times = std::move(s.times);
@@ -759,8 +765,24 @@ ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInter
         for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
         return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, from);
     };
+    // Euler rows: one compatible chain from the first sample on, again after every insertion. The
+    // given rows' branches were chosen between samples a quarter frame apart; where the path passes
+    // near gimbal lock the nearest branch there may be the other one, and a sample added before such a
+    // row, continuous with the row before it, would leave a change of branch between two neighbouring
+    // samples, which Blender interpolates channel by channel, off the rotation (a quaternion path 1.5°
+    // from XYZ's lock: 1.55° between two samples 1/512 frame apart). Re-chained, the rows follow the
+    // path as densely as it is sampled.
+    const Relift relift = [&](std::vector<double>& r) {
+        if (to.kind != RotationMode::Kind::euler) return;
+        const std::size_t n = r.size() / 3;
+        std::vector<Vec3> a(n);
+        for (std::size_t i = 0; i < n; ++i) a[i] = Vec3(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+        euler_filter(a.data(), n, to.order);
+        for (std::size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) r[3 * i + c] = a[i][c];
+    };
     ProvedKeys out = reduce_proved(playback, reference_on, values_at, to, times, std::move(rows), tolerance,
-                                   KeyInterpolation::BEZIER, false, std::move(flags), min_gap);
+                                   KeyInterpolation::BEZIER, false, std::move(flags), min_gap, relift);
     out.copied_interpolation = original_interpolation;
     return out;
 }
