@@ -596,18 +596,31 @@ def test_random_sources_play_as_before(scene):
         if bound is None:
             assert between, case
             continue
+        assert bound <= TOL, (case, result.lines())
         err = np.degrees(angles_between(fcurve_quats(obj, dense), dense_before))
-        assert err.max() <= max(bound, TOL) + 1e-4, "case %d: %s → %s (%s, keys at %s): %.5f° at frame %s, proved %.5f°" % (
+        assert err.max() <= TOL + 1e-4, "case %d: %s → %s (%s, keys at %s): %.5f° at frame %s, proved %.5f°" % (
             case, source, target, usual, frames.tolist(), err.max(), dense[err.argmax()], bound)
-        print("case", case, source, target, usual, "bound %.4f dense %.4f" % (bound, err.max()))
-        if bound > TOL:
-            assert "ABOVE" in result.lines()[0]
-            continue
         proved += 1
         worst_dense = max(worst_dense, err.max())
-    assert proved >= 3
+    assert proved >= 4
     print("[convert random] Blender %s: 24 cases, max %.4f° at quarter frames; %d proved, max %.4f° at 64 points "
           "per frame" % (bpy.app.version_string, worst, proved, worst_dense))
+
+
+def test_a_bound_above_the_tolerance_is_named_with_its_frame():
+    """The result line of a conversion whose proof stays above the tolerance (bound, frame) and of one
+    not proved (why), as the operator and the CLI print them."""
+    row = convert.TargetResult("Bone", "XYZ", "QUATERNION",
+                               actions=[("Walk", 3, 8, 2, 0.0447, 0.2133, 12.5, ""),
+                                        ("Run", 3, 6, 1, 0.0312, None, None, "rotation_euler[1] has CONSTANT keys")])
+    line = row.line(0.05)
+    assert ("'Walk' 3 → 8 keys (2 generated), within 0.2133° at every instant ABOVE the tolerance near frame 12.5: "
+            "8 fits with the proof's failing times added as samples did not bring the keys within it there (max "
+            "error 0.0447° at the samples)") in line, line
+    assert ("'Run' 3 → 6 keys (1 generated), max error 0.0312° at every checked point (not proved between them: "
+            "rotation_euler[1] has CONSTANT keys)") in line, line
+    result = convert.ConvertResult(convert.ConvertSettings(rotation_mode="QUATERNION"), [row])
+    assert "0 of 2 proved within the tolerance at every instant, 1 ABOVE it (bound 0.2133°)" in result.summary()
 
 
 def fcurve_quats(owner, times):
@@ -658,3 +671,38 @@ def test_uneven_keys_convert_proved_at_every_instant(scene, mode, tmp_path):
     assert err.max() <= TOL + 1e-4, "%.5f° at frame %.6f" % (err.max(), times[err.argmax()])
     print("[convert uneven] Blender %s, XYZ → %s: %s; max %.4f° at %d times" % (
         bpy.app.version_string, mode, uneven.split(": ", 2)[-1], err.max(), len(times)))
+
+
+def test_a_path_near_gimbal_lock_keeps_one_euler_branch(scene, tmp_path):
+    """Twelve quaternion Bezier bones, keys 40-150° apart (the benchmark's scene), converted to XYZ:
+    bone Q2 passes 1.5° from XYZ's gimbal lock near frame 16.75, where its X and Z channels swing by
+    about 200° a frame. Its channels stay on one Euler branch from sample to sample, also where the
+    proof adds samples (before, a change of branch was left between two samples 1/512 frame apart and
+    played 1.55° off the rotation there, bound ABOVE the tolerance); every bone is proved, and Blender's
+    playback of the saved file in a fresh process stays within the tolerance of the playback before at
+    64 points per frame."""
+    from mathutils import Quaternion
+    rng = np.random.default_rng(12)
+    rig = add_rig("Rig", bones=tuple("Q%d" % i for i in range(12)))
+    for pb in rig.pose.bones:
+        q = Quaternion()
+        for frame in (1, 11, 26, 40, 60):
+            pb.rotation_quaternion = q
+            pb.keyframe_insert("rotation_quaternion", frame=frame, group=pb.name)
+            axis = rng.normal(size=3)
+            q = Quaternion(axis / np.linalg.norm(axis), math.radians(rng.uniform(40, 150))) @ q
+    bpy.ops.object.mode_set(mode="OBJECT")
+    source = rig.copy()
+    bpy.context.collection.objects.link(source)
+    fcurves.assign_action(source, fcurves.copy_action(fcurves.active_action(rig), "Source"))
+    found = [Target(rig, name) for name in rig.pose.bones.keys()]
+    result = convert.convert(found, convert.ConvertSettings(rotation_mode="XYZ", tolerance=TOL))
+    assert "12 of 12 proved within the tolerance at every instant)" in result.summary(), result.lines()
+    times = np.arange(64, 60 * 64 + 1) / 64.0
+    blend = tmp_path / "near_lock.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    names = rig.pose.bones.keys()
+    got = fresh_blender_quats(blend, [[o, b] for o in (rig.name, source.name) for b in names], times, tmp_path)
+    for b in names:
+        err = np.degrees(angles_between(got["%s/%s" % (rig.name, b)], got["%s/%s" % (source.name, b)]))
+        assert err.max() <= TOL + 1e-4, "%s: %.5f° at frame %s" % (b, err.max(), times[err.argmax()])
