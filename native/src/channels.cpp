@@ -60,17 +60,7 @@ std::vector<double> euler_channels(const std::vector<Quat>& q, EulerOrder order,
     } else {
         for (std::size_t s = 0; s < n; ++s)
             angles[s] = reference_rows ? quat_to_euler_compat(q[s], order, ref(s)) : quat_to_euler(q[s], order);
-        if (n >= 2) {
-            // Filtering from a locked sample would leave the choice between its two (equally near)
-            // solutions to rounding; from the sample farthest from the lock it is unambiguous.
-            std::size_t anchor = 0;
-            for (std::size_t s = 1; s < n; ++s)
-                if (gimbal_distance(angles[s], order) > gimbal_distance(angles[anchor], order)) anchor = s;
-            euler_filter(angles.data() + anchor, n - anchor, order);
-            std::reverse(angles.begin(), angles.begin() + anchor + 1);
-            euler_filter(angles.data(), anchor + 1, order);
-            std::reverse(angles.begin(), angles.begin() + anchor + 1);
-        }
+        euler_filter_from_anchor(angles.data(), n, order);
     }
     std::vector<double> out(3 * n);
     for (std::size_t s = 0; s < n; ++s)

@@ -5,6 +5,7 @@
 #include "quatcurve/euler.hpp"
 
 #include <cfloat>
+#include <algorithm>
 #include <cmath>
 
 #include "numbers.hpp"
@@ -250,6 +251,17 @@ Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order, const Vec3& compat) 
 
 void euler_filter(Vec3* angles, std::size_t n, EulerOrder order) {
     for (std::size_t s = 1; s < n; ++s) angles[s] = euler_compat(angles[s], order, angles[s - 1]);
+}
+
+void euler_filter_from_anchor(Vec3* angles, std::size_t n, EulerOrder order) {
+    if (n < 2) return;
+    std::size_t anchor = 0;
+    for (std::size_t s = 1; s < n; ++s)
+        if (gimbal_distance(angles[s], order) > gimbal_distance(angles[anchor], order)) anchor = s;
+    euler_filter(angles + anchor, n - anchor, order);
+    std::reverse(angles, angles + anchor + 1);
+    euler_filter(angles, anchor + 1, order);
+    std::reverse(angles, angles + anchor + 1);
 }
 
 double gimbal_distance(const Vec3& angles, EulerOrder order) {

@@ -364,6 +364,27 @@ bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double t
     return opened;
 }
 
+// Euler rows made one compatible chain again after every insertion of samples (euler_filter_from_anchor:
+// the row farthest from gimbal lock keeps its values); empty for other modes. The given rows' branches
+// were chosen between samples a frame or a quarter frame apart; where the path passes near gimbal
+// lock its channels swing fast and the branch nearest the row before may be the other one, so a
+// sample added before such a row, continuous with the row before it, would leave a change of branch
+// between two neighbouring samples, which Blender interpolates channel by channel, off the rotation
+// (a quaternion path 1.5° from XYZ's lock: 1.55° between two samples 1/512 frame apart; SQUAD and
+// SLERP bakes reduced to XYZ or ZXY through random keys: 34 of 240 above 0.05° after 8 rounds, up to
+// 11.7°). Re-chained, the rows follow the path as densely as it is sampled.
+Relift euler_relift(const RotationMode& mode) {
+    if (mode.kind != RotationMode::Kind::euler) return {};
+    return [order = mode.order](std::vector<double>& r) {
+        const std::size_t n = r.size() / 3;
+        std::vector<Vec3> a(n);
+        for (std::size_t i = 0; i < n; ++i) a[i] = Vec3(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+        euler_filter_from_anchor(a.data(), n, order);
+        for (std::size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) r[3 * i + c] = a[i][c];
+    };
+}
+
 // forced: flags of the given samples that are keys in every reduction (empty: none), no other key
 // within min_gap frames of them.
 ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_on, const ValuesAt& values_at,
@@ -730,7 +751,8 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
     };
     const KeptBreaks kept(motion);
     const ReferenceOn whole = [](double, double) { return std::unique_ptr<Motion>(); };
-    return reduce_proved(kept, whole, values_at, mode, times, rows, tolerance, interpolation, synchronized);
+    return reduce_proved(kept, whole, values_at, mode, times, rows, tolerance, interpolation, synchronized, {}, 0.0,
+                         euler_relift(mode));
 }
 
 ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
@@ -765,22 +787,7 @@ ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInter
         for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
         return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, from);
     };
-    // Euler rows: one compatible chain from the first sample on, again after every insertion. The
-    // given rows' branches were chosen between samples a quarter frame apart; where the path passes
-    // near gimbal lock the nearest branch there may be the other one, and a sample added before such a
-    // row, continuous with the row before it, would leave a change of branch between two neighbouring
-    // samples, which Blender interpolates channel by channel, off the rotation (a quaternion path 1.5°
-    // from XYZ's lock: 1.55° between two samples 1/512 frame apart). Re-chained, the rows follow the
-    // path as densely as it is sampled.
-    const Relift relift = [&](std::vector<double>& r) {
-        if (to.kind != RotationMode::Kind::euler) return;
-        const std::size_t n = r.size() / 3;
-        std::vector<Vec3> a(n);
-        for (std::size_t i = 0; i < n; ++i) a[i] = Vec3(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
-        euler_filter(a.data(), n, to.order);
-        for (std::size_t i = 0; i < n; ++i)
-            for (int c = 0; c < 3; ++c) r[3 * i + c] = a[i][c];
-    };
+    const Relift relift = euler_relift(to);
     ProvedKeys out = reduce_proved(playback, reference_on, values_at, to, times, std::move(rows), tolerance,
                                    KeyInterpolation::BEZIER, false, std::move(flags), min_gap, relift);
     out.copied_interpolation = original_interpolation;

@@ -62,6 +62,10 @@ Vec3 blender_quat_to_euler(const Quat& q, EulerOrder order, const Vec3& compat);
 // against the (already filtered) previous one. Removes flips between the two solutions and 2π
 // jumps without changing any orientation. n = 0 or 1 leaves the array unchanged.
 void euler_filter(Vec3* angles, std::size_t n, EulerOrder order);
+// euler_filter both ways from the triple farthest from gimbal lock (gimbal_distance; the first of
+// equals), which keeps its values: filtering from a locked triple would leave the choice between its
+// two (equally near) solutions to rounding, from the farthest one it is unambiguous.
+void euler_filter_from_anchor(Vec3* angles, std::size_t n, EulerOrder order);
 // Distance (radians, in [0, π/2]) of the middle angle b from the gimbal-lock set b ≡ π/2 (mod π):
 // atan2(|cos b|, |sin b|). 0 is locked, π/2 is as far as it gets.
 double gimbal_distance(const Vec3& angles, EulerOrder order);

@@ -196,7 +196,10 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
 // The same against a method's curve: values are the curve's rotations at `times` as channel values of
 // `mode` (quats_to_channels, with whatever reference the caller chose: they are kept as given, made
 // hemisphere-continuous for quaternions); a sample the proof adds takes the curve's rotation there
-// as channel values continuous with the sample before. Nothing is copied (`copied` is empty).
+// as channel values continuous with the sample before, and Euler rows are then made one compatible
+// chain again (euler_filter_from_anchor: the row farthest from gimbal lock keeps its values), so no
+// change of branch is left between two samples where the path swings past gimbal lock between
+// frames. Nothing is copied (`copied` is empty).
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
                                const std::vector<double>& values, double tolerance,
                                KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
@@ -208,7 +211,8 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
 // min_gap frames of one), and their playback proved against the original's own (channel_count(from)
 // F-curves of mode `from`, every segment of `original_interpolation`) at every time from the first
 // sample to the last, round after round as reduce_keys_proved does; a sample the proof adds takes the
-// original's rotation there as `to`'s channels, continuous with the sample before. Nothing is
+// original's rotation there as `to`'s channels, continuous with the sample before (Euler rows
+// chained again as reduce_curve_proved's). Nothing is
 // copied: Blender swings through a quaternion original's own sign flip, and the keys follow that swing
 // as far as the proof reaches (its bound says how far). Throws InvalidArgument as reduce_keys_proved,
 // for a tolerance that is not above 0 and for forced indices that do not increase within the samples.
