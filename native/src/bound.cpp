@@ -753,4 +753,21 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
     return r;
 }
 
+void tighten_proof(const Motion& a, const Motion& b, const std::vector<double>& times, double min_step,
+                   std::size_t max_evaluations, PlaybackBound& proof) {
+    if (proof.proven()) return;
+    double level = 1.05 * proof.max_evaluated;
+    for (int i = 0; i < 6 && level < proof.bound; ++i) {
+        const PlaybackBound again = prove_within(a, b, times, level, min_step, max_evaluations);
+        proof.evaluations += again.evaluations;
+        proof.max_evaluated = std::fmax(proof.max_evaluated, again.max_evaluated);
+        if (again.bound < proof.bound) {
+            proof.bound = again.bound;
+            proof.worst_time = again.worst_time;
+        }
+        if (again.proven()) break;
+        level = std::fmax(1.5 * level, 1.05 * again.max_evaluated);
+    }
+}
+
 }  // namespace quatcurve

@@ -56,7 +56,7 @@ constexpr int kProofRounds = 8;
 // The proof halves intervals down to this (frames): a change of Euler branch beside a key at gimbal
 // lock spans 0.0105 frame, and its fast channels need steps far below 1/1024 frame to be bounded.
 constexpr double kProofMinStep = 1.0 / 65536.0;
-// The evaluations of one proof that tightens a failed segment's bound (tighten_failed): a segment
+// The evaluations of one proof that tightens a failed segment's bound (tighten_proof): a segment
 // the fit cannot hold is rare, and its bound is worth a few proofs, not an unbounded search.
 constexpr std::size_t kTightenEvaluations = 200'000;
 // An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap, and
@@ -188,30 +188,9 @@ void prove_segments(const Motion& playback, const Motion& method, double toleran
     sort_proof(fit.proof);
 }
 
-// A key segment the fit could not hold within the tolerance (its proof has violations or unproven
-// intervals): the proof stops halving an interval at a violating end, so its bound there is that
-// whole interval's, up to π, however close the playback stays. Proved again at a level just above
-// the largest distance evaluated (5 % over it, raised by half while a proof at it fails, six times
-// at most), the bound comes within that margin of what the playback does: the least of the bounds
-// found (each holds at every instant, whatever its verdict) is kept, with its worst time. The
-// violations and unproven intervals stay those of the tolerance, so the segment still reads as
-// not proved.
-void tighten_failed(const Motion& playback, const Motion& method, const std::vector<double>& span, PlaybackBound& proof) {
-    double level = proof.max_evaluated * 1.05;
-    for (int i = 0; i < 6 && level < proof.bound; ++i) {
-        const PlaybackBound again = prove_within(playback, method, span, level, kProofMinStep, kTightenEvaluations);
-        proof.evaluations += again.evaluations;
-        proof.max_evaluated = std::fmax(proof.max_evaluated, again.max_evaluated);
-        if (again.bound < proof.bound) {
-            proof.bound = again.bound;
-            proof.worst_time = again.worst_time;
-        }
-        if (again.proven()) break;
-        level = std::fmax(1.5 * level, 1.05 * again.max_evaluated);
-    }
-}
-
-// tighten_failed on every key segment of `fit` that is not proved, and their union again.
+// Every key segment of `fit` that is not proved, made tight (tighten_proof: its bound within a few
+// percent of what the playback does there, not the bound of the interval its proof stopped at), and
+// their union again.
 void tighten_failed_segments(const Motion& playback, const Motion& method, KeyFit& fit) {
     if (fit.proof.proven()) return;
     fit.proof = {};
@@ -220,7 +199,7 @@ void tighten_failed_segments(const Motion& playback, const Motion& method, KeyFi
         if (!proof.proven()) {
             const std::vector<double> span(fit.times.begin() + static_cast<std::ptrdiff_t>(fit.forced[j]),
                                            fit.times.begin() + static_cast<std::ptrdiff_t>(fit.forced[j + 1]) + 1);
-            tighten_failed(playback, method, span, proof);
+            tighten_proof(playback, method, span, kProofMinStep, kTightenEvaluations, proof);
         }
         merge_proof(fit.proof, proof);
     }

@@ -210,12 +210,10 @@ PlaybackBound prove_pieces(const ReducedKeys& keys, const RotationMode& mode, co
     return merged(std::move(all));
 }
 
-// After the last round, each piece whose proof still fails is proved again just above the largest
-// distance evaluated on it (5 % above, raised by half while that fails, at most six times; as
-// fit.cpp's tighten_failed), keeping the least bound: where the keys cannot follow the reference
-// (a Euler path through gimbal lock within a hundredth of a frame) the bound is then within a few
-// percent of what the playback does there, not the bound of the interval the proof stopped at. The
-// verdict (violations, unproven intervals) stays the one at the tolerance.
+// After the last round, each piece whose proof still fails is made tight (tighten_proof, as the
+// fit's key segments are): where the keys cannot follow the reference the bound is then within a
+// few percent of what the playback does there, not the bound of the interval the proof stopped at.
+// The verdict (violations, unproven intervals) stays the one at the tolerance.
 PlaybackBound tighten_pieces(const ReducedKeys& keys, const RotationMode& mode, const Motion& whole_reference,
                              const std::vector<double>& samples, std::vector<Piece>& pieces) {
     PlaybackBound all;
@@ -227,19 +225,7 @@ PlaybackBound tighten_pieces(const ReducedKeys& keys, const RotationMode& mode, 
             const std::vector<double> span(from, to);
             const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * span.size());
             const PlaybackMotion reduced(piece.keys, keys.interpolation, mode);
-            const Motion& reference = piece.reference ? *piece.reference : whole_reference;
-            double level = 1.05 * proof.max_evaluated;
-            for (int i = 0; i < 6 && level < proof.bound; ++i) {
-                const PlaybackBound again = prove_within(reduced, reference, span, level, kMinStep, cap);
-                proof.evaluations += again.evaluations;
-                proof.max_evaluated = std::fmax(proof.max_evaluated, again.max_evaluated);
-                if (again.bound < proof.bound) {
-                    proof.bound = again.bound;
-                    proof.worst_time = again.worst_time;
-                }
-                if (again.proven()) break;
-                level = std::fmax(1.5 * level, 1.05 * again.max_evaluated);
-            }
+            tighten_proof(reduced, piece.reference ? *piece.reference : whole_reference, span, kMinStep, cap, proof);
         }
         merge_into(all, proof);
     }
@@ -362,6 +348,33 @@ bool open_candidates(const ReducedKeys& keys, const RotationMode& mode, double t
         done = b;
     }
     return opened;
+}
+
+// A quaternion row negated where it lies in the other hemisphere from `before` (other modes: as is).
+void continue_sign(const RotationMode& mode, const double* before, double* out) {
+    if (mode.kind == RotationMode::Kind::quaternion &&
+        before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
+        for (int c = 0; c < 4; ++c) out[c] = -out[c];
+}
+
+// The channel values of `mode` at t of a reference given as rotations (`rotation_at`), continuous
+// with the sample before.
+ValuesAt rotation_values(std::function<Quat(double)> rotation_at, const RotationMode& mode) {
+    return [rotation_at = std::move(rotation_at), mode](double at, const double* before, double* out) {
+        const std::vector<double> v = quats_to_channels({rotation_at(at)}, mode, before, 1);
+        std::copy(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(channel_count(mode)), out);
+        continue_sign(mode, before, out);
+    };
+}
+
+// The original keys (of `mode`) sliced to each piece, a PlaybackMotion of a few keys.
+ReferenceOn sliced_reference(const std::vector<FCurveKeys>& original, KeyInterpolation interpolation,
+                             const RotationMode& mode) {
+    return [&original, interpolation, mode](double t0, double t1) -> std::unique_ptr<Motion> {
+        std::vector<FCurveKeys> sliced;
+        for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
+        return std::make_unique<PlaybackMotion>(std::move(sliced), interpolation, mode);
+    };
 }
 
 // Euler rows made one compatible chain again after every insertion of samples (euler_filter_from_anchor:
@@ -679,19 +692,12 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
                               bool synchronized) {
     check_rows(times, values, mode, tolerance);
     const PlaybackMotion playback(original, original_interpolation, mode);
-    const std::size_t C = channel_count(mode);
     std::vector<double> rows = values;
     const ValuesAt values_at = [&](double at, const double* before, double* out) {
         playback.values(at, out);
-        if (mode.kind == RotationMode::Kind::quaternion &&
-            before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
-            for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
+        continue_sign(mode, before, out);
     };
-    const ReferenceOn reference_on = [&](double t0, double t1) -> std::unique_ptr<Motion> {
-        std::vector<FCurveKeys> sliced;
-        for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
-        return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, mode);
-    };
+    const ReferenceOn reference_on = sliced_reference(original, original_interpolation, mode);
     if (mode.kind != RotationMode::Kind::quaternion) {
         ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
                                        interpolation, synchronized);
@@ -737,18 +743,15 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
                                bool synchronized) {
     check_rows(times, values, mode, tolerance);
     const CurveMotion motion(curve);
-    const std::size_t C = channel_count(mode);
     std::vector<double> rows = values;
     if (mode.kind == RotationMode::Kind::quaternion) make_continuous(rows);
-    const ValuesAt values_at = [&](double at, const double* before, double* out) {
-        double q[4];
-        curve.sample(&at, 1, q);
-        const std::vector<double> v = quats_to_channels({from_wxyz(q)}, mode, before, 1);
-        std::copy(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(C), out);
-        if (mode.kind == RotationMode::Kind::quaternion &&
-            before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
-            for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
-    };
+    const ValuesAt values_at = rotation_values(
+        [&curve](double at) {
+            double q[4];
+            curve.sample(&at, 1, q);
+            return from_wxyz(q);
+        },
+        mode);
     const KeptBreaks kept(motion);
     const ReferenceOn whole = [](double, double) { return std::unique_ptr<Motion>(); };
     return reduce_proved(kept, whole, values_at, mode, times, rows, tolerance, interpolation, synchronized, {}, 0.0,
@@ -772,21 +775,10 @@ ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInter
         flags[forced[a]] = 1;
     }
     const PlaybackMotion playback(original, original_interpolation, from);
-    const std::size_t C = channel_count(to);
     std::vector<double> rows = values;
     if (to.kind == RotationMode::Kind::quaternion) make_continuous(rows);
-    const ValuesAt values_at = [&](double at, const double* before, double* out) {
-        const std::vector<double> v = quats_to_channels({playback.at(at)}, to, before, 1);
-        std::copy(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(C), out);
-        if (to.kind == RotationMode::Kind::quaternion &&
-            before[0] * out[0] + before[1] * out[1] + before[2] * out[2] + before[3] * out[3] < 0.0)
-            for (std::size_t c = 0; c < C; ++c) out[c] = -out[c];
-    };
-    const ReferenceOn reference_on = [&](double t0, double t1) -> std::unique_ptr<Motion> {
-        std::vector<FCurveKeys> sliced;
-        for (const FCurveKeys& ch : original) sliced.push_back(slice_keys(ch, t0, t1));
-        return std::make_unique<PlaybackMotion>(std::move(sliced), original_interpolation, from);
-    };
+    const ValuesAt values_at = rotation_values([&playback](double at) { return playback.at(at); }, to);
+    const ReferenceOn reference_on = sliced_reference(original, original_interpolation, from);
     const Relift relift = euler_relift(to);
     ProvedKeys out = reduce_proved(playback, reference_on, values_at, to, times, std::move(rows), tolerance,
                                    KeyInterpolation::BEZIER, false, std::move(flags), min_gap, relift);

@@ -63,6 +63,22 @@ def key(owner, prop, frames_values, interpolation="LINEAR", degrees=False):
     set_interpolation(owner, prop, interpolation)
 
 
+def add_uneven_euler_keys(rng):
+    """An empty "Uneven" (XYZ) with 65 Bezier keys at uneven fractional frames (gaps of 0.011 to 12.25
+    frames, on a 1/1024 grid; `rng` draws them and the noise) on smooth sines with 2° of noise and a
+    400° spin about Z: (object, key frames)."""
+    gaps = np.r_[rng.uniform(0.02, 0.3, 30), rng.uniform(0.5, 3, 30), [0.011, 0.013, 7.5, 12.25]]
+    rng.shuffle(gaps)
+    frames = np.round((1 + np.r_[0, np.cumsum(gaps)]) * 1024) / 1024
+    angles = np.column_stack([50 * np.sin(frames / 9.0), 35 * np.sin(frames / 13.0 + 1),
+                              60 * np.sin(frames / 11.0 + 2)])
+    angles += rng.normal(scale=2.0, size=angles.shape)
+    angles[:, 2] += 400 * (frames - 1) / (frames[-1] - 1)
+    obj = add_empty("Uneven", "XYZ")
+    key(obj, "rotation_euler", zip(frames.tolist(), angles.tolist()), interpolation="BEZIER", degrees=True)
+    return obj, frames
+
+
 def rotation_fcurves(owner, prop):
     channels = fcurves.Channels.of(owner.id_data)
     path = owner.path_from_id(prop)

@@ -13,8 +13,8 @@ import bpy
 import numpy as np
 import pytest
 
-from bake_helpers import (add_empty, add_rig, angles_between, file_state, key, rotation_quat, select_bones,
-                          select_objects)
+from bake_helpers import (add_empty, add_rig, add_uneven_euler_keys, angles_between, file_state, key, rotation_quat,
+                          select_bones, select_objects)
 from test_fit import fresh_blender_quats
 from test_fit_inputs import bundled_addons, enable_bundled, generate_rigify_rig, operator_missing  # noqa: F401
 from quatcurve_blender import convert, fcurves, fit, live, targets
@@ -641,14 +641,7 @@ def test_uneven_keys_convert_proved_at_every_instant(scene, mode, tmp_path):
     every key's snap zone — stays within the tolerance of the playback before. A CONSTANT source,
     whose playback is not emulated, says so."""
     rng = np.random.default_rng(4)
-    gaps = np.r_[rng.uniform(0.02, 0.3, 30), rng.uniform(0.5, 3, 30), [0.011, 0.013, 7.5, 12.25]]
-    rng.shuffle(gaps)
-    frames = np.round((1 + np.r_[0, np.cumsum(gaps)]) * 1024) / 1024
-    angles = np.column_stack([50 * np.sin(frames / 9.0), 35 * np.sin(frames / 13.0 + 1), 60 * np.sin(frames / 11.0 + 2)])
-    angles += rng.normal(scale=2.0, size=angles.shape)
-    angles[:, 2] += 400 * (frames - 1) / (frames[-1] - 1)
-    obj = add_empty("Uneven", "XYZ")
-    key(obj, "rotation_euler", zip(frames.tolist(), angles.tolist()), interpolation="BEZIER", degrees=True)
+    obj, frames = add_uneven_euler_keys(rng)
     con = add_empty("Steps", "XYZ")
     key(con, "rotation_euler", CONSTANT_EULER, interpolation="CONSTANT", degrees=True)
     source = obj.copy()  # the source's motion, kept on a copy with its own action

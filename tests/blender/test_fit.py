@@ -12,7 +12,8 @@ import pytest
 from mathutils import Quaternion
 
 import fresh_blender
-from bake_helpers import add_empty, add_rig, angles_between, file_state, key, select_bones, select_objects
+from bake_helpers import (add_empty, add_rig, add_uneven_euler_keys, angles_between, file_state, key, select_bones,
+                          select_objects)
 from quatcurve_blender import fcurves, fit, native
 
 METHODS = ("SLERP", "NLERP", "SQUAD", "CATMULL_ROM", "TCB", "SPLINE_C2")
@@ -159,14 +160,7 @@ def test_a_segment_left_unproved_is_fitted_again_with_more_room(scene, tmp_path)
     that key segment is proved, and Blender's playback of the saved file — in a fresh process, at 64
     points per frame, 200 random times and every key's snap edges — stays within the tolerance."""
     rng = np.random.default_rng(4)
-    gaps = np.r_[rng.uniform(0.02, 0.3, 30), rng.uniform(0.5, 3, 30), [0.011, 0.013, 7.5, 12.25]]
-    rng.shuffle(gaps)
-    frames = np.round((1 + np.r_[0, np.cumsum(gaps)]) * 1024) / 1024
-    angles = np.column_stack([50 * np.sin(frames / 9.0), 35 * np.sin(frames / 13.0 + 1), 60 * np.sin(frames / 11.0 + 2)])
-    angles += rng.normal(scale=2.0, size=angles.shape)
-    angles[:, 2] += 400 * (frames - 1) / (frames[-1] - 1)
-    obj = add_empty("Uneven", "XYZ")
-    key(obj, "rotation_euler", zip(frames.tolist(), angles.tolist()), interpolation="BEZIER", degrees=True)
+    obj, frames = add_uneven_euler_keys(rng)
     target = fit.targets.Target(obj)
     keys = fit.read_animator_keys(target)
     result = fit.fit([target], fit.FitSettings(method="SPLINE_C2", tolerance=TOL))

@@ -232,4 +232,15 @@ struct PlaybackBound {
 PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<double>& times, double tolerance,
                            double min_step = 1.0 / 1024.0, std::size_t max_evaluations = 2'000'000);
 
+// A proof that failed (`proof`, of prove_within(a, b, times, …)) made tight: prove_within stops
+// halving an interval at a violating end, so its bound there is that whole interval's, up to π,
+// however close the motions stay. Proved again at a level just above the largest distance evaluated
+// (5 % over it, raised by half while a proof at it fails, six times at most; each with min_step and
+// max_evaluations), the bound comes within that margin of the motions' distance: the least of the
+// bounds found (each holds at every instant, whatever its verdict) is kept with its worst time, the
+// evaluations are added, and the violations and unproven intervals stay those of the tolerance (it
+// still reads as not proved). A proof already proved is left as it is.
+void tighten_proof(const Motion& a, const Motion& b, const std::vector<double>& times, double min_step,
+                   std::size_t max_evaluations, PlaybackBound& proof);
+
 }  // namespace quatcurve
