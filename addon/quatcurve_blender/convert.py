@@ -12,11 +12,14 @@ rotation as Blender builds it (native channels_to_quats). Those dense rotations 
 of the new mode, continuous along the samples (native quats_to_channels: quaternion signs in one
 hemisphere from sample to sample, Euler angles without flips or 360° jumps, so spins survive;
 starting from the source's own values when source and target are both Euler, both quaternion or both
-axis-angle). The native fitter (quatcurve.fit_keys) then writes BEZIER keys in the new mode: a key on
-every frame that had an animator key on any rotation channel (its key type and selection carried
-over) and as few generated keys (GENERATED, JITTER on Blender 3.4) as the tolerance needs, so that
-Blender's evaluation of the new channels stays within `tolerance` degrees of the rotation played
-before, at every sample (verified natively by emulating Blender's F-curve evaluation).
+axis-angle). The native fitter then writes BEZIER keys in the new mode: a key on every frame that had
+an animator key on any rotation channel (its key type and selection carried over) and as few
+generated keys (GENERATED, JITTER on Blender 3.4) as the tolerance needs, so that Blender's evaluation
+of the new channels stays within `tolerance` degrees of the rotation played before: at every instant
+of the keyed range where Blender's playback of the old keys is emulated bit for bit (every segment
+Bezier, or every one linear: reduce.read_original), proved against it (quatcurve.convert_keys_proved);
+otherwise at every sample (quatcurve.fit_keys, verified by emulating Blender's F-curve evaluation),
+and the result line says why it is not proved between them.
 
 Keys typed GENERATED in the source are a fit's or an earlier conversion's: they are resampled, not
 kept. The old rotation channels are removed, the new ones made in the same group, and the rotation
@@ -50,7 +53,8 @@ class ConvertError(TargetError):
 @dataclass
 class ConvertSettings:
     """rotation_mode: the new mode (MODES); tolerance: degrees, the largest angle between Blender's
-    playback after and before the conversion at every sample; subframes: samples per frame;
+    playback after and before the conversion (at every instant where proved, else at every sample);
+    subframes: samples per frame;
     actions: 'ACTIVE' (the action each target plays) or 'ALL' (every action animating its rotation)."""
     rotation_mode: str = "QUATERNION"
     tolerance: float = 0.05

@@ -31,10 +31,12 @@ def convert_properties():
                                         description="The new rotation mode"),
         "tolerance": P.FloatProperty(
             name="Tolerance (°)", default=0.05, min=1e-4, soft_max=5.0, precision=3,
-            description="Largest angle between Blender's playback after and before the conversion, at every "
-                        "frame and subframe, in degrees"),
+            description="Largest angle between Blender's playback after and before the conversion, in degrees: "
+                        "at every instant where the old keys are all Bezier or all linear (proved), else at "
+                        "every checked point"),
         "subframes": P.IntProperty(name="Subframes", default=4, min=1, max=64,
-                                   description="Points per frame where the tolerance is checked"),
+                                   description="Samples per frame the new keys are fitted to (where the conversion "
+                                               "is not proved, the points where the tolerance is checked)"),
         "actions": P.EnumProperty(name="Actions", items=ACTION_ITEMS, default="ACTIVE",
                                   description="Which actions to convert"),
     }
