@@ -389,6 +389,29 @@ int snap_overlap(double key, double t0, double t1) {
 
 }  // namespace
 
+namespace {
+
+// Whether a BEZIER segment of `ch` meeting [lo, hi] has its four control values (as Blender reads
+// them, float32) within 4 ulps of `magnitude` of each other: the only segments Blender's flat-segment
+// shortcut (or segment_controls') may take, each test being three differences below FLT_EPSILON.
+bool may_be_flat(const FCurveKeys& ch, double lo, double hi, double magnitude) {
+    const std::size_t n = ch.frames.size();
+    if (n < 2 || ch.handle_left.size() != 2 * n || ch.handle_right.size() != 2 * n) return n >= 2;
+    std::size_t j = static_cast<std::size_t>(std::upper_bound(ch.frames.begin(), ch.frames.end(), lo) - ch.frames.begin());
+    j = j == 0 ? 0 : std::min(j - 1, n - 2);
+    const double spread = 4.0 * FLT_EPSILON * magnitude;
+    for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
+        const double y[4] = {float(ch.values[j]), float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]),
+                             float(ch.values[j + 1])};
+        const double top = std::fmax(std::fmax(y[0], y[1]), std::fmax(y[2], y[3]));
+        const double bottom = std::fmin(std::fmin(y[0], y[1]), std::fmin(y[2], y[3]));
+        if (top - bottom < spread) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
 bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curvature, double* step) const {
     if (mode_.kind != RotationMode::Kind::quaternion) return false;
     // A frame in the snap zone of a key shows the key's value: the piece's value at the key, off its
@@ -413,9 +436,11 @@ bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curv
         channel_bounds(c, lo, hi, rate[c], curvature[c]);
         // A flat segment plays its first value up to the next key, whose value may differ by the
         // flatness threshold (3 × FLT_EPSILON, segment_controls); float32 values: 4 ulps of the
-        // largest magnitude around cover it.
+        // largest magnitude around cover it. Only a BEZIER segment whose four control values lie that
+        // close may be flat (for Blender or for segment_controls): elsewhere the piece is the cubic.
         const double magnitude = std::fmax(1.0, std::fmax(std::fabs(v0[c]), std::fabs(v1[c])));
-        step[c] = (partly ? reach * rate[c] : 0.0) + 4.0 * FLT_EPSILON * magnitude;
+        const bool flat = interpolation_ == KeyInterpolation::BEZIER && may_be_flat(channels_[c], lo, hi, magnitude);
+        step[c] = (partly ? reach * rate[c] : 0.0) + (flat ? 4.0 * FLT_EPSILON * magnitude : 0.0);
     }
     return true;
 }
