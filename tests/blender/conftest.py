@@ -25,8 +25,7 @@ def pytest_report_header(config):
 
 # Checks marked `per_kind` exercise a path that is the same in every Blender of one kind (the
 # executable, or the bpy module): the command line's and the batch's parsing, scheduling, crash
-# recovery and Slurm, wrapped around tasks that every pass checks in-process — and the reduction's
-# tightest tolerance, native work that every pass checks at a looser one. They run in the
+# recovery and Slurm, wrapped around tasks that every pass checks in-process. They run in the
 # executable's pass and in one bpy module's pass; CTest tells the other passes so with
 # QUATCURVE_TEST_PER_KIND=0 and names where they run. Run by hand, every pass runs them.
 def pytest_configure(config):
