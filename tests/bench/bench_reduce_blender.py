@@ -20,6 +20,7 @@ Run with any Blender:
   blender -b --factory-startup --python tests/bench/bench_reduce_blender.py -- [--module PATH]
 `--module PATH`: another build's compiled quatcurve module (e.g. one built from an earlier commit) in
 place of addon/quatcurve_blender's, to measure it with the same script.
+`--tolerance DEG`: the tolerance of every reduction and of Decimate's search (default 0.1).
 `--smoke` (tests/bench/smoke.py): mocapbank's first 60 frames, Decimate at 4 margins.
 """
 import builtins
@@ -60,7 +61,8 @@ from quatcurve_blender import fcurves, native, reduce, targets, workers  # noqa:
 
 MOCAP = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "mocap"))
 CLIPS = ("mocapbank.bvh",) if smoke.SMOKE else ("mocapbank.bvh", "freebvh.bvh")
-TOL_DEG = 0.1
+# `--tolerance DEG`: another tolerance than the 0.1° of the tables in docs/benchmarks.md.
+TOL_DEG = float(_args[_args.index("--tolerance") + 1]) if "--tolerance" in _args else 0.1
 SMOKE_FRAMES = 60
 # The add-on's native reduction is timed this many times, the best kept (the machine may be shared).
 REPEAT = 5
@@ -207,7 +209,7 @@ def search_decimate(arm, original, frames, reference):
 
 def addon_reduce(arm, original, frames, reference, bones):
     """(keys, max error in degrees, native seconds, MB of rotation channels, proved everywhere) of the
-    add-on's reduction (0.1°, BEZIER per channel) on one thread."""
+    add-on's reduction (TOL_DEG, BEZIER per channel) on one thread."""
     threads = workers.THREADS
     workers.THREADS = 1
     try:
@@ -245,7 +247,7 @@ def clip_table(clip, qc):
     reference = {name: np.stack([fcurves.read_keys(f)[1] for f in fc], axis=1)
                  for name, fc in curves.items()}
     total = sum(fcurves.key_count(f) for fc in curves.values() for f in fc)
-    print("Blender %s, %s: %d frames, %d bones, %d rotation keys; tolerance %.2f deg; load average %s"
+    print("Blender %s, %s: %d frames, %d bones, %d rotation keys; tolerance %g deg; load average %s"
           % (bpy.app.version_string, os.path.basename(clip), len(frames), len(curves), total, TOL_DEG,
              "%.2f %.2f %.2f" % os.getloadavg()))
     ak, ae, aseconds, megabytes, proved = addon_reduce(arm, original, frames, reference, list(curves))
