@@ -35,9 +35,10 @@ std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int
     for (double m = first; m <= last; m += 1.0) {
         const double t = m / sub;
         while (k < key_frames.size() && key_frames[k] < t) out.push_back(key_frames[k++]);
-        // The keys on either side of t: grid points within 1e-6 frames give way to the key.
-        const bool near = (k < key_frames.size() && key_frames[k] - t < 1e-6) ||
-                          (k > 0 && t - key_frames[k - 1] < 1e-6);
+        // The keys on either side of t: grid points within 1e-6 frames, or on the key's float32
+        // frame (Blender's frames; one float32 step is 1/128 frame at frame 65536), give way to it.
+        const auto on = [t](double key) { return std::fabs(key - t) < 1e-6 || float(key) == float(t); };
+        const bool near = (k < key_frames.size() && on(key_frames[k])) || (k > 0 && on(key_frames[k - 1]));
         if (!near) out.push_back(t);
     }
     while (k < key_frames.size()) out.push_back(key_frames[k++]);
@@ -53,14 +54,19 @@ constexpr double kFitShare = 0.9;
 constexpr double kRetryShares[] = {0.6, 0.3};
 // Rounds of "prove, add the times that failed as samples, fit again".
 constexpr int kProofRounds = 8;
+// The rounds stop (and the failed segments are tightened) where the samples they would add take the
+// count past kMaxSampleGrowth times the samples they started from plus kSampleAllowance per key
+// segment.
+constexpr std::size_t kMaxSampleGrowth = 2;
+constexpr std::size_t kSampleAllowance = 256;
 // The proof halves intervals down to this (frames): a change of Euler branch beside a key at gimbal
 // lock spans 0.0105 frame, and its fast channels need steps far below 1/1024 frame to be bounded.
 constexpr double kProofMinStep = 1.0 / 65536.0;
 // The evaluations of one proof that tightens a failed segment's bound (tighten_proof): a segment
 // the fit cannot hold is rare, and its bound is worth a few proofs, not an unbounded search.
 constexpr std::size_t kTightenEvaluations = 200'000;
-// An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap, and
-// distinct in float32 up to frame ~3e4).
+// An added sample keeps this far from the samples beside it (beyond Blender's 1e-4 key snap), and
+// on another float32 frame than either (beyond frame 32768 a float32 step is above this).
 constexpr double kAddedSampleGap = 1.0 / 1024.0;
 // Two Euler rows that agree within this (radians, per angle) are on the same branch: branches differ
 // by about π, while near gimbal lock the first and last angles of the same rotation are ill-conditioned
@@ -241,6 +247,7 @@ KeyFit fit_rounds(const Curve& curve, const std::vector<double>& key_frames, con
     }
     const CurveMotion curve_motion(curve);
     const KeptBreaks method(curve_motion);
+    const std::size_t sample_budget = kMaxSampleGrowth * fit.times.size() + kSampleAllowance * (K - 1);
     for (int round = 0;; ++round) {
         fit_round(curve, key_frames, key_values, mode, tolerance * share, min_gap, fit);
         std::vector<FCurveKeys> channels(fit.keys.channels.begin(), fit.keys.channels.end());
@@ -268,7 +275,8 @@ KeyFit fit_rounds(const Curve& curve, const std::vector<double>& key_frames, con
                 const double before = merged.empty() ? -HUGE_VAL : merged.back();
                 const double g = std::isfinite(below) ? std::fmax(kAddedSampleGap, 0.125 * (t - below)) : kAddedSampleGap;
                 const double at = std::isfinite(below) ? std::clamp(add[j], below + g, t - g) : add[j];
-                if (at - before > kAddedSampleGap && t - at > kAddedSampleGap) {
+                if (at - before > kAddedSampleGap && t - at > kAddedSampleGap &&
+                    float(at) != float(before) && float(at) != float(t)) {
                     merged.push_back(at);
                     ++added;
                 }
@@ -276,7 +284,7 @@ KeyFit fit_rounds(const Curve& curve, const std::vector<double>& key_frames, con
             merged.push_back(t);
             below = t;
         }
-        if (added == 0) {
+        if (added == 0 || fit.times.size() + added > sample_budget) {
             tighten_failed_segments(kept, method, fit);
             break;
         }

@@ -216,6 +216,62 @@ TEST(FitProof, UnreachableToleranceGivesATightBound) {
     EXPECT_GE(failed, 3);
 }
 
+// Quaternion keys through `curve`'s signs (the sign the curve reaches each key with), float32.
+std::vector<double> signed_keys(const Curve& curve, const std::vector<double>& t, const std::vector<Quat>& q) {
+    const std::vector<Quat> at = curve.sample(t);
+    std::vector<double> values;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+        const double s = glm::dot(at[k], q[k]) < 0 ? -1.0 : 1.0;
+        for (double c : {q[k].w, q[k].x, q[k].y, q[k].z}) values.push_back(static_cast<float>(s * c));
+    }
+    return values;
+}
+
+// Keys a twentieth of a frame apart beyond frame 100,000, where one float32 step is 1/128 frame: the
+// samples the proof adds between them keep off their neighbours' float32 frames (they were taken
+// for one another, and the fit refused the keys: "times[1]: same float32 frame as times[0]"). The
+// fit ends, and its bound holds at 64 points per frame and as many random times.
+TEST(FitProof, KeysBeyondFrame100000AFewFloat32StepsApartAreFitted) {
+    std::mt19937 rng(11);
+    const RotationMode mode = parse_rotation_mode("QUATERNION");
+    const std::vector<double> t = {100050.0, 100050.046875, 100050.1015625, 100050.1484375, 100052.0, 100060.0};
+    std::vector<Quat> q;
+    for (std::size_t k = 0; k < t.size(); ++k)
+        q.push_back(glm::angleAxis(double(k * k) * 3.0 * kDeg, glm::normalize(Vec3(1.0, 0.5 * double(k), 0.2))));
+    for (Method method : {Method::SQUAD, Method::SPLINE_C2}) {
+        const Curve curve = Curve(t, q, method);
+        const std::vector<double> values = signed_keys(curve, t, q);
+        const KeyFit fit = fit_through_keys(curve, t, values, mode, 4, 0.05 * kDeg);
+        for (std::size_t i = 1; i < fit.times.size(); ++i)
+            ASSERT_LT(float(fit.times[i - 1]), float(fit.times[i])) << method_name(method) << ": sample " << i;
+        const double dense = dense_max(curve, fit.keys, mode, t.front(), t.back(), 64 * 10, rng);
+        EXPECT_LE(dense, fit.proof.bound + 1e-6) << method_name(method);
+    }
+}
+
+// Keys 200 frames and 0.011 frame apart (random rotations): the C2 spline through them turns
+// hundreds of radians a frame beside the close pair, where no F-curve follows it. Each round of the
+// proof found hundreds of thousands of intervals it could not close, each became a sample, and the
+// fit ran for many minutes; the rounds now stop where the samples would pass twice the first ones
+// plus 256 a key segment, and the fit reports the bound it can prove (which holds densely).
+TEST(FitProof, KeysTheFitCannotFollowStopAddingSamples) {
+    std::mt19937 rng(4);
+    const RotationMode mode = parse_rotation_mode("QUATERNION");
+    const std::vector<double> t = {-5000.0, -4800.0, -4799.98876953125, -4599.98876953125, -4596.98876953125};
+    std::normal_distribution<double> normal;
+    std::vector<Quat> q;
+    for (std::size_t k = 0; k < t.size(); ++k)
+        q.push_back(glm::normalize(Quat(normal(rng), normal(rng), normal(rng), normal(rng))));
+    const Curve curve = Curve(t, q, Method::SPLINE_C2);
+    const std::vector<double> values = signed_keys(curve, t, q);
+    const KeyFit fit = fit_through_keys(curve, t, values, mode, 4, 0.05 * kDeg);
+    const std::size_t first = fit_sample_frames(t, 4).size();
+    EXPECT_LE(fit.times.size(), 2 * first + 256 * (t.size() - 1));
+    EXPECT_FALSE(fit.proof.proven());
+    const double dense = dense_max(curve, fit.keys, mode, t.front(), t.back(), 64 * 404, rng);
+    EXPECT_LE(dense, fit.proof.bound + 1e-6);
+}
+
 // The seed's example: Euler XYZ keys (0°, 90°, 0°) at frame 1 and (90°, 45°, 90°) at frame 4 (and a
 // key at the lock at the end). The keys keep their values; the channels change branch beside the
 // keys at the lock, and the playback stays within the proved bound at 64 points per frame and at
