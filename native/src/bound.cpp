@@ -685,10 +685,12 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         b.bounds(p0.t, p1.t, vb, ab);
         if (neighbours) {
             // Neighbouring float32 frames: a float32 motion shows one of its two ends in between (a
-            // step there, such as the snap to a key, included), the other moves by at most its speed;
-            // two float32 motions show the same end (Blender evaluates both at the same frame).
+            // step there, such as the snap to a key, included), the other moves by at most its speed
+            // (from either end: d ≤ max(d0, d1) + its speed·h); two float32 motions show the same end
+            // (Blender evaluates both at the same frame).
             if (a.float32_frames() && b.float32_frames()) return std::fmax(p0.d, p1.d) + kArithmeticSlack;
-            return std::fmax(p0.d, p1.d) + (va + vb) * h + kArithmeticSlack;
+            const double moving = (a.float32_frames() ? 0.0 : va) + (b.float32_frames() ? 0.0 : vb);
+            return std::fmax(p0.d, p1.d) + moving * h + kArithmeticSlack;
         }
         const double first = std::fmax(0.5 * (p0.d + p1.d + (va + vb) * h), std::fmax(p0.d, p1.d));
         const double sigma = glm::dot(p0.qa, p0.qb) < 0.0 ? -1.0 : 1.0;

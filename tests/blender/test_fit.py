@@ -142,8 +142,9 @@ def test_keys_a_few_float32_steps_apart_beyond_frame_100000_are_fitted(scene, tm
     "times[1]: same float32 frame as times[0]"), and Blender's playback of the saved file in a fresh
     process — at every float32 frame over the close keys, 64 points per frame after them and 200
     random times — stays within the bound the fit reports. No fit holds 0.05° here (the path turns
-    about 200° a frame, 1.6° a float32 step), and the bound is loose beside the keys (86° against
-    1.6° played, bpy 5.0.1): it holds, which is what this test asks."""
+    about 200° a frame, 1.6° a float32 step). Between two neighbouring float32 frames Blender shows
+    one of them, so only the method's own speed widens the bound there: 8.1° against 1.6° played
+    (the playback's speed counted too gave 86°)."""
     obj = add_empty("Far", "QUATERNION")
     axis = (1.0, 0.5, 0.2)
     key(obj, "rotation_quaternion", [(f, Quaternion(axis, math.radians(3.0 * k * k))) for k, f in enumerate(FAR_FRAMES)],
@@ -163,6 +164,7 @@ def test_keys_a_few_float32_steps_apart_beyond_frame_100000_are_fitted(scene, tm
     print("[keys beyond frame 100000] Blender %s: bound %.4f°, played %.4f° at frame %.5f"
           % (bpy.app.version_string, bound, err.max(), times[err.argmax()]))
     assert err.max() <= bound + 1e-4
+    assert bound <= 10 * err.max()
 
 
 def test_a_bound_above_the_tolerance_at_a_key_names_blenders_snap(scene):

@@ -238,14 +238,24 @@ TEST(FitProof, KeysBeyondFrame100000AFewFloat32StepsApartAreFitted) {
     std::vector<Quat> q;
     for (std::size_t k = 0; k < t.size(); ++k)
         q.push_back(glm::angleAxis(double(k * k) * 3.0 * kDeg, glm::normalize(Vec3(1.0, 0.5 * double(k), 0.2))));
+    std::vector<double> keyed;  // as Blender stores them (float32), and fit_channels takes them
+    for (const Quat& r : q)
+        for (double c : {r.w, r.x, r.y, r.z}) keyed.push_back(static_cast<float>(c));
     for (Method method : {Method::SQUAD, Method::SPLINE_C2}) {
-        const Curve curve = Curve(t, q, method);
+        const Curve curve = curve_from_channels(t, keyed, mode, method, {});
         const std::vector<double> values = signed_keys(curve, t, q);
         const KeyFit fit = fit_through_keys(curve, t, values, mode, 4, 0.05 * kDeg);
         for (std::size_t i = 1; i < fit.times.size(); ++i)
             ASSERT_LT(float(fit.times[i - 1]), float(fit.times[i])) << method_name(method) << ": sample " << i;
         const double dense = dense_max(curve, fit.keys, mode, t.front(), t.back(), 64 * 10, rng);
         EXPECT_LE(dense, fit.proof.bound + 1e-6) << method_name(method);
+        // Between two neighbouring float32 frames Blender shows one of them: only the curve's own
+        // speed widens the bound there. It counted the playback's too: SQUAD 15.0° where 1.76° is
+        // found (now 8.4°); SPLINE_C2 24.4° (now 17.2° against 1.35°: the C2 curve's speed bound
+        // beside the close keys, 35 rad/frame, is 15° a float32 step).
+        const double found = std::fmax(dense, fit.proof.max_evaluated);
+        EXPECT_LE(fit.proof.bound, (method == Method::SQUAD ? 6.0 : 15.0) * found)
+            << method_name(method) << ": " << fit.proof.bound / kDeg << "° against " << found / kDeg << "° found";
     }
 }
 
