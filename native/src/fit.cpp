@@ -39,7 +39,8 @@ std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int
         // frame (Blender's frames; one float32 step is 1/128 frame at frame 65536), give way to it.
         const auto on = [t](double key) { return std::fabs(key - t) < 1e-6 || float(key) == float(t); };
         const bool near = (k < key_frames.size() && on(key_frames[k])) || (k > 0 && on(key_frames[k - 1]));
-        if (!near) out.push_back(t);
+        // Beyond frame 2^19 a float32 step passes 1/64 frame: grid points sharing one give way too.
+        if (!near && (out.empty() || float(out.back()) != float(t))) out.push_back(t);
     }
     while (k < key_frames.size()) out.push_back(key_frames[k++]);
     return out;

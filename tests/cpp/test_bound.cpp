@@ -259,6 +259,17 @@ TEST(FitProof, KeysBeyondFrame100000AFewFloat32StepsApartAreFitted) {
     }
 }
 
+// Beyond frame 2^19 one float32 step is 1/16 frame: 64 subframes would put several grid points on
+// one float32 frame (the fit then refused the keys). Each sample has a float32 frame of its own.
+TEST(FitProof, SamplesBeyondFrame524288HaveFloat32FramesOfTheirOwn) {
+    const std::vector<double> t = {600000.0, 600001.0, 600003.5};
+    for (int subframes : {4, 64}) {
+        const std::vector<double> s = fit_sample_frames(t, subframes);
+        for (std::size_t i = 1; i < s.size(); ++i) ASSERT_LT(float(s[i - 1]), float(s[i])) << subframes << ": " << i;
+        for (double key : t) EXPECT_NE(std::find(s.begin(), s.end(), key), s.end()) << subframes;
+    }
+}
+
 // Keys 200 frames and 0.011 frame apart (random rotations): the C2 spline through them turns
 // hundreds of radians a frame beside the close pair, where no F-curve follows it. Each round of the
 // proof found hundreds of thousands of intervals it could not close, each became a sample, and the
