@@ -317,17 +317,26 @@ std::vector<double> sample_frames(const std::vector<double>& key_frames, int per
     if (key_frames.empty()) return {};
     const double first = key_frames.front(), last = key_frames.back();
     const std::size_t count = frame_count(std::floor((last - first) * per_frame + 1e-9), "key_frames");
-    std::vector<double> out(key_frames);
+    // The keys and the grid merged (both increasing). A grid point gives way to a key within 1e-4
+    // frames of it, and to any sample on its float32 frame (Blender's frames: beyond frame 2048 half
+    // a float32 step passes 1e-4 frame).
+    std::vector<double> out;
+    out.reserve(key_frames.size() + count);
+    std::size_t k = 0;
+    bool last_is_key = false;
+    const auto near_key = [](double key, double t) { return std::fabs(key - t) < 1e-4 || float(key) == float(t); };
     for (std::size_t m = 0; m < count; ++m) {
         const double t = first + static_cast<double>(m) / per_frame;
-        // The keys on either side of t: grid points within 1e-4 frames give way to the key.
-        const auto after = std::lower_bound(key_frames.begin(), key_frames.end(), t);
-        const bool near = (after != key_frames.end() && std::fabs(*after - t) < 1e-4) ||
-                          (after != key_frames.begin() && std::fabs(t - *(after - 1)) < 1e-4);
-        if (!near) out.push_back(t);
+        while (k < key_frames.size() && key_frames[k] <= t) {
+            out.push_back(key_frames[k++]);
+            last_is_key = true;
+        }
+        if (!out.empty() && (last_is_key ? near_key(out.back(), t) : float(out.back()) == float(t))) continue;
+        if (k < key_frames.size() && near_key(key_frames[k], t)) continue;
+        out.push_back(t);
+        last_is_key = false;
     }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
+    out.insert(out.end(), key_frames.begin() + static_cast<std::ptrdiff_t>(k), key_frames.end());
     return out;
 }
 

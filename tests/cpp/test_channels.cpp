@@ -101,6 +101,13 @@ TEST(Channels, SamplingPolicies) {
     EXPECT_EQ(whole_frame_samples({0.5, 2.25, 3}), (std::vector<double>{0.5, 1, 2, 2.25, 3}));
     EXPECT_THROW(step_frames(1, 0, 1), InvalidArgument);
     EXPECT_THROW(sample_frames({2, 1}, 1), InvalidArgument);
+    // Beyond frame 2048 half a float32 step passes 1e-4 frame: a grid point on a key's float32 frame
+    // gives way to it too (the conversion then refused the samples: "same float32 frame as").
+    const std::vector<double> keys = {5000.0, 5000.250122, 5001.0, 100050.00390625};
+    const std::vector<double> far = sample_frames(keys, 4);
+    for (std::size_t i = 1; i < far.size(); ++i) ASSERT_LT(float(far[i - 1]), float(far[i])) << i;
+    for (double key : keys) EXPECT_NE(std::find(far.begin(), far.end(), key), far.end());
+    EXPECT_EQ(std::find(far.begin(), far.end(), 5000.25), far.end());
     const double f[3] = {0, 3, 9}, v[3] = {0, 3, 0};
     double left[6], right[6];
     segment_handles(f, v, 3, left, right);
