@@ -157,7 +157,8 @@ void bind_channels(py::module_& m) {
           [](py::handle keys, int per_frame) { return frames_array(sample_frames(to_frames(keys, "key_frames"), per_frame)); },
           py::arg("key_frames"), py::arg("per_frame") = 1,
           "Samples over a keyed range: every 1/per_frame frame from the first key to the last (grid "
-          "points within 1e-4 frames of a key give way to it) and every key, sorted (N,).");
+          "points within 1e-4 frames of a key, or on any sample's float32 frame, give way) and every key, "
+          "sorted (N,), each on a float32 frame of its own.");
     m.def("whole_frame_samples",
           [](py::handle keys) { return frames_array(whole_frame_samples(to_frames(keys, "key_frames"))); },
           py::arg("key_frames"), "Every whole frame from the first key to the last and every key, sorted (N,).");

@@ -104,7 +104,8 @@ std::vector<double> axis_angle_span_channels(const std::vector<Quat>& q, const d
 // or step < 1. Every policy throws rather than return more than 1e8 frames.
 std::vector<double> step_frames(double start, double end, double step);
 // Compare's samples over a keyed range: the grid first key + m/per_frame up to the last key (1e-9 of
-// slack), without grid points within 1e-4 frames of a key, merged with the key frames (sorted).
+// slack), without grid points within 1e-4 frames of a key or on another sample's float32 frame,
+// merged with the key frames (sorted; every sample on a float32 frame of its own).
 // key_frames must increase; per_frame ≥ 1.
 std::vector<double> sample_frames(const std::vector<double>& key_frames, int per_frame);
 // Reduce's samples: every whole frame from the first key to the last, and every key frame (sorted,

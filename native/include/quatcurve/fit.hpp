@@ -19,8 +19,9 @@
 namespace quatcurve {
 
 // The samples a fit matches: every 1/subframes frame from the first key to the last (1e-9 of slack
-// at the ends) without grid points within 1e-6 frames of a key, merged with the key frames (sorted,
-// unique). key_frames must increase; subframes ≥ 1.
+// at the ends) without grid points within 1e-6 frames of a key or on another sample's float32 frame,
+// merged with the key frames (sorted; every sample on a float32 frame of its own). key_frames must
+// increase; subframes ≥ 1.
 std::vector<double> fit_sample_frames(const std::vector<double>& key_frames, int subframes);
 
 // A change of representation inside key segment `segment` (see fit_through_keys), at sample `frame`:
