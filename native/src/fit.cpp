@@ -315,10 +315,38 @@ struct Source {
 
 // The fit of key segments from their sources (a reused segment of the previous fit, or a segment of
 // a run fitted now), joined at the keys: each segment's samples, keys and handles as its source has
-// them; a key between two segments takes its left handle from the segment before it.
+// them; a key between two segments takes its left handle from the segment before it. Consecutive
+// segments of one source are copied as one block (a refit's sources are a few such runs).
 void assemble(const std::vector<Source>& sources, std::size_t C, KeyFit& out) {
     const std::size_t S = sources.size();
+    struct Block {
+        std::size_t k0, k1;    // key segments [k0, k1) of the result
+        std::size_t lo, hi;    // their samples [lo, hi] in the source (hi: the block's last key)
+        std::vector<std::pair<std::size_t, std::size_t>> keys;  // per channel, [first, end) of its keys
+    };
+    std::vector<Block> blocks;
+    std::size_t samples = 1;
+    std::vector<std::size_t> keys(C, 0);
+    for (std::size_t k0 = 0; k0 < S;) {
+        const KeyFit& f = *sources[k0].fit;
+        const std::size_t s0 = sources[k0].segment;
+        std::size_t k1 = k0 + 1;
+        while (k1 < S && sources[k1].fit == &f && sources[k1].segment == s0 + (k1 - k0)) ++k1;
+        Block b{k0, k1, f.forced[s0], f.forced[s0 + (k1 - k0)], {}};
+        samples += b.hi - b.lo;
+        b.keys.resize(C);
+        for (std::size_t c = 0; c < C; ++c) {
+            const std::vector<std::size_t>& idx = f.keys.channels[c].indices;
+            const auto first = std::lower_bound(idx.begin(), idx.end(), b.lo);
+            const auto end = std::upper_bound(first, idx.end(), k1 == S ? b.hi : b.hi - 1);
+            b.keys[c] = {static_cast<std::size_t>(first - idx.begin()), static_cast<std::size_t>(end - idx.begin())};
+            keys[c] += b.keys[c].second - b.keys[c].first;
+        }
+        blocks.push_back(std::move(b));
+        k0 = k1;
+    }
     out.times.clear();
+    out.times.reserve(samples);
     out.forced.assign(S + 1, 0);
     out.switches.clear();
     out.segment_proofs.assign(S, {});
@@ -327,40 +355,47 @@ void assemble(const std::vector<Source>& sources, std::size_t C, KeyFit& out) {
     out.keys.interpolation = KeyInterpolation::BEZIER;
     out.keys.synchronized = true;
     out.keys.channels.assign(C, {});
-    for (std::size_t k = 0; k < S; ++k) {
-        const KeyFit& f = *sources[k].fit;
-        const std::size_t s = sources[k].segment, lo = f.forced[s], hi = f.forced[s + 1];
-        const std::size_t offset = out.times.size();
-        out.forced[k] = offset;
-        const bool last = k + 1 == S;
-        out.times.insert(out.times.end(), f.times.begin() + static_cast<std::ptrdiff_t>(lo),
-                         f.times.begin() + static_cast<std::ptrdiff_t>(last ? hi + 1 : hi));
+    for (std::size_t c = 0; c < C; ++c) {
+        ReducedChannel& to = out.keys.channels[c];
+        to.indices.reserve(keys[c]);
+        to.frames.reserve(keys[c]);
+        to.values.reserve(keys[c]);
+        to.handle_left.reserve(2 * keys[c]);
+        to.handle_right.reserve(2 * keys[c]);
+    }
+    const auto at = [](const auto& v, std::size_t i) { return v.begin() + static_cast<std::ptrdiff_t>(i); };
+    for (const Block& b : blocks) {
+        const KeyFit& f = *sources[b.k0].fit;
+        const std::size_t s0 = sources[b.k0].segment, offset = out.times.size();
+        const bool last = b.k1 == S;
+        out.times.insert(out.times.end(), at(f.times, b.lo), at(f.times, last ? b.hi + 1 : b.hi));
+        for (std::size_t k = b.k0; k < b.k1; ++k) {
+            const std::size_t s = s0 + (k - b.k0);
+            out.forced[k] = offset + (f.forced[s] - b.lo);
+            out.segment_proofs[k] = f.segment_proofs[s];
+            merge_proof(out.proof, f.segment_proofs[s]);
+        }
         if (last) out.forced[S] = out.times.size() - 1;
         for (const EulerSwitch& w : f.switches)
-            if (w.segment == s) out.switches.push_back({k, w.frame});
-        out.segment_proofs[k] = f.segment_proofs[s];
-        merge_proof(out.proof, f.segment_proofs[s]);
+            if (w.segment >= s0 && w.segment < s0 + (b.k1 - b.k0))
+                out.switches.push_back({b.k0 + (w.segment - s0), w.frame});
         out.keys.max_error = std::fmax(out.keys.max_error, f.keys.max_error);
         out.keys.synchronized = out.keys.synchronized && f.keys.synchronized;
         for (std::size_t c = 0; c < C; ++c) {
             const ReducedChannel& from = f.keys.channels[c];
             ReducedChannel& to = out.keys.channels[c];
-            auto first = std::lower_bound(from.indices.begin(), from.indices.end(), lo);
-            auto end = std::upper_bound(from.indices.begin(), from.indices.end(), last ? hi : hi - 1);
-            for (auto it = first; it != end; ++it) {
-                const std::size_t i = static_cast<std::size_t>(it - from.indices.begin());
-                const bool joined = it == first && k > 0;  // its left handle is the segment before's
-                to.indices.push_back(offset + (*it - lo));
-                to.frames.push_back(from.frames[i]);
-                to.values.push_back(from.values[i]);
-                if (!joined) to.handle_left.insert(to.handle_left.end(), {from.handle_left[2 * i], from.handle_left[2 * i + 1]});
-                to.handle_right.insert(to.handle_right.end(), {from.handle_right[2 * i], from.handle_right[2 * i + 1]});
-            }
-            if (!last) {  // the left handle of the key that ends this segment
-                const auto at = std::lower_bound(from.indices.begin(), from.indices.end(), hi);
-                const std::size_t i = static_cast<std::size_t>(at - from.indices.begin());
-                to.handle_left.insert(to.handle_left.end(), {from.handle_left[2 * i], from.handle_left[2 * i + 1]});
-            }
+            const auto [first, end] = b.keys[c];
+            for (std::size_t i = first; i < end; ++i) to.indices.push_back(offset + (from.indices[i] - b.lo));
+            to.frames.insert(to.frames.end(), at(from.frames, first), at(from.frames, end));
+            to.values.insert(to.values.end(), at(from.values, first), at(from.values, end));
+            // A key joining this block to the one before takes its left handle from that one.
+            const std::size_t left = first < end && b.k0 > 0 ? first + 1 : first;
+            to.handle_left.insert(to.handle_left.end(), at(from.handle_left, 2 * left), at(from.handle_left, 2 * end));
+            to.handle_right.insert(to.handle_right.end(), at(from.handle_right, 2 * first),
+                                   at(from.handle_right, 2 * end));
+            if (!last)  // the left handle of the key that ends this block (the next key in its source)
+                to.handle_left.insert(to.handle_left.end(), at(from.handle_left, 2 * end),
+                                      at(from.handle_left, 2 * end + 2));
         }
     }
     sort_proof(out.proof);

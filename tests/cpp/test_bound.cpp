@@ -554,6 +554,48 @@ std::vector<std::vector<double>> keys_between(const ReducedKeys& keys, std::size
     return out;
 }
 
+// A refit joined from kept and refitted key segments reads as one fit: per channel as many handles
+// as keys (two numbers each) and each key on its own sample (times[indices[i]] == frames[i]), every
+// animator key (forced) a key of every channel, the proof the union of the segments' proofs, and
+// each key segment outside [lo, hi) (kept: the edit cannot reach it) with the previous fit's
+// samples and proof.
+void expect_assembled(const KeyFit& refit, const KeyFit& previous, std::size_t K, std::size_t lo, std::size_t hi,
+                      const std::string& what) {
+    ASSERT_EQ(refit.forced.size(), K) << what;
+    ASSERT_EQ(refit.segment_proofs.size(), K - 1) << what;
+    EXPECT_EQ(refit.forced.back(), refit.times.size() - 1) << what;
+    for (const ReducedChannel& ch : refit.keys.channels) {
+        ASSERT_EQ(ch.indices.size(), ch.frames.size()) << what;
+        ASSERT_EQ(ch.values.size(), ch.frames.size()) << what;
+        ASSERT_EQ(ch.handle_left.size(), 2 * ch.frames.size()) << what;
+        ASSERT_EQ(ch.handle_right.size(), 2 * ch.frames.size()) << what;
+        for (std::size_t i = 0; i < ch.frames.size(); ++i) {
+            ASSERT_LT(ch.indices[i], refit.times.size()) << what;
+            if (i > 0) EXPECT_LT(ch.indices[i - 1], ch.indices[i]) << what;
+            EXPECT_EQ(static_cast<float>(refit.times[ch.indices[i]]), static_cast<float>(ch.frames[i]))
+                << what << " key " << i;
+        }
+        for (std::size_t f : refit.forced)
+            EXPECT_TRUE(std::binary_search(ch.indices.begin(), ch.indices.end(), f)) << what;
+    }
+    PlaybackBound merged;
+    for (std::size_t j = 0; j + 1 < K; ++j) {
+        const std::vector<double> span(refit.times.begin() + static_cast<std::ptrdiff_t>(refit.forced[j]),
+                                       refit.times.begin() + static_cast<std::ptrdiff_t>(refit.forced[j + 1]) + 1);
+        const std::vector<double> was(previous.times.begin() + static_cast<std::ptrdiff_t>(previous.forced[j]),
+                                      previous.times.begin() + static_cast<std::ptrdiff_t>(previous.forced[j + 1]) + 1);
+        if (j < lo || j >= hi) {
+            EXPECT_EQ(span, was) << what << " segment " << j;
+            EXPECT_EQ(refit.segment_proofs[j].bound, previous.segment_proofs[j].bound) << what << " segment " << j;
+            EXPECT_EQ(refit.segment_proofs[j].evaluations, previous.segment_proofs[j].evaluations) << what;
+        }
+        merged.bound = std::fmax(merged.bound, refit.segment_proofs[j].bound);
+        merged.evaluations += refit.segment_proofs[j].evaluations;
+    }
+    EXPECT_EQ(refit.proof.bound, merged.bound) << what;
+    EXPECT_EQ(refit.proof.evaluations, merged.evaluations) << what;
+}
+
 }  // namespace
 
 // A refit after one key moved (fit_through_keys' previous): the local methods fit again only the
@@ -612,6 +654,10 @@ TEST(FitProof, RefitKeepsUnchangedSegmentsAndProvesTheRest) {
             } else {
                 EXPECT_GE(refit.refitted, 2 * reach) << what;
             }
+            if (method == Method::SPLINE_C2)
+                expect_assembled(refit, first, k, 0, k - 1, what);
+            else
+                expect_assembled(refit, first, k, m - reach, m + reach, what);
             const KeyFit full = fit_through_keys(curve2, t, moved, mode, 4, tol);
             EXPECT_EQ(refit.proof.proven(), full.proof.proven()) << what;
             if (full.proof.proven()) EXPECT_LE(refit.proof.bound, tol) << what;
