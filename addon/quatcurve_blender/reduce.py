@@ -27,8 +27,10 @@ for bit (from the last frame before the flip where every channel has a key to th
 frames, values with their stored signs, the handles of those segments, the original's
 interpolation; FREE handles, so Blender keeps them), which is why they are within the bound there.
 The pieces between are reduced as above, each in the hemisphere of its own stored signs, ending on
-the copied keys (`TargetResult.copied` lists the spans). Otherwise the reduction holds at frames and
-keys (`reduce_values`) and the result line says why between frames is not proved.
+the copied keys (`TargetResult.copied` lists the spans). Where the reduction would keep no fewer keys
+than the original has, the original's keys stay, copied whole (the result line says so). Otherwise
+the reduction holds at frames and keys (`reduce_values`) and the result line says why between frames
+is not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
 builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
 with modifiers are refused (the bound is for the keys alone), except a loop's (cycles.py): its period
@@ -129,8 +131,9 @@ class ReducedChannels:
     @property
     def key_interpolations(self):
         """Per channel, each key's interpolation (the segment after it): the original's for a key in a
-        copied span [f0, f1), `interpolation` for the others — or None when every key has
-        `interpolation`."""
+        copied span [f0, f1) — and for the channel's last key when a span ends there (no segment
+        follows it: the original's keys stay as they were) —, `interpolation` for the others; or None
+        when every key has `interpolation`."""
         if self.copied is None or not len(self.copied) or self.copied_interpolation == self.interpolation:
             return None
         out = []
@@ -139,8 +142,17 @@ class ReducedChannels:
             inside = np.zeros(len(frames), dtype=bool)
             for f0, f1 in self.copied:
                 inside |= (frames >= f0) & (frames < f1)
+                if len(frames) and frames[-1] == f1:
+                    inside[-1] = True
             out.append(np.where(inside, self.copied_interpolation, self.interpolation))
         return out
+
+    def kept_original(self, frames):
+        """True when the result is the original's own keys over the whole range (one copied span from
+        the first frame to the last): the reduction would have kept as many keys or more."""
+        copied = self.copied
+        return (copied is not None and len(copied) == 1 and float(copied[0][0]) <= np.float32(frames[0])
+                and float(copied[0][1]) >= np.float32(frames[-1]))
 
     def error_text(self, tolerance_deg):
         """The error for a result line: 'max error X° at every instant' (the proved bound), or where
@@ -439,6 +451,8 @@ def reduce(found, settings):
         error_deg = math.degrees(item.reduced.max_error)
         bound = item.reduced.bound
         text = item.reduced.error_text(settings.tolerance)
+        if item.reduced.kept_original(item.frames):
+            text += " — the original's keys kept as they are: no fewer keys hold the tolerance at every instant"
         if item.loop is not None:
             text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
                      "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))

@@ -684,6 +684,28 @@ ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation
     return out;
 }
 
+// The reduction, or the original's own keys when the reduction keeps no fewer: a reduction proved at
+// every instant can need more keys than an original whose keys lie closer than its samples can
+// follow (keys a few float32 steps apart far from frame 0), and one that keeps as many only moves the
+// curve. The original's keys, copied whole as one span (join_pieces: each channel's keys bit for bit,
+// a constant channel two keys), play as the original does: bound 0.
+// Only where every channel's keys lie within the samples' range (the copy then changes nothing
+// outside it) and a tolerance above 0 (0 keeps every sample, proving nothing between them).
+ProvedKeys fewest_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& original,
+                       KeyInterpolation original_interpolation, const std::vector<double>& times, double tolerance,
+                       KeyInterpolation interpolation) {
+    if (!(tolerance > 0.0)) return reduced;
+    const double f0 = static_cast<float>(times.front()), f1 = static_cast<float>(times.back());
+    std::size_t count = 0;
+    for (const FCurveKeys& ch : original) {
+        if (!ch.frames.empty() && (ch.frames.front() < f0 || ch.frames.back() > f1)) return reduced;
+        count += constant_channel(ch) ? 2 : ch.frames.size();
+    }
+    if (count >= reduced.keys.key_count()) return reduced;
+    return join_pieces(original, original_interpolation, times, {{0, times.size() - 1}}, {}, {}, tolerance,
+                       interpolation);
+}
+
 }  // namespace
 
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
@@ -702,7 +724,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
                                        interpolation, synchronized);
         out.copied_interpolation = original_interpolation;
-        return out;
+        return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
     }
     // The given samples checked as a whole, before any piece is (errors name their index in `times`).
     reduce_impl::check_float32_storage(
@@ -714,7 +736,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
                                        interpolation, synchronized);
         out.copied_interpolation = original_interpolation;
-        return out;
+        return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
     }
     for (const auto& span : spans)  // the copied keys' values exactly, where the pieces beside them end
         for (std::size_t i : {span.first, span.second}) playback.values(times[i], &rows[4 * i]);
@@ -735,7 +757,9 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         }
         if (s < spans.size()) begin = spans[s].second;
     }
-    return join_pieces(original, original_interpolation, times, spans, pieces, piece_of, tolerance, interpolation);
+    return fewest_keys(join_pieces(original, original_interpolation, times, spans, pieces, piece_of, tolerance,
+                                   interpolation),
+                       original, original_interpolation, times, tolerance, interpolation);
 }
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,

@@ -406,6 +406,48 @@ def test_sign_flips_play_as_the_original_in_a_fresh_blender(reducer, interpolati
             label, interpolation, len(flips), before, after, err.max(), times[err.argmax()]))
 
 
+def test_an_original_no_reduction_thins_keeps_its_keys(reducer):
+    """Sparse quaternion keys with bent BEZIER handles (a segment every 6 frames), reduced to LINEAR
+    at 0.1°: a LINEAR reduction proved at every instant needs more keys than the original has, so the
+    original's keys stay, bit for bit (frames, values, handles, interpolation), the result line says so
+    and counts as many keys after as before; the bound is 0."""
+    rng = np.random.default_rng(5)
+    frames = np.arange(1.0, 44.0, 6.0)
+    q = rng.normal(size=(len(frames), 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    obj = keyed_object("Bent", frames, q, "QUATERNION")
+    curves = rotation_curves(obj, "rotation_quaternion", 4)
+    for fcurve in curves:
+        for point in fcurve.keyframe_points:
+            point.interpolation = "BEZIER"
+            point.handle_left_type = point.handle_right_type = "FREE"
+            f, v = point.co
+            point.handle_left = (f - 2.0, v + rng.normal(scale=0.3))
+            point.handle_right = (f + 2.0, v + rng.normal(scale=0.3))
+
+    def key_data(fcurve):
+        n = len(fcurve.keyframe_points)
+        out = []
+        for attr in ("co", "handle_left", "handle_right"):
+            a = np.empty(2 * n, dtype=np.float32)
+            fcurve.keyframe_points.foreach_get(attr, a)
+            out.append(a)
+        return out, [p.interpolation for p in fcurve.keyframe_points]
+
+    before = [key_data(f) for f in curves]
+    result = reduce.reduce([targets.Target(obj)], reduce.ReduceSettings(tolerance=0.1, interpolation="LINEAR"))
+    line = result.lines()[0]
+    assert "original's keys kept" in line, line
+    assert result.keys_after == result.keys_before == 4 * len(frames), line
+    target = result.targets[0]
+    assert target.proven and target.bound_deg == 0.0, line
+    after = [key_data(f) for f in rotation_curves(obj, "rotation_quaternion", 4)]
+    for (arrays_b, ipo_b), (arrays_a, ipo_a) in zip(before, after):
+        assert ipo_a == ipo_b
+        for a, b in zip(arrays_a, arrays_b):
+            np.testing.assert_array_equal(a, b)
+
+
 @pytest.mark.parametrize("interpolation", ["BEZIER", "LINEAR"])
 def test_tight_tolerance_is_proved_and_plays_within_it_in_a_fresh_blender(reducer, interpolation, tmp_path):
     """Three joints of a real clip (LINEAR quaternion keys at every frame, as imported), reduced to

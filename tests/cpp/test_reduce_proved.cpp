@@ -315,13 +315,20 @@ TEST(ReduceProved, SparseKeysFlippingBetweenKeysAreCopiedWholeSegments) {
     const RotationMode mode = parse_rotation_mode("QUATERNION");
     std::mt19937 rng(23);
     std::normal_distribution<double> nd(0.0, 0.25);
-    // Keys every 6 frames on a slow turn; the stored sign flips at keys 3, 5 and 6 (of 9).
-    const std::vector<double> key_t = {1, 7, 13, 19, 25, 31, 37, 43, 49};
+    // Keys every 6 frames on a slow turn; the stored sign flips at keys 3, 5 and 6 (of 9). Then a key
+    // at every frame to frame 300 on a smooth turn, which the reduction thins: the result keeps fewer
+    // keys than the original (else it would be the original's keys, fewest_keys).
+    std::vector<double> key_t = {1, 7, 13, 19, 25, 31, 37, 43, 49};
     const int signs[] = {1, 1, 1, -1, -1, 1, -1, -1, -1};
     std::vector<Quat> key_q;
     for (std::size_t k = 0; k < key_t.size(); ++k) {
         const Vec3 v(0.2 * double(k) + nd(rng), 0.1 * double(k) + nd(rng), 0.3 + nd(rng));
         key_q.push_back(double(signs[k]) * axis_angle_to_quat(glm::normalize(v), glm::length(v)));
+    }
+    const Quat last = key_q.back();
+    for (double t = 50.0; t <= 300.0; t += 1.0) {
+        key_t.push_back(t);
+        key_q.push_back(multiply(last, axis_angle_to_quat(Vec3(0.0, 0.0, 1.0), 0.02 * (t - 49.0))));
     }
     for (KeyInterpolation original_ipo : {KeyInterpolation::BEZIER, KeyInterpolation::LINEAR}) {
         std::vector<FCurveKeys> channels(4);
@@ -339,16 +346,19 @@ TEST(ReduceProved, SparseKeysFlippingBetweenKeysAreCopiedWholeSegments) {
                 }
             }
             for (std::size_t k = 0; k < ch.frames.size(); ++k) {
-                const double dt = 2.0, slope = 0.05 * nd(rng);
+                // The smooth turn's keys: handles at thirds along the neighbours' slope.
+                const bool tail = ch.frames[k] > 49.0 && k + 1 < ch.frames.size();
+                const double dt = tail ? 1.0 / 3.0 : 2.0;
+                const double slope = tail ? (ch.values[k + 1] - ch.values[k - 1]) / 6.0 : 0.05 * nd(rng);
                 ch.handle_left.insert(ch.handle_left.end(), {static_cast<float>(ch.frames[k] - dt),
                                                              static_cast<float>(ch.values[k] - slope)});
                 ch.handle_right.insert(ch.handle_right.end(), {static_cast<float>(ch.frames[k] + dt),
-                                                               static_cast<float>(ch.values[k] + 2 * slope)});
+                                                               static_cast<float>(ch.values[k] + (tail ? 1 : 2) * slope)});
             }
         }
         channels[3] = FCurveKeys{{1.0}, {0.0}, {0.0, 0.0}, {2.0, 0.0}};  // z constant (a sign of its own otherwise)
         std::vector<double> times;
-        for (double t = 1.0; t <= 49.0; t += 1.0) times.push_back(t);
+        for (double t = 1.0; t <= 300.0; t += 1.0) times.push_back(t);
         std::vector<double> values(4 * times.size());
         for (std::size_t c = 0; c < 4; ++c) {
             std::vector<double> out;
@@ -372,8 +382,9 @@ TEST(ReduceProved, SparseKeysFlippingBetweenKeysAreCopiedWholeSegments) {
                 expect_copied_bit_for_bit(channels, original_ipo, r, flips);
                 EXPECT_TRUE(r.proof.proven()) << what << ": " << r.proof.bound / kDeg << "°";
                 double where = 0.0;
-                const double d = dense_max(r, mode, original, dense_times(1.0, 49.0, 64, rng), &where);
+                const double d = dense_max(r, mode, original, dense_times(1.0, 300.0, 64, rng), &where);
                 EXPECT_LE(d, r.proof.bound) << what << ": " << d / kDeg << "° at frame " << where;
+                EXPECT_LT(r.keys.key_count(), 3 * key_t.size() + 3) << what;  // fewer than the original's
                 for (const ReducedChannel& ch : r.keys.channels) {
                     const bool bezier = ipo == KeyInterpolation::BEZIER || original_ipo == KeyInterpolation::BEZIER;
                     EXPECT_EQ(ch.handle_left.size(), bezier ? 2 * ch.frames.size() : 0) << what;
@@ -383,6 +394,78 @@ TEST(ReduceProved, SparseKeysFlippingBetweenKeysAreCopiedWholeSegments) {
                 }
             }
         }
+    }
+}
+
+// An original no reduction within the tolerance thins (sparse BEZIER keys whose random handles bend
+// every segment, reduced to LINEAR; Euler BEZIER keys 1/16 frame apart beyond frame 100,000): the
+// result is the original's own keys, bit for bit over the whole range (one copied span), and plays as
+// the original at 64 points per frame and random times. Never more keys than the original: LINEAR
+// Euler keys there are thinned (a reduction, proved).
+TEST(ReduceProved, AnOriginalNoReductionThinsIsKeptAsItIs) {
+    std::mt19937 rng(29);
+    std::normal_distribution<double> nd(0.0, 0.3);
+    struct Case {
+        const char* mode;
+        std::vector<double> frames;
+        KeyInterpolation original_ipo, ipo;
+        bool kept;  // the original's keys are the result
+    };
+    std::vector<double> far;
+    for (double f = 100050.0; far.size() < 24; f += far.size() % 3 == 2 ? 7.0 : 0.0625) far.push_back(f);
+    const Case cases[] = {
+        {"QUATERNION", {1, 7, 13, 19, 25, 31, 37}, KeyInterpolation::BEZIER, KeyInterpolation::LINEAR, true},
+        {"XYZ", far, KeyInterpolation::LINEAR, KeyInterpolation::BEZIER, false},
+        {"XYZ", far, KeyInterpolation::BEZIER, KeyInterpolation::BEZIER, true},
+    };
+    for (const Case& k : cases) {
+        const RotationMode mode = parse_rotation_mode(k.mode);
+        const std::size_t C = channel_count(mode), K = k.frames.size();
+        std::vector<FCurveKeys> channels(C);
+        std::size_t original_keys = 0;
+        for (std::size_t c = 0; c < C; ++c) {
+            FCurveKeys& ch = channels[c];
+            double v = nd(rng);
+            for (std::size_t i = 0; i < K; ++i) {
+                v += nd(rng);
+                const double f = k.frames[i], gap = i + 1 < K ? k.frames[i + 1] - f : 1.0;
+                ch.frames.push_back(f);
+                ch.values.push_back(static_cast<float>(v));
+                ch.handle_left.insert(ch.handle_left.end(), {static_cast<float>(f - gap / 3), static_cast<float>(v + nd(rng))});
+                ch.handle_right.insert(ch.handle_right.end(), {static_cast<float>(f + gap / 3), static_cast<float>(v + nd(rng))});
+            }
+            original_keys += K;
+        }
+        std::vector<double> times;  // Blender's frames over the range, and the keys' own
+        for (double t = std::ceil(k.frames.front()); t <= k.frames.back(); t += 1.0) times.push_back(t);
+        times.insert(times.end(), k.frames.begin(), k.frames.end());
+        std::sort(times.begin(), times.end());
+        times.erase(std::unique(times.begin(), times.end()), times.end());
+        std::vector<double> values(C * times.size());
+        for (std::size_t c = 0; c < C; ++c) {
+            std::vector<double> out;
+            blender_evaluate(channels[c], k.original_ipo, times, out);
+            for (std::size_t i = 0; i < times.size(); ++i) values[C * i + c] = out[i];
+        }
+        const std::string what = std::string(k.mode) + " " + key_interpolation_name(k.original_ipo) + " → " +
+                                 key_interpolation_name(k.ipo);
+        const PlaybackMotion original(channels, k.original_ipo, mode);
+        const ProvedKeys r = reduce_keys_proved(channels, k.original_ipo, mode, times, values, 0.1 * kDeg, k.ipo, false);
+        const std::vector<std::pair<double, double>> whole = {{k.frames.front(), k.frames.back()}};
+        EXPECT_TRUE(r.proof.proven()) << what;
+        double where = 0.0;
+        const double d = dense_max(r, mode, original, dense_times(k.frames.front(), k.frames.back(), 64, rng), &where);
+        EXPECT_LE(d, r.proof.bound + 1e-12) << what << " at frame " << where;
+        if (!k.kept) {
+            EXPECT_LT(r.keys.key_count(), original_keys) << what;
+            EXPECT_TRUE(r.copied.empty()) << what;
+            continue;
+        }
+        EXPECT_EQ(r.copied, whole) << what;
+        EXPECT_EQ(r.keys.key_count(), original_keys) << what;
+        expect_copied_bit_for_bit(channels, k.original_ipo, r, whole);
+        EXPECT_EQ(r.proof.bound, 0.0) << what;
+        EXPECT_LE(d, 1e-12) << what << " at frame " << where;
     }
 }
 
