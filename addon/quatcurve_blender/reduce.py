@@ -323,6 +323,7 @@ class SkeletonResult:
     vertex: str                 # 'tail', 'shell X', 'shell Y', 'shell Z'
     action: str
     worst_text: str = ""        # worst, with the scene's units
+    kept: tuple = ()            # bones asked for whose reduction needed as many keys or more: their keys stay
 
 
 @dataclass
@@ -363,9 +364,11 @@ class ReduceResult:
 
     def lines(self):
         if self.error == "DISTANCE":
-            return ["%s: %d bone%s, %d → %d rotation keys, worst %s at %s, frame %s (%s) in '%s'"
+            return ["%s: %d bone%s, %d → %d rotation keys, worst %s at %s, frame %s (%s) in '%s'%s"
                     % (t.name, t.bones, "" if t.bones == 1 else "s", t.keys_before, t.keys_after,
-                       self.length(t.worst), t.bone, num(t.frame), t.vertex, t.action) for t in self.targets]
+                       self.length(t.worst), t.bone, num(t.frame), t.vertex, t.action,
+                       "; %d kept their keys (a reduction needed as many or more): %s" % (
+                           len(t.kept), ", ".join(t.kept)) if t.kept else "") for t in self.targets]
         return ["%s (%s): %d → %d keys, %s in '%s'"
                 % (t.name, t.mode, t.keys_before, t.keys_after, t.error_text, t.action)
                 for t in self.targets]
@@ -495,7 +498,8 @@ class SkeletonReduce:
     read: object                # skeleton.ReadSkeleton
     distance: float             # the native target: the bound less Blender's float32 posing slack
     shell: float
-    result: object = None       # quatcurve.SkeletonReduction
+    result: object = None       # quatcurve.SkeletonReduction (None: every bone asked for kept its keys)
+    kept: list = field(default_factory=list)  # bone indices kept with their own keys (reduce_item)
 
 
 def float32_slack(read, shell):
@@ -543,17 +547,28 @@ def reduce_distance(found, settings, begin):
         raise ReduceError(str(error)) from error
 
     def reduce_item(item):
+        # A bone whose reduction keeps as many keys as it has or more (sparse keys to LINEAR output)
+        # keeps its own keys instead, and the others are reduced again around it, posed as it plays:
+        # the distance the result reports is the written keys' (each round keeps at least one more).
         read = item.read
-        try:
-            item.result = read.skeleton().reduce(read.frames, read.rotations, read.locations, read.scales,
-                                                 item.distance, item.shell, settings.interpolation,
-                                                 settings.synchronized, reduced=read.reduced)
-        except ValueError as error:
-            raise ReduceError("%s: %s" % (read.object.name, error)) from error
-        if item.result.error.distance > item.distance:
-            raise ReduceError("%s: no reduction keeps every virtual vertex within %s (the float32 floor of the keys "
-                              "reaches %s)" % (read.object.name, length_text(distance),
-                                               length_text(item.result.error.distance)))
+        while np.any(read.reduced):
+            try:
+                item.result = read.skeleton().reduce(read.frames, read.rotations, read.locations, read.scales,
+                                                     item.distance, item.shell, settings.interpolation,
+                                                     settings.synchronized, reduced=read.reduced)
+            except ValueError as error:
+                raise ReduceError("%s: %s" % (read.object.name, error)) from error
+            if item.result.error.distance > item.distance:
+                raise ReduceError("%s: no reduction keeps every virtual vertex within %s (the float32 floor of the "
+                                  "keys reaches %s)" % (read.object.name, length_text(distance),
+                                                        length_text(item.result.error.distance)))
+            grown = [b for b in np.flatnonzero(read.reduced) if item.result.keys[b].key_count >= read.keys_before[b]]
+            if not grown:
+                break
+            read.reduced = read.reduced.copy()
+            read.reduced[grown] = False
+            item.kept.extend(int(b) for b in grown)
+            item.result = None
         return item
 
     done = list(parallel_imap(reduce_item, iter(items)))  # everything computed before the first write
@@ -572,17 +587,23 @@ def reduce_distance(found, settings, begin):
                           shell=shell, units=(units.system, units.scale_length or 1.0))
     action_of = {id(item): action.name for item, action in zip(owners, actions)}
     for item in done:
-        read, error = item.read, item.result.error
+        read = item.read
         chosen = np.flatnonzero(read.reduced)
-        before = int(read.keys_before[chosen].sum())
-        after = int(sum(item.result.keys[b].key_count for b in chosen))
-        bone = read.names[error.bone] if error.bone >= 0 else "-"
-        frame = float(read.frames[error.sample]) if error.bone >= 0 else float(read.frames[0])
-        vertex = VERTEX_NAMES[error.vertex] if error.vertex >= 0 else "-"
-        result.targets.append(SkeletonResult(read.object.name, len(chosen), before, after, error.distance, bone, frame,
-                                             vertex, action_of.get(id(item), ""), result.length(error.distance)))
+        kept = int(read.keys_before[item.kept].sum())
+        before = int(read.keys_before[chosen].sum()) + kept
+        after = int(sum(item.result.keys[b].key_count for b in chosen)) + kept
+        if item.result is not None and item.result.error.bone >= 0:
+            error = item.result.error
+            worst, bone, frame = error.distance, read.names[error.bone], float(read.frames[error.sample])
+            vertex = VERTEX_NAMES[error.vertex]
+        else:  # nothing reduced, or nowhere off: the keys play as they did
+            worst, bone, frame, vertex = 0.0 if item.result is None else item.result.error.distance, "-", \
+                float(read.frames[0]), "-"
+        result.targets.append(SkeletonResult(read.object.name, len(chosen) + len(item.kept), before, after, worst, bone,
+                                             frame, vertex, action_of.get(id(item), ""), result.length(worst),
+                                             tuple(read.names[b] for b in item.kept)))
         result.keys_before += before
         result.keys_after += after
-        result.worst_distance = max(result.worst_distance, error.distance)
+        result.worst_distance = max(result.worst_distance, worst)
     result.seconds = time.perf_counter() - begin
     return result

@@ -96,6 +96,50 @@ def test_chain_rig_keeps_every_virtual_vertex_within_the_distance(scene, tmp_pat
     assert lines.startswith("Chain: 10 bones") and "frame" in lines
 
 
+def test_bones_no_reduction_thins_keep_their_keys(scene, tmp_path):
+    """The chain rig with three bones thinned to a key every 6 frames (automatic handles), reduced to
+    LINEAR keys: those three need as many keys as they have or more, so they keep their own keys, bit
+    for bit (the result line names them), and the other bones are reduced around them; no bone ends
+    with more keys than it had, and Blender's posed armature, in a fresh process, keeps every virtual
+    vertex within the distance of the original's."""
+    thinned = {"spine", "forearm.L", "shin.L"}
+    rig = rigs.build_chain_rig()
+    for fcurve in fcurves.Channels.of(rig).fcurves:
+        if ".rotation_" not in fcurve.data_path or fcurve.data_path.split('"')[1] not in thinned:
+            continue
+        points = fcurve.keyframe_points
+        for k in range(len(points) - 2, 0, -1):
+            if (points[k].co[0] - 1) % 6:
+                points.remove(points[k])
+        fcurve.update()
+
+    def per_bone():
+        out = {}
+        for f in fcurves.Channels.of(rig).fcurves:
+            if ".rotation_" in f.data_path:
+                co = np.empty(2 * len(f.keyframe_points), dtype=np.float32)
+                f.keyframe_points.foreach_get("co", co)
+                out.setdefault(f.data_path.split('"')[1], []).append(co)
+        return out
+
+    frames = key_frames(rig)
+    keys_before = per_bone()
+    before = posed(rig, frames, tmp_path, "before")
+    assert bpy.ops.quatcurve.reduce(error="DISTANCE", distance=0.002, shell=0.1, interpolation="LINEAR") == {"FINISHED"}
+    lines = bpy.context.scene.quatcurve_reduce.last_lines
+    print(lines)
+    keys_after = per_bone()
+    kept = {bone for bone, co in keys_before.items()
+            if all(len(a) == len(b) and np.array_equal(a, b) for a, b in zip(co, keys_after[bone]))}
+    assert kept == thinned and "3 kept their keys" in lines and all(bone in lines for bone in kept), (kept, lines)
+    for bone, co in keys_before.items():
+        assert sum(map(len, keys_after[bone])) <= sum(map(len, co)), bone
+    after = posed(rig, frames, tmp_path, "after")
+    distance = 0.002
+    worst = worst_distance(rig, before, after, 0.1)
+    assert worst[0] <= distance, "%s frame %s: %.6g above %.6g" % (worst[1], frames[worst[2]], worst[0], distance)
+
+
 def test_unselected_bones_keep_their_keys_and_the_bound_holds(scene, tmp_path):
     rig = rigs.build_chain_rig()
     for name in ("chest", "hand.L"):
