@@ -4,8 +4,9 @@ arguments, its smoke mode and its exit.
 `--smoke` among a benchmark's arguments (after `--` under Blender's binary) runs the smallest size
 once: every code path of the full run, no repeats, no time compared with a target. The exit status
 is non-zero when the benchmarked code raises, so CTest's bench.smoke.* tests (docs/testing.md) catch
-a benchmark that no longer runs. Scripts run by Blender's binary put this folder on sys.path first
-(its --python does not)."""
+a benchmark that no longer runs. `--help` (or `-h`) prints the benchmark's own docstring (what it
+measures, how to run it, its options) and exits without running it. Scripts run by Blender's binary
+put this folder on sys.path first (its --python does not)."""
 
 import os
 import sys
@@ -22,14 +23,20 @@ def script_args():
 
 
 SMOKE = "--smoke" in script_args()
+HELP = "--help" in script_args() or "-h" in script_args()
 
 
 def run(main, *args):
     """Runs main(*args) and exits with its status: what it returns (None: 0), a SystemExit's code
     (a message: printed, status 1), or 1 with the traceback printed when it raises. The bpy module
-    leaves through os._exit, since it can hang in its exit-time destructors (seen with 4.5)."""
+    leaves through os._exit, since it can hang in its exit-time destructors (seen with 4.5).
+    With --help: the benchmark's docstring, status 0, main not run."""
     try:
-        code = main(*args)
+        if HELP:
+            print((sys.modules[main.__module__].__doc__ or "").strip())
+            code = 0
+        else:
+            code = main(*args)
     except SystemExit as stop:
         code = stop.code
     except BaseException:  # noqa: BLE001 — any failure of the benchmarked code fails the run

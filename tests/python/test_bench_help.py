@@ -1,0 +1,26 @@
+"""The benchmarks' `--help` (tests/bench/smoke.py): each prints its own docstring and exits 0
+without running. The benchmarks that need no Blender are run here, in this build's Python; the ones
+run by Blender share the same smoke.run."""
+
+import ast
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "bench"
+PLAIN = sorted(p for p in BENCH.glob("*.py")
+               if p.name != "smoke.py" and "\nimport bpy" not in "\n" + p.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("script", PLAIN, ids=lambda p: p.name)
+@pytest.mark.parametrize("flag", ["--help", "-h"])
+def test_help_prints_the_docstring_and_runs_nothing(script, flag):
+    doc = ast.get_docstring(ast.parse(script.read_text(encoding="utf-8")))
+    assert doc, script.name
+    done = subprocess.run([sys.executable, str(script), flag], capture_output=True, text=True, timeout=60,
+                          env=dict(os.environ), cwd=BENCH.parents[1])
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == doc.strip()
