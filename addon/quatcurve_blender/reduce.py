@@ -293,6 +293,13 @@ class TargetReduce:
     loop: cycles.Loop = None    # a loop: its period is reduced
     cycles: tuple = None        # per channel, the Cycles modifier's (mode_before, mode_after) to put back
 
+    @property
+    def untouched(self):
+        """The reduction keeps as many keys as the target has or more, and its playback could not be
+        emulated (CONSTANT keys, mixed interpolations: the native copy of the original's keys needs
+        the emulation): its F-curves are left as they are, which play as they did."""
+        return self.original is None and self.reduced.key_count >= self.keys_before
+
 
 @dataclass
 class TargetResult:
@@ -437,19 +444,34 @@ def reduce(found, settings):
     # soon as everything is read — copying the action and writing the first targets while the workers
     # reduce the rest — and a failure on the way removes the new actions again; in place, everything
     # is computed before the first key is replaced.
-    items = []
+    items, written = [], []
 
     def writes():
         for item in parallel_imap(reduce_item, read_all()):
             items.append(item)
+            if item.untouched:
+                continue
+            written.append(item)
             yield write.RotationWrite(item.target, item.mode, item.reduced.keys, item.reduced.interpolation,
                                       replace=(item.prop,), cycles=item.cycles,
                                       key_interpolations=item.reduced.key_interpolations)
 
     actions = write.write_rotations(writes() if settings.new_action else list(writes()),
                                     settings.new_action, "reduced")
+    action_of = {id(item): action.name for item, action in zip(written, actions)}
     result = ReduceResult(settings.tolerance, settings.interpolation)
-    for item, action in zip(items, actions):
+    for item in items:
+        if item.untouched:  # its keys as they were: Blender plays them as before
+            action = fcurves.active_action(item.target.id_data)
+            result.targets.append(TargetResult(
+                item.target.name, item.mode, item.keys_before, item.keys_before, 0.0,
+                action.name if action is not None else "",
+                "max error 0.0000° at every instant — its keys kept as they are: a reduction keeps no fewer (%d "
+                "keys; %s)" % (item.reduced.key_count, item.between), 0.0, True))
+            result.keys_before += item.keys_before
+            result.keys_after += item.keys_before
+            continue
+        action = action_of[id(item)]
         after = item.reduced.key_count
         error_deg = math.degrees(item.reduced.max_error)
         bound = item.reduced.bound
@@ -460,7 +482,7 @@ def reduce(found, settings):
             text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
                      "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))
         result.targets.append(TargetResult(item.target.name, item.mode, item.keys_before, after,
-                                           error_deg, action.name, text,
+                                           error_deg, action, text,
                                            None if bound is None else math.degrees(bound),
                                            item.reduced.proof is not None and item.reduced.proof.proven,
                                            [] if item.reduced.copied is None else

@@ -448,6 +448,39 @@ def test_an_original_no_reduction_thins_keeps_its_keys(reducer):
             np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("new_action", [False, True])
+def test_stepped_keys_no_reduction_thins_stay_as_they_are(reducer, new_action):
+    """Blocking keys (CONSTANT, a key every 5 frames) reduced beside a dense LINEAR target in one call:
+    a reduction needs more keys than the steps have (and their playback is not emulated), so the
+    stepped target's F-curves stay as they are, bit for bit, and its line says so; the dense target is
+    reduced and written (into the copy of its action with new_action)."""
+    rng = np.random.default_rng(1)
+    stepped = bpy.data.objects.new("Stepped", None)
+    bpy.context.scene.collection.objects.link(stepped)
+    stepped.rotation_mode = "XYZ"
+    for f in range(1, 60, 5):
+        stepped.rotation_euler = rng.normal(size=3)
+        stepped.keyframe_insert("rotation_euler", frame=f)
+    for fcurve in fcurves.Channels.of(stepped).fcurves:
+        for point in fcurve.keyframe_points:
+            point.interpolation = "CONSTANT"
+    frames = np.arange(1.0, 61.0)
+    angles = np.column_stack([np.sin(frames / 9.0), 0.5 * np.cos(frames / 7.0), 0.1 * frames / 60.0])
+    dense = keyed_object("Dense", frames, angles, "XYZ")
+    digest = [fcurves.fcurve_digest(f).hexdigest() for f in fcurves.Channels.of(stepped).fcurves]
+    action = fcurves.active_action(stepped).name
+    result = reduce.reduce([targets.Target(stepped), targets.Target(dense)],
+                           reduce.ReduceSettings(tolerance=0.1, new_action=new_action))
+    lines = result.lines()
+    assert "kept as they are" in lines[0] and "36 → 36 keys" in lines[0] and action in lines[0], lines[0]
+    assert [fcurves.fcurve_digest(f).hexdigest() for f in fcurves.Channels.of(stepped).fcurves] == digest
+    assert fcurves.active_action(stepped).name == action
+    target = result.targets[1]
+    assert target.keys_after < target.keys_before and "kept" not in lines[1], lines[1]
+    assert target.action == fcurves.active_action(dense).name
+    assert (target.action != "DenseAction") == new_action, target.action
+
+
 @pytest.mark.parametrize("interpolation", ["BEZIER", "LINEAR"])
 def test_tight_tolerance_is_proved_and_plays_within_it_in_a_fresh_blender(reducer, interpolation, tmp_path):
     """Three joints of a real clip (LINEAR quaternion keys at every frame, as imported), reduced to
