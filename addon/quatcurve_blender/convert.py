@@ -19,7 +19,8 @@ of the new channels stays within `tolerance` degrees of the rotation played befo
 of the keyed range where Blender's playback of the old keys is emulated bit for bit (every segment
 Bezier, or every one linear: reduce.read_original), proved against it (quatcurve.convert_keys_proved);
 otherwise at every sample (quatcurve.fit_keys, verified by emulating Blender's F-curve evaluation),
-and the result line says why it is not proved between them.
+and the result line says why it is not proved between them. Blocking keys (every key CONSTANT) become
+CONSTANT keys of the new mode at every key frame (stepped_plan): the same steps at the same frames.
 
 Keys typed GENERATED in the source are a fit's or an earlier conversion's: they are resampled, not
 kept. The old rotation channels are removed, the new ones made in the same group, and the rotation
@@ -111,6 +112,8 @@ class Source:
     loop: cycles.Loop = None
     original: tuple = None  # reduce.read_original's (channels, interpolation): the playback the proof emulates
     between: str = ""       # why the conversion is not proved between samples (original is None)
+    stepped: bool = False   # every key CONSTANT (blocking): forced holds every key frame, and each one's
+                            # rotation becomes a CONSTANT key of the new mode (plan)
 
 
 def _where(target, action):
@@ -160,6 +163,15 @@ def read_source(target, action, channels, slot, mode, subframes):
     keyed = np.unique(np.concatenate(frames_all))
     animator = np.unique(np.concatenate(animator))
     forced_frames = np.union1d(animator, keyed[[0, -1]])
+    # Blocking keys: every segment of every channel CONSTANT, constant extrapolation, no loop. The
+    # rotation then changes only at key frames (of any channel): keyed in the new mode at all of them,
+    # CONSTANT, it plays the same steps at the same frames.
+    present = [c for c in curves if c is not None]
+    kinds = [fcurves.segment_interpolations(c) for c in present]
+    stepped = (loop is None and any(kinds) and all(k <= {"CONSTANT"} for k in kinds)
+               and all(c.extrapolation == "CONSTANT" for c in present))
+    if stepped:
+        forced_frames = keyed
     times = qc.sample_frames(keyed, int(subframes))
     values = targets.evaluate_channels(target, prop, curves, times)
     bad = ~np.isfinite(values)
@@ -188,7 +200,7 @@ def read_source(target, action, channels, slot, mode, subframes):
     group = channels.group_of(path, count) or (target.bone if target.bone is not None else "Object Transforms")
     return Source(target, target.name, where, action, channels, slot, mode, prop, path, group,
                   times, quats, values[0].copy(), forced.astype(np.int64), types, selected, source_keys, loop,
-                  original, between)
+                  original, between, stepped)
 
 
 def refuse_drivers(target, modes):
@@ -351,6 +363,28 @@ class Plan:
     generated: int
     bound: float = None
     worst_frame: float = None
+    interpolation: str = "BEZIER"  # of every key written (CONSTANT: blocking keys, stepped_plan)
+
+
+def stepped_plan(source, mode, prop, reference):
+    """Blocking keys (Source.stepped) in the new mode: at every key frame, the rotation Blender plays
+    there as CONSTANT keys (channel values continuous from key to key). Both play a constant rotation
+    from one key frame to the next and change at the same frames, so the angle between them at every
+    instant is the angle at the keys, between the old rotation and the one Blender builds from the new
+    keys as stored (float32): that is the bound, proved, with no key generated."""
+    qc = native.require()
+    at_keys = source.quats[source.forced]
+    values = qc.quats_to_channels(at_keys, mode, reference).astype(np.float32).astype(np.float64)
+    angles = qc.angle_between(qc.channels_to_quats(values, mode), at_keys)
+    frames = source.times[source.forced]
+    worst = int(np.argmax(angles))
+    channels = [(frames.copy(), values[:, c].copy(), np.column_stack([frames, values[:, c]]),
+                 np.column_stack([frames, values[:, c]]), source.types.copy(), source.selected.copy())
+                for c in range(values.shape[1])]
+    generated = int((source.types == fit.KEY_TYPE_GENERATED).sum()) * values.shape[1]
+    bound = float(angles[worst])
+    return Plan(source, mode, prop, channels, bound, len(frames) * values.shape[1], generated, bound,
+                float(frames[worst]), "CONSTANT")
 
 
 def plan(source, settings):
@@ -360,6 +394,11 @@ def plan(source, settings):
     prop, _ = fcurves.rotation_property(mode)
     reference = source.first if family(mode) == family(source.mode) else None
     bound = worst = None
+    if source.stepped:
+        try:
+            return stepped_plan(source, mode, prop, reference)
+        except ValueError as error:
+            raise ConvertError("%s: %s" % (source.where, error)) from None
     try:
         values = qc.quats_to_channels(source.quats, mode, reference)
         if source.original is not None:
@@ -404,7 +443,8 @@ def write_plan(plan):
         if modes is not None:
             cycle = curve.modifiers.new("CYCLES")
             cycle.mode_before = cycle.mode_after = modes[c]
-        fcurves.write_keys(curve, frames, values, interpolation="BEZIER", handle_left=left, handle_right=right)
+        fcurves.write_keys(curve, frames, values, interpolation=plan.interpolation, handle_left=left,
+                           handle_right=right)
         fcurves.write_key_types(curve, types)
         fcurves.write_key_selection(curve, selected)
     record = _find_record(source.action, source.slot, _owner_path(source.target))

@@ -638,20 +638,36 @@ def test_uneven_keys_convert_proved_at_every_instant(scene, mode, tmp_path):
     checked at quarter frames only, the converted keys left the motion by 0.75-1.38° between them. The
     conversion is proved against the source's own playback at every instant, and Blender's playback
     of the saved file — in a fresh process, at 64 points per frame, 200 random times and both sides of
-    every key's snap zone — stays within the tolerance of the playback before. A CONSTANT source,
-    whose playback is not emulated, says so."""
+    every key's snap zone — stays within the tolerance of the playback before. Blocking keys (every
+    key CONSTANT, one channel keyed at a frame of its own) become CONSTANT keys at every key frame,
+    none generated, and play the same steps; a source mixing CONSTANT and LINEAR keys, whose playback
+    is not emulated, says so."""
     rng = np.random.default_rng(4)
     obj, frames = add_uneven_euler_keys(rng)
     con = add_empty("Steps", "XYZ")
     key(con, "rotation_euler", CONSTANT_EULER, interpolation="CONSTANT", degrees=True)
-    source = obj.copy()  # the source's motion, kept on a copy with its own action
-    bpy.context.collection.objects.link(source)
-    fcurves.assign_action(source, fcurves.copy_action(fcurves.active_action(obj), "Source"))
-    result = convert.convert([Target(obj), Target(con)], convert.ConvertSettings(rotation_mode=mode, tolerance=TOL))
-    uneven, steps = result.lines()[:2]
+    y = fcurves.Channels.of(con).find_all("rotation_euler", 3)[1]
+    y.keyframe_points.insert(20.5, 0.7).interpolation = "CONSTANT"  # Y alone steps at 20.5
+    mixed = add_empty("Mixed", "XYZ")
+    key(mixed, "rotation_euler", CONSTANT_EULER, interpolation="CONSTANT", degrees=True)
+    for fcurve in fcurves.Channels.of(mixed).fcurves:
+        fcurve.keyframe_points[1].interpolation = "LINEAR"
+    sources = []
+    for owner in (obj, con):  # each source's motion, kept on a copy with its own action
+        copy = owner.copy()
+        bpy.context.collection.objects.link(copy)
+        fcurves.assign_action(copy, fcurves.copy_action(fcurves.active_action(owner), owner.name + "Source"))
+        sources.append(copy)
+    result = convert.convert([Target(obj), Target(con), Target(mixed)],
+                             convert.ConvertSettings(rotation_mode=mode, tolerance=TOL))
+    uneven, steps, mix = result.lines()[:3]
     assert "at every instant" in uneven and "ABOVE" not in uneven, uneven
-    assert "not proved between them: rotation_euler[0] has CONSTANT keys" in steps, steps
-    assert "1 of 2 proved within the tolerance at every instant)" in result.summary(), result.summary()
+    assert "13 → %d keys (0 generated), within 0.0000° at every instant" % (5 * len(channel_keys(con))) in steps, steps
+    assert all(p.interpolation == "CONSTANT" for f in fcurves.Channels.of(con).fcurves for p in f.keyframe_points)
+    assert all(len(c[0]) == 5 for c in channel_keys(con)), channel_keys(con)
+    assert "not proved between them: rotation_euler[0] has CONSTANT/LINEAR keys" in mix or \
+        "not proved between them: rotation_euler[0] has CONSTANT keys" in mix, mix
+    assert "2 of 3 proved within the tolerance at every instant)" in result.summary(), result.summary()
     written = np.unique(np.concatenate([c[0] for c in channel_keys(obj)] + [frames]))
     times = np.unique(np.r_[np.arange(math.ceil(frames[0] * 64), math.floor(frames[-1] * 64) + 1) / 64,
                             np.round(rng.uniform(frames[0], frames[-1], 200) * 65536) / 65536,
@@ -659,9 +675,11 @@ def test_uneven_keys_convert_proved_at_every_instant(scene, mode, tmp_path):
     times = times[(times >= frames[0]) & (times <= frames[-1])]
     blend = tmp_path / "uneven.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
-    got = fresh_blender_quats(blend, [[obj.name, None], [source.name, None]], times, tmp_path)
-    err = np.degrees(angles_between(got[obj.name], got[source.name]))
+    got = fresh_blender_quats(blend, [[o.name, None] for o in (obj, con, *sources)], times, tmp_path)
+    err = np.degrees(angles_between(got[obj.name], got[sources[0].name]))
     assert err.max() <= TOL + 1e-4, "%.5f° at frame %.6f" % (err.max(), times[err.argmax()])
+    steps_err = np.degrees(angles_between(got[con.name], got[sources[1].name]))
+    assert steps_err.max() <= 1e-3, "steps: %.5f° at frame %.6f" % (steps_err.max(), times[steps_err.argmax()])
     print("[convert uneven] Blender %s, XYZ → %s: %s; max %.4f° at %d times" % (
         bpy.app.version_string, mode, uneven.split(": ", 2)[-1], err.max(), len(times)))
 
