@@ -20,7 +20,8 @@ PLAIN = sorted(p for p in BENCH.glob("*.py")
 def test_help_prints_the_docstring_and_runs_nothing(script, flag):
     doc = ast.get_docstring(ast.parse(script.read_text(encoding="utf-8")))
     assert doc, script.name
-    done = subprocess.run([sys.executable, str(script), flag], capture_output=True, text=True, timeout=60,
-                          env=dict(os.environ), cwd=BENCH.parents[1])
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == doc.strip()
+    # UTF-8 both ways, whatever the console's code page (Windows' is not: the docstrings have ° and —).
+    done = subprocess.run([sys.executable, str(script), flag], capture_output=True, timeout=60,
+                          env=dict(os.environ, PYTHONIOENCODING="utf-8"), cwd=BENCH.parents[1])
+    assert done.returncode == 0, done.stderr.decode("utf-8", "replace")
+    assert done.stdout.decode("utf-8").replace("\r\n", "\n").strip() == doc.strip()
