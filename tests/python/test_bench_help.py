@@ -3,6 +3,7 @@ without running. The benchmarks that need no Blender are run here, in this build
 run by Blender share the same smoke.run."""
 
 import ast
+import importlib.util
 import os
 import subprocess
 import sys
@@ -18,7 +19,10 @@ PLAIN = sorted(p for p in BENCH.glob("*.py")
 @pytest.mark.parametrize("script", PLAIN, ids=lambda p: p.name)
 @pytest.mark.parametrize("flag", ["--help", "-h"])
 def test_help_prints_the_docstring_and_runs_nothing(script, flag):
-    doc = ast.get_docstring(ast.parse(script.read_text(encoding="utf-8")))
+    text = script.read_text(encoding="utf-8")
+    if ("scipy" in text or "test_curve_tangents" in text) and importlib.util.find_spec("scipy") is None:
+        pytest.skip("%s imports scipy, absent here" % script.name)  # (the Windows cp313 suite has none)
+    doc = ast.get_docstring(ast.parse(text))
     assert doc, script.name
     # UTF-8 both ways, whatever the console's code page (Windows' is not: the docstrings have ° and —).
     done = subprocess.run([sys.executable, str(script), flag], capture_output=True, timeout=60,
