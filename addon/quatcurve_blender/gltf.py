@@ -24,8 +24,9 @@ sampler's frames (times as the file stores them, float32 seconds), is then reduc
 `quatcurve.reduce_slerp_proved` to few keys (a greedy search) whose slerp is proved within the
 tolerance of the curve at every instant (slerp is bi-invariant: the node's A·q·B of them plays the
 same motion turned); where the curve is Blender's playback of keys quatcurve does not emulate, the
-keys hold at the samples (`reduce_slerp`) and the result says so. Translations, scales, meshes,
-skins: as the exporter wrote them.
+keys hold at the samples (`reduce_slerp`) and the result says so. Blocking keys (every rotation key
+CONSTANT, Blender's playback) become a STEP sampler keyed where they step (blocking_steps).
+Translations, scales, meshes, skins: as the exporter wrote them.
 
 A loop (cycles.py: Cycles modifiers on the target's rotation channels) is written as exactly one
 period, its first key to its last ([t0, t0 + P] in seconds), reduced as a closed curve
@@ -302,6 +303,7 @@ class SamplerPlan:
     proved_against: object
     why: str
     fps: float
+    steps: np.ndarray = None  # blocking keys (blocking_steps): the frames a STEP sampler keys
 
     def sample(self, frames):
         """The target's curve at `frames`, (N, 4) in the channels' own rotation."""
@@ -342,6 +344,7 @@ def plan_sampler(doc, sampler, target, settings, fps):
     if loop is not None:  # one period: the first key to the last
         frames = np.array([loop.start, loop.end])
         how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
+    span = frames[0], frames[-1]  # the exporter's frames (the loop's period), before float32 seconds
     step = 1.0 / settings.subframes
     dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
     dense[-1] = frames[-1]
@@ -349,7 +352,25 @@ def plan_sampler(doc, sampler, target, settings, fps):
     t32 = (dense / fps).astype(np.float32).astype(np.float64)
     t32 = t32[np.concatenate(([True], t32[1:] > t32[:-1]))]  # float32 may merge very close times
     proved_against, why = proof_reference(target, curve, t32 * fps, loop)
-    return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps)
+    steps = None
+    if callable(curve) and loop is None and settings.error == "ANGLE":
+        steps = blocking_steps(target, *span)
+    return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps, steps)
+
+
+def blocking_steps(target, first, last):
+    """Where the rotation of a target keyed with blocking keys steps, as the frames of a glTF STEP
+    sampler: `first` and every rotation key frame in (first, last] — or None unless every segment of
+    every rotation F-curve is CONSTANT (no modifiers, constant extrapolation, no NLA). Between those
+    frames Blender holds the last key's rotation, as STEP holds its last key's value."""
+    played = targets.playback(target, fcurves.active_action(target.id_data))
+    present = [fc for fc in played.fcurves if fc is not None]
+    kinds = [fcurves.segment_interpolations(fc) for fc in present]
+    if (played.nla or not present or not any(kinds) or not all(k <= {"CONSTANT"} for k in kinds)
+            or any(fc.extrapolation != "CONSTANT" or len(fc.modifiers) for fc in present)):
+        return None
+    keyed = fcurves.key_frames(present)
+    return np.concatenate(([first], keyed[(keyed > first) & (keyed <= last)]))
 
 
 def reduce_sampler(plan, settings):
@@ -358,6 +379,11 @@ def reduce_sampler(plan, settings):
     qc = native.require()
     tolerance = max(math.radians(settings.tolerance) - MARGIN, 0.0)
     how = plan.how
+    if plan.steps is not None:
+        # Blocking keys: the held rotation at each step, STEP in the file (sampler_keys' caller).
+        return (plan.steps, plan.sample(plan.steps), FLOAT32_QUAT,
+                how + ", STEP keys at the %d frames where it steps (blocking keys): the same rotation at every "
+                "instant, each step at its frame as the file stores it (float32 seconds)" % len(plan.steps))
     if plan.proved_against is not None:
         # Proved at every instant in the channels' own rotation: slerp is bi-invariant, so the file's
         # keys A·q·B play the same motion turned. The keys sit on times the file stores exactly.
@@ -570,7 +596,7 @@ def rewrite(doc, scene, settings, fps):
             raise GltfError("%s: %s" % (plan.target.name, e)) from None
         times, quats = sampler_keys(plan, key_frames, keys)
         result.keys_after, result.max_error, result.curve = len(times), error, how
-        written.append((sampler, times, quats))
+        written.append((sampler, times, quats, "STEP" if plan.steps is not None else "LINEAR"))
     plans = written
     # Key times already stored (the exporter's inputs, and ours as they are written): samplers with
     # the same times share one input accessor (still motion keeps its first and last sample).
@@ -581,8 +607,8 @@ def rewrite(doc, scene, settings, fps):
                 inputs.setdefault(doc.accessor_array(sampler["input"]).astype("<f4").tobytes(), sampler["input"])
             except glb.GlbError:
                 pass
-    for sampler, times, quats in plans:
-        sampler["interpolation"] = "LINEAR"
+    for sampler, times, quats, interpolation in plans:
+        sampler["interpolation"] = interpolation
         known = inputs.get(np.asarray(times, dtype="<f4").tobytes())
         if known is not None:
             users[sampler["input"]] -= 1

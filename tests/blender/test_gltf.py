@@ -22,6 +22,7 @@ import pytest
 from mathutils import Matrix, Quaternion
 
 from bake_helpers import add_rig, key, select_bones, select_objects
+from quatcurve_blender import fcurves
 
 TOLERANCE = 0.1          # degrees: the export's
 FIT_TOLERANCE = 0.005    # degrees: Blender's playback of a fitted target against its method
@@ -377,6 +378,36 @@ def test_export_holds_its_bound_at_every_instant(animated, tmp_path, method):
     print("\n%s, Blender %s: max error %.4f° at %d times (64 per frame and 200 random)%s" % (
         method, bpy.app.version_string, max(errors.values()), len(times), ("\n" + lines) if lines else ""))
     assert max(errors.values()) <= TOLERANCE + slack + 1e-4, errors
+
+
+def test_blocking_keys_export_as_step(animated, tmp_path):
+    """An object keyed with blocking keys (every key CONSTANT; one channel steps at a fractional frame
+    of its own) beside the animated scene: its sampler is STEP with a key at the first frame and at
+    every frame where it steps, and the file, played per the spec at 64 points per frame and 200
+    random times, holds Blender's rotation at every one of them but within 1e-4 frame of a step (the
+    file stores each step's time as float32 seconds); the other samplers stay LINEAR."""
+    from quatcurve_blender import gltf
+    blocks = bpy.data.objects.new("Blocks", None)
+    bpy.context.scene.collection.objects.link(blocks)
+    blocks.rotation_mode = "YXZ"
+    key(blocks, "rotation_euler", [(1, (0, 0, 0)), (30, (40, -20, 10)), (61, (90, 30, -60)), (100, (0, 10, 0))],
+        interpolation="CONSTANT", degrees=True)
+    fcurves.Channels.of(blocks).find_all("rotation_euler", 3)[2].keyframe_points.insert(47.5, 0.9).interpolation = \
+        "CONSTANT"
+    steps = [1, 30, 47.5, 61, 100]
+    out = tmp_path / "blocks.glb"
+    result = gltf.export(bpy.context.scene, str(out), gltf.ExportSettings(tolerance=TOLERANCE))
+    row = next(r for r in result.samplers if r.target == "Blocks")
+    assert row.rewritten and row.keys_after == len(steps) and "STEP keys at the 5 frames" in row.curve, row
+    glb_file = GltfFile(str(out))
+    i = glb_file.node("Blocks")
+    times, _, interpolation = glb_file.samplers[i]
+    assert interpolation == "STEP" and np.allclose(times * FPS, steps, atol=1e-4), (interpolation, times * FPS)
+    assert all(s[2] == "LINEAR" for n, s in glb_file.samplers.items() if n != i)
+    dense = [t for t in dense_times() if min(abs(t - f) for f in steps) > 1e-4]
+    want = exporter_frames(blender_worlds(["Blocks"], dense), exact_export(tmp_path / "exact.glb"), dense)
+    error = file_error(glb_file, want, dense)["Blocks"]
+    assert error <= 1e-3, error
 
 
 def test_distance_export_holds_each_budget_at_every_instant(animated, tmp_path):
