@@ -27,7 +27,7 @@ for bit (from the last frame before the flip where every channel has a key to th
 frames, values with their stored signs, the handles of those segments, the original's
 interpolation; FREE handles, so Blender keeps them), which is why they are within the bound there.
 The pieces between are reduced as above, each in the hemisphere of its own stored signs, ending on
-the copied keys (`TargetResult.copied` lists the spans). Where the reduction would keep no fewer keys
+the copied keys (`TargetResult.copied` lists the spans). Where the reduction would keep more keys
 than the original has, the original's keys stay, copied whole (the result line says so). Otherwise
 the reduction holds at frames and keys (`reduce_values`) and the result line says why between frames
 is not proved.
@@ -149,7 +149,7 @@ class ReducedChannels:
 
     def kept_original(self, frames):
         """True when the result is the original's own keys over the whole range (one copied span from
-        the first frame to the last): the reduction would have kept as many keys or more."""
+        the first frame to the last): the reduction would have kept more keys."""
         copied = self.copied
         return (copied is not None and len(copied) == 1 and float(copied[0][0]) <= np.float32(frames[0])
                 and float(copied[0][1]) >= np.float32(frames[-1]))
@@ -295,10 +295,10 @@ class TargetReduce:
 
     @property
     def untouched(self):
-        """The reduction keeps as many keys as the target has or more, and its playback could not be
+        """The reduction keeps more keys than the target has, and its playback could not be
         emulated (CONSTANT keys, mixed interpolations: the native copy of the original's keys needs
         the emulation): its F-curves are left as they are, which play as they did."""
-        return self.original is None and self.reduced.key_count >= self.keys_before
+        return self.original is None and self.reduced.key_count > self.keys_before
 
 
 @dataclass
@@ -330,7 +330,7 @@ class SkeletonResult:
     vertex: str                 # 'tail', 'shell X', 'shell Y', 'shell Z'
     action: str
     worst_text: str = ""        # worst, with the scene's units
-    kept: tuple = ()            # bones asked for whose reduction needed as many keys or more: their keys stay
+    kept: tuple = ()            # bones asked for whose reduction needed more keys: their keys stay
 
 
 @dataclass
@@ -374,7 +374,7 @@ class ReduceResult:
             return ["%s: %d bone%s, %d → %d rotation keys, worst %s at %s, frame %s (%s) in '%s'%s"
                     % (t.name, t.bones, "" if t.bones == 1 else "s", t.keys_before, t.keys_after,
                        self.length(t.worst), t.bone, num(t.frame), t.vertex, t.action,
-                       "; %d kept their keys (a reduction needed as many or more): %s" % (
+                       "; %d kept their keys (a reduction needed more): %s" % (
                            len(t.kept), ", ".join(t.kept)) if t.kept else "") for t in self.targets]
         return ["%s (%s): %d → %d keys, %s in '%s'"
                 % (t.name, t.mode, t.keys_before, t.keys_after, t.error_text, t.action)
@@ -466,7 +466,7 @@ def reduce(found, settings):
             result.targets.append(TargetResult(
                 item.target.name, item.mode, item.keys_before, item.keys_before, 0.0,
                 action.name if action is not None else "",
-                "max error 0.0000° at every instant — its keys kept as they are: a reduction keeps no fewer (%d "
+                "max error 0.0000° at every instant — its keys kept as they are: a reduction needs more (%d "
                 "keys; %s)" % (item.reduced.key_count, item.between), 0.0, True))
             result.keys_before += item.keys_before
             result.keys_after += item.keys_before
@@ -477,7 +477,7 @@ def reduce(found, settings):
         bound = item.reduced.bound
         text = item.reduced.error_text(settings.tolerance)
         if item.reduced.kept_original(item.frames):
-            text += " — the original's keys kept as they are: no fewer keys hold the tolerance at every instant"
+            text += " — the original's keys kept as they are: a reduction within the tolerance needs more keys"
         if item.loop is not None:
             text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
                      "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))
@@ -569,7 +569,7 @@ def reduce_distance(found, settings, begin):
         raise ReduceError(str(error)) from error
 
     def reduce_item(item):
-        # A bone whose reduction keeps as many keys as it has or more (sparse keys to LINEAR output)
+        # A bone whose reduction keeps more keys than it has (sparse keys to LINEAR output)
         # keeps its own keys instead, and the others are reduced again around it, posed as it plays:
         # the distance the result reports is the written keys' (each round keeps at least one more).
         read = item.read
@@ -584,7 +584,7 @@ def reduce_distance(found, settings, begin):
                 raise ReduceError("%s: no reduction keeps every virtual vertex within %s (the float32 floor of the "
                                   "keys reaches %s)" % (read.object.name, length_text(distance),
                                                         length_text(item.result.error.distance)))
-            grown = [b for b in np.flatnonzero(read.reduced) if item.result.keys[b].key_count >= read.keys_before[b]]
+            grown = [b for b in np.flatnonzero(read.reduced) if item.result.keys[b].key_count > read.keys_before[b]]
             if not grown:
                 break
             read.reduced = read.reduced.copy()

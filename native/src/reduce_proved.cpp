@@ -684,11 +684,11 @@ ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation
     return out;
 }
 
-// The reduction, or the original's own keys when the reduction keeps no fewer: a reduction proved at
+// The reduction, or the original's own keys when the reduction keeps more: a reduction proved at
 // every instant can need more keys than an original whose keys lie closer than its samples can
-// follow (keys a few float32 steps apart far from frame 0), and one that keeps as many only moves the
-// curve. The original's keys, copied whole as one span (join_pieces: each channel's keys bit for bit,
-// a constant channel two keys), play as the original does: bound 0.
+// follow (keys a few float32 steps apart far from frame 0). The original's keys, copied whole as one
+// span (join_pieces: each channel's keys bit for bit, a constant channel two keys), play as the
+// original does: bound 0.
 // Only where every channel's keys lie within the samples' range (the copy then changes nothing
 // outside it) and a tolerance above 0 (0 keeps every sample, proving nothing between them).
 ProvedKeys fewest_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& original,

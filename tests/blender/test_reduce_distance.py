@@ -98,7 +98,7 @@ def test_chain_rig_keeps_every_virtual_vertex_within_the_distance(scene, tmp_pat
 
 def test_bones_no_reduction_thins_keep_their_keys(scene, tmp_path):
     """The chain rig with three bones thinned to a key every 6 frames (automatic handles), reduced to
-    LINEAR keys: those three need as many keys as they have or more, so they keep their own keys, bit
+    LINEAR keys: those three need more keys than they have, so they keep their own keys, bit
     for bit (the result line names them), and the other bones are reduced around them; no bone ends
     with more keys than it had, and Blender's posed armature, in a fresh process, keeps every virtual
     vertex within the distance of the original's."""

@@ -165,10 +165,10 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 // at a span's end has the left handle of the part before it and the right handle of the part after.
 // The samples' values are taken with the sign of the original's playback at their time.
 //
-// Never more keys than the original (reduce_keys_proved): where the result would keep as many keys
-// as the original's channels hold or more (a constant channel counting two), and every channel's keys
-// lie within [times.front(), times.back()] and the tolerance is above 0, the result is the
-// original's keys copied whole as one span (as above; proof bound 0).
+// Never more keys than the original (reduce_keys_proved): where the result would keep more keys than
+// the original's channels hold (a constant channel counting two), every channel's keys lie within
+// [times.front(), times.back()] and the tolerance is above 0, the result is the original's keys
+// copied whole as one span (as above; proof bound 0).
 //
 // tolerance 0 keeps every sample (as reduce_keys does) and proves nothing between them: the proof
 // then has bound +∞ and the whole range unproven.
