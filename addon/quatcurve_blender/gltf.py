@@ -352,9 +352,7 @@ def plan_sampler(doc, sampler, target, settings, fps):
     t32 = (dense / fps).astype(np.float32).astype(np.float64)
     t32 = t32[np.concatenate(([True], t32[1:] > t32[:-1]))]  # float32 may merge very close times
     proved_against, why = proof_reference(target, curve, t32 * fps, loop)
-    steps = None
-    if callable(curve) and loop is None and settings.error == "ANGLE":
-        steps = blocking_steps(target, *span)
+    steps = blocking_steps(target, *span) if callable(curve) and loop is None else None
     return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps, steps)
 
 
@@ -373,6 +371,29 @@ def blocking_steps(target, first, last):
     return np.concatenate(([first], keyed[(keyed > first) & (keyed <= last)]))
 
 
+def step_keys(plan):
+    """Blocking keys (plan.steps): the held rotation at each step, written as a STEP sampler (in either
+    error mode: the same rotation at every instant, so nothing to budget)."""
+    seconds = step_seconds(plan.steps, plan.fps)
+    # Steps closer than float32 seconds tell apart: the last of them holds from that time on.
+    frames = plan.steps[np.append(seconds[1:] > seconds[:-1], True)]
+    merged = len(plan.steps) - len(frames)
+    return (frames, plan.sample(frames), FLOAT32_QUAT,
+            plan.how + ", STEP keys at the %d frames where it steps (blocking keys): the same rotation at every "
+            "instant, each step at its frame or one float32 step of its time before it%s" % (
+                len(frames), "; %d steps closer than that to the next merged into it" % merged if merged else ""))
+
+
+def step_seconds(frames, fps):
+    """A STEP sampler's key times as the file stores them: float32 seconds at or before each frame, so
+    a player at a step's frame already holds its key (float64 array)."""
+    seconds = np.asarray(frames, dtype=np.float64) / fps
+    stored = seconds.astype(np.float32)
+    late = stored.astype(np.float64) > seconds
+    stored[late] = np.nextafter(stored[late], np.float32(-np.inf))
+    return stored.astype(np.float64)
+
+
 def reduce_sampler(plan, settings):
     """(key frames, (K, 4) keys in the channels' rotation, error bound (radians), description): the
     sampler's keys within the tolerance of its curve (ANGLE)."""
@@ -380,10 +401,7 @@ def reduce_sampler(plan, settings):
     tolerance = max(math.radians(settings.tolerance) - MARGIN, 0.0)
     how = plan.how
     if plan.steps is not None:
-        # Blocking keys: the held rotation at each step, STEP in the file (sampler_keys' caller).
-        return (plan.steps, plan.sample(plan.steps), FLOAT32_QUAT,
-                how + ", STEP keys at the %d frames where it steps (blocking keys): the same rotation at every "
-                "instant, each step at its frame as the file stores it (float32 seconds)" % len(plan.steps))
+        return step_keys(plan)
     if plan.proved_against is not None:
         # Proved at every instant in the channels' own rotation: slerp is bi-invariant, so the file's
         # keys A·q·B play the same motion turned. The keys sit on times the file stores exactly.
@@ -420,7 +438,8 @@ def sampler_keys(plan, key_frames, keys):
     """(key times in seconds, (K, 4) float32 glTF x, y, z, w): `keys` (the channels' rotation) turned
     into the node's (A·q·B), one hemisphere chain, a loop's last key its first."""
     qc = native.require()
-    key_times = (np.asarray(key_frames, dtype=np.float64) / plan.fps).astype(np.float32).astype(np.float64)
+    key_times = (step_seconds(key_frames, plan.fps) if plan.steps is not None else
+                 (np.asarray(key_frames, dtype=np.float64) / plan.fps).astype(np.float32).astype(np.float64))
     kept = qc.quat_multiply(qc.quat_multiply(plan.a, np.asarray(keys, dtype=np.float64)), plan.b)
     kept = kept / np.linalg.norm(kept, axis=1, keepdims=True)
     for k in range(1, len(kept)):  # one hemisphere chain, as reduce_slerp gives them
@@ -506,7 +525,8 @@ def reduce_distance(plans, settings, scene):
         for plan in group:
             b = index[plan.target.bone if is_armature else read.names[0]]
             rotations[b] = plan.sample(frames)
-            bones[b] = plan.slerp_bone()
+            # Blocking keys: the STEP sampler plays the pose Blender does, so the bone is not reduced.
+            bones[b] = plan.slerp_bone() if plan.steps is None else None
             by_bone[b] = plan
         sk = read.skeleton()
         if is_armature:
@@ -526,6 +546,9 @@ def reduce_distance(plans, settings, scene):
                 obj.name, reduce.length_text(distance, system, scale_length),
                 reduce.length_text(error.distance, system, scale_length)))
         for b, plan in by_bone.items():
+            if plan.steps is not None:
+                done[id(plan)] = step_keys(plan)
+                continue
             keys = result.keys[b]
             how = plan.how + ", angle budget %.4g°" % math.degrees(result.budgets[b])
             if plan.proved_against is not None:

@@ -380,12 +380,14 @@ def test_export_holds_its_bound_at_every_instant(animated, tmp_path, method):
     assert max(errors.values()) <= TOLERANCE + slack + 1e-4, errors
 
 
-def test_blocking_keys_export_as_step(animated, tmp_path):
+@pytest.mark.parametrize("error", ["ANGLE", "DISTANCE"])
+def test_blocking_keys_export_as_step(animated, tmp_path, error):
     """An object keyed with blocking keys (every key CONSTANT; one channel steps at a fractional frame
-    of its own) beside the animated scene: its sampler is STEP with a key at the first frame and at
-    every frame where it steps, and the file, played per the spec at 64 points per frame and 200
-    random times, holds Blender's rotation at every one of them but within 1e-4 frame of a step (the
-    file stores each step's time as float32 seconds); the other samplers stay LINEAR."""
+    of its own) beside the animated scene, exported in either error mode: its sampler is STEP with a
+    key at the first frame and at every frame where it steps, and the file, played per the spec at 64
+    points per frame and 200 random times, holds Blender's rotation at every one of them but within
+    1e-4 frame of a step, and at every step's own frame (the file stores each step's time as float32
+    seconds at or before its frame); the other samplers stay LINEAR."""
     from quatcurve_blender import gltf
     blocks = bpy.data.objects.new("Blocks", None)
     bpy.context.scene.collection.objects.link(blocks)
@@ -396,7 +398,9 @@ def test_blocking_keys_export_as_step(animated, tmp_path):
         "CONSTANT"
     steps = [1, 30, 47.5, 61, 100]
     out = tmp_path / "blocks.glb"
-    result = gltf.export(bpy.context.scene, str(out), gltf.ExportSettings(tolerance=TOLERANCE))
+    settings = (gltf.ExportSettings(tolerance=TOLERANCE) if error == "ANGLE" else
+                gltf.ExportSettings(error="DISTANCE", distance=0.001, shell=0.1))
+    result = gltf.export(bpy.context.scene, str(out), settings)
     row = next(r for r in result.samplers if r.target == "Blocks")
     assert row.rewritten and row.keys_after == len(steps) and "STEP keys at the 5 frames" in row.curve, row
     glb_file = GltfFile(str(out))
@@ -408,6 +412,27 @@ def test_blocking_keys_export_as_step(animated, tmp_path):
     want = exporter_frames(blender_worlds(["Blocks"], dense), exact_export(tmp_path / "exact.glb"), dense)
     error = file_error(glb_file, want, dense)["Blocks"]
     assert error <= 1e-3, error
+    # At each step's own frame the file already holds the new key (an object's axes are the file's:
+    # no turn). Blender's exporter, which rounds each time to the nearest float32, may not.
+    error = file_error(glb_file, blender_worlds(["Blocks"], steps), steps)["Blocks"]
+    assert error <= 1e-3, error
+
+
+def test_step_times_are_at_or_before_their_frames_and_never_equal():
+    """A STEP sampler's key times: float32 seconds at or before each frame (one float32 step at most),
+    and steps that float32 seconds cannot tell apart (0.001 frame at frame 100,000 and 24 fps) merged
+    into the last of them, which holds from there."""
+    from quatcurve_blender import gltf
+    frames = np.array([1.0, 4.0, 19.0, 47.5, 1e5, 1e5 + 0.001, 1e5 + 0.002, 1e5 + 1])
+    seconds = gltf.step_seconds(frames, 24.0)
+    assert np.all(seconds == seconds.astype(np.float32)) and np.all(seconds <= frames / 24.0)
+    assert np.all(frames / 24.0 - seconds <= np.spacing(np.float32(frames / 24.0)))
+    plan = gltf.SamplerPlan(None, None, None, None, lambda f: np.column_stack([f, f, f, f]), "blocks", frames, None,
+                            "", 24.0, frames)
+    kept, values, _, how = gltf.step_keys(plan)
+    times = gltf.step_seconds(kept, 24.0)
+    assert np.all(np.diff(times) > 0) and kept[-2] == 1e5 + 0.002 and values[-2, 0] == 1e5 + 0.002, (kept, times)
+    assert len(kept) < len(frames) and "merged" in how, how
 
 
 def test_distance_export_holds_each_budget_at_every_instant(animated, tmp_path):

@@ -351,6 +351,37 @@ def test_chain_rig_within_the_distance_through_the_operator(scene, tmp_path):
     assert any(line.startswith("Chain/head:") and "kept as sampled" in line for line in lines)
 
 
+def test_blocking_bone_steps_and_the_others_keep_the_distance(scene, tmp_path):
+    """The chain rig with its forearm blocked (keys 5 frames apart, every key CONSTANT): the forearm's
+    sampler is STEP, keyed at its keys, and not reduced; every other rewritten bone is, around the
+    forearm's pose as Blender plays it, and the file keeps the distance at every frame (a step's frame
+    included: the file stores its time at or before the frame)."""
+    from quatcurve_blender import gltf
+    rig = chain_rig(scene)
+    # Off the frames where the oracle finds each bone's axes (1, 21, 41, 60): Blender's own exporter
+    # stores a step's time rounded to float32, which may fall after its frame.
+    steps = [1] + list(range(4, 61, 5))
+    for curve in fcurves.Channels.of(rig).find_all('pose.bones["forearm.L"].rotation_euler', 3):
+        for p in reversed(curve.keyframe_points):
+            if int(round(p.co[0])) not in steps:
+                curve.keyframe_points.remove(p, fast=True)
+        for p in curve.keyframe_points:
+            p.interpolation = "CONSTANT"
+        curve.update()
+    oracle = Oracle(rig, tmp_path / "default.glb")
+    out = tmp_path / "distance.glb"
+    result = gltf.export(scene, str(out), distance_settings(distance=0.002, shell=0.1))
+    row = next(r for r in result.samplers if r.target == "Chain/forearm.L")
+    assert row.rewritten and row.keys_after == len(steps) and "STEP keys at the %d frames" % len(steps) in row.curve
+    assert "angle budget" not in row.curve, row.curve
+    assert sum("angle budget" in r.curve for r in result.samplers) == 8, result.lines()
+    glb = GlbNodes(str(out))
+    times, _, interpolation = glb.channels[(glb.node("forearm.L"), "rotation")]
+    assert interpolation == "STEP" and np.allclose(times * oracle.fps, steps, rtol=0, atol=1e-4), times * oracle.fps
+    assert all(times * oracle.fps <= np.array(steps, dtype=np.float64))
+    check_distance(oracle, glb, 0.002, 0.1, result.summary(), fewer=False)
+
+
 @pytest.mark.parametrize("case", ["distance < 0", "shell < 0", "constraint"])
 def test_refusals_write_nothing(scene, tmp_path, case):
     """A negative distance or shell (0 means the default), and an unmuted constraint on a bone (the
