@@ -6,6 +6,7 @@
 # Extra arguments go to CMake's configure step of build/, e.g. -DQUATCURVE_SANITIZE=ON.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+[ -x "$VENV/bin/python" ] || die "$VENV is missing: run build_scripts/setup.sh first (build_scripts/test.sh runs both)"
 load_blenders
 
 # configure_and_build DIR PYTHON_VENV [CMAKE ARGS…] -- [BUILD ARGS…]
