@@ -121,15 +121,16 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
 
 }  // namespace detail
 
-// Hot samplers get an x86-64-v3 (AVX2, FMA) clone next to the baseline x86-64 one, chosen at load
-// time (GCC function multi-versioning), so the module still runs on any x86-64. Define
+// Hot samplers get x86-64-v4 (AVX-512: 32 vector registers, so far fewer spills of their 256-bit
+// vectors) and x86-64-v3 (AVX2, FMA) clones next to the baseline x86-64 one, chosen at load time
+// (GCC function multi-versioning), so the module still runs on any x86-64. Define
 // QUATCURVE_NO_MULTIVERSION to build the baseline only.
 // QUATCURVE_HOT_UNFUSED: the same clones without contracting a·b + c into an FMA, for kernels
 // whose every bit must match baseline scalar code (which has no FMA to contract into).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(QUATCURVE_NO_MULTIVERSION)
-#define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
-#define QUATCURVE_HOT_UNFUSED __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=off")))
+#define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#define QUATCURVE_HOT_UNFUSED __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), optimize("fp-contract=off")))
 #else
 #define QUATCURVE_HOT
 #define QUATCURVE_HOT_UNFUSED
