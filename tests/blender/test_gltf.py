@@ -380,8 +380,8 @@ def test_export_holds_its_bound_at_every_instant(animated, tmp_path, method):
     assert max(errors.values()) <= TOLERANCE + slack + 1e-4, errors
 
 
-@pytest.mark.parametrize("error", ["ANGLE", "DISTANCE"])
-def test_blocking_keys_export_as_step(animated, tmp_path, error):
+@pytest.mark.parametrize("mode", ["ANGLE", "DISTANCE"])
+def test_blocking_keys_export_as_step(animated, tmp_path, mode):
     """An object keyed with blocking keys (every key CONSTANT; one channel steps at a fractional frame
     of its own) beside the animated scene, exported in either error mode: its sampler is STEP with a
     key at the first frame and at every frame where it steps, and the file, played per the spec at 64
@@ -398,7 +398,7 @@ def test_blocking_keys_export_as_step(animated, tmp_path, error):
         "CONSTANT"
     steps = [1, 30, 47.5, 61, 100]
     out = tmp_path / "blocks.glb"
-    settings = (gltf.ExportSettings(tolerance=TOLERANCE) if error == "ANGLE" else
+    settings = (gltf.ExportSettings(tolerance=TOLERANCE) if mode == "ANGLE" else
                 gltf.ExportSettings(error="DISTANCE", distance=0.001, shell=0.1))
     result = gltf.export(bpy.context.scene, str(out), settings)
     row = next(r for r in result.samplers if r.target == "Blocks")
