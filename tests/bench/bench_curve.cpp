@@ -117,9 +117,10 @@ LQ lintermediate(const LQ& p, const LQ& q, const LQ& n) {
     return lmul(q, lexp(-(ax + bx) / 4, -(ay + by) / 4, -(az + bz) / 4));
 }
 
-// The GLM loops get the same x86-64-v3 clone as the library's hot samplers (fair comparison).
+// The GLM loops get the same x86-64-v4 and x86-64-v3 clones as the library's hot samplers (fair
+// comparison).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define BENCH_HOT __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define BENCH_HOT __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define BENCH_HOT
 #endif
