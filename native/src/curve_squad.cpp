@@ -27,7 +27,9 @@ inline Q4 squad_from(const SquadSeg& g, double s, double C1, double K1, double C
     double c3, k3;
     exp_coeffs(gf * gf * n2, c3, k3);
     k3 *= gf;
-    return mul(A, {c3, k3 * X.x, k3 * X.y, k3 * X.z});
+    // A·(c3, k3·vec X) = (c3 − k3·X.w)·A + k3·A·X, and A·X = B (A is a unit quaternion).
+    const double ca = c3 - k3 * X.w;
+    return {ca * A.w + k3 * B.w, ca * A.x + k3 * B.x, ca * A.y + k3 * B.y, ca * A.z + k3 * B.z};
 }
 
 // The same construction with jets: exact world angular velocity; s advances at sd per frame.
@@ -112,7 +114,12 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
             // g·|χ| ≤ π: θ² ≤ π² < 10; a small log: |χ| ≤ 1, θ² ≤ 1/4
             exp_coeffs4<decltype(small_log)::value ? 6 : 10>(gf * gf * n2, c3, k3);
             k3 *= gf;
-            mul(A, QV{c3, k3 * X.x, k3 * X.y, k3 * X.z}, q);
+            // A·(c3, k3·vec X) = (c3 − k3·X.w)·A + k3·A·X, and A·X = B (A is a unit quaternion).
+            const V4 ca = c3 - k3 * X.w;
+            q.w = ca * A.w + k3 * B.w;
+            q.x = ca * A.x + k3 * B.x;
+            q.y = ca * A.y + k3 * B.y;
+            q.z = ca * A.z + k3 * B.z;
         });
     };
     // A: |r| ≤ π, so 8 or 10 terms; B: |ψ| < 2π, so 8, 10 or 12 (exp_terms). A small log (|r| ≤ 1 and
