@@ -77,6 +77,10 @@ constexpr double kSameAngles = 1e-2;
 // A change of Euler branch between keys whose path passes no nearer than this to gimbal lock is
 // refused (radians: 5°, a visible swing of about 10°).
 constexpr double kSwitchRefused = 5.0 * kTwoPiFit / 360.0;
+// A change of Euler branch whose two rows, joined channel by channel, turn the rotation off the path
+// by more than this (radians, 20°: a change within kSwitchRefused of the lock swings about twice
+// that) needs a whole turn of an angle, which no place on the path makes free: refused.
+constexpr double kSwitchSwingRefused = 4.0 * kSwitchRefused;
 // The sample beside a key at gimbal lock, in min_gaps from it (the nearest a generated key may sit).
 constexpr double kBesideLock = 1.05;
 // cos(middle angle) below this: the key sits at gimbal lock.
@@ -111,6 +115,22 @@ bool lift_through(std::vector<double>& V, std::size_t r, const double* target, s
     if (!same_angles(&W[3 * r], target)) return false;
     V.swap(W);
     return true;
+}
+
+// How far the rotation leaves the path where Euler rows a and b (samples qa and qb) are joined channel
+// by channel, as the F-curves join them across a change of branch: the largest angle, at 32 points
+// of the straight channel path, to the nearer of qa and qb, less the path's own step between them.
+// At gimbal lock the first and last angles move together without moving the rotation (about the
+// step); a whole turn of an angle between the rows sweeps the rotation around (up to 180°).
+double switch_swing(const double* a, const double* b, const Quat& qa, const Quat& qb, const RotationMode& mode) {
+    double worst = 0.0;
+    for (int k = 1; k < 32; ++k) {
+        const double u = k / 32.0;
+        const double row[3] = {a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]), a[2] + u * (b[2] - a[2])};
+        const Quat q = channels_to_quat(row, mode);
+        worst = std::fmax(worst, std::fmin(angle_between(q, qa), angle_between(q, qb)));
+    }
+    return std::fmax(0.0, worst - angle_between(qa, qb));
 }
 
 void fit_round(const Curve& curve, const std::vector<double>& key_frames, const std::vector<double>& key_values,
@@ -606,7 +626,22 @@ void fit_round(const Curve& curve, const std::vector<double>& key_frames, const 
                                   key_frames[k], key_frames[k + 1], lock * 360.0 / kTwoPiFit, t[forced[k] + switch_at]);
                     throw InvalidArgument(text);
                 }
-                if (switch_at > 0) fit.switches.push_back({k, t[forced[k] + switch_at]});
+                if (switch_at > 0) {
+                    const std::size_t s = switch_at;
+                    const double swing = switch_swing(&v[3 * (s - 1)], &v[3 * s], span[s - 1], span[s], mode);
+                    if (swing > kSwitchSwingRefused) {
+                        char text[480];
+                        std::snprintf(text, sizeof text,
+                                      "keys at frames %g and %g: the method's path reaches the second key on the "
+                                      "other Euler branch, and the channels can change branch (near frame %.3f) "
+                                      "only with a whole turn of an angle, which swings the rotation by up to "
+                                      "%.0f° there: key the second key's angles on the path's own turn, or convert "
+                                      "the target to quaternion first",
+                                      key_frames[k], key_frames[k + 1], t[forced[k] + s], swing * 360.0 / kTwoPiFit);
+                        throw InvalidArgument(text);
+                    }
+                    fit.switches.push_back({k, t[forced[k] + s]});
+                }
                 std::copy(v.begin(), v.end() - 3, values.begin() + static_cast<std::ptrdiff_t>(C * forced[k]));
             }
             break;

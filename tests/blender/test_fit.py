@@ -368,6 +368,27 @@ def test_fit_axis_angle_refuses_a_turn_away_from_the_rest_pose(scene, method):
         np.testing.assert_array_equal(t0, t1)
 
 
+@pytest.mark.parametrize("method", ["SLERP", "SPLINE_C2"])
+def test_fit_euler_refuses_a_branch_change_needing_a_whole_turn(scene, method):
+    """YXZ keys a random scene found: the first at gimbal lock (X, the middle angle, at -90°), the
+    second on the other Euler branch a turn of X away from where the path from the lock brings it.
+    The channels could change branch only by sweeping X through 360° between two samples (the fit
+    once wrote that and reported a 180° bound): refused naming the object, the keys' frames and the
+    turn, nothing changed."""
+    obj = add_empty("Lock", "YXZ")
+    key(obj, "rotation_euler", [(1, (-90, 186.093, 83.258)), (6.5, (164.499, 132.318, 104.844))],
+        interpolation="BEZIER", degrees=True)
+    select_objects(obj)
+    before = rotation_keys(obj)
+    with pytest.raises(RuntimeError, match=r"Lock\.?[A-Z_0-9]*: keys at frames 1 and 6.5: .*other Euler branch.*"
+                                           r"whole turn of an angle.*convert the target to quaternion"):
+        bpy.ops.quatcurve.fit(method=method, tolerance=TOL)
+    for (f0, v0, t0), (f1, v1, t1) in zip(before, rotation_keys(obj)):
+        np.testing.assert_array_equal(f0, f1)
+        np.testing.assert_array_equal(v0, v1)
+        np.testing.assert_array_equal(t0, t1)
+
+
 def test_fit_axis_angle_operator_and_refit(scene):
     obj = add_empty("Axis", "AXIS_ANGLE")
     key(obj, "rotation_axis_angle", [(f, v) for f, v in zip([k[0] for k in AXIS_ANGLE_KEYS],

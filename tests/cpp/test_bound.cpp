@@ -349,6 +349,49 @@ TEST(FitProof, EulerBranchChangeFarFromGimbalLockIsRefused) {
     }
 }
 
+// From a key at gimbal lock the channels may change Euler branch for free (the first and last angles
+// move together there), but not by a whole turn of an angle. XYZ (0, 90, 0) to the rotation of
+// (0, 45, 0) keyed on the other branch, as (180, 135, 180) or (180, -225, 180), is fitted and proved.
+// YXZ keys a random scene found (the middle angle, about X, at the lock at frame 1000): the path
+// from the lock reaches the second key on the other branch a turn of X away, so the channels would
+// sweep a whole turn between two samples (the rotation swings up to 180° there, where the fit once
+// wrote it and reported a 180° bound); the fit refuses, naming the keys and the turn.
+TEST(FitProof, EulerBranchChangeNeedingAWholeTurnIsRefused) {
+    const double tol = 0.05 * kDeg;
+    struct Case {
+        const char* order;
+        std::vector<double> t, deg;  // channel values (about X, Y, Z) in degrees, key after key
+        bool refused;
+    };
+    const Case cases[] = {
+        {"XYZ", {1.0, 11.0}, {0, 90, 0, 180, 135, 180}, false},
+        {"XYZ", {1.0, 11.0}, {0, 90, 0, 180, -225, 180}, false},
+        {"YXZ", {1000.0, 1005.5068359375}, {-90, 186.093, 83.258, 164.499, 132.318, 104.844}, true},
+    };
+    std::mt19937 rng(3);
+    for (const Case& c : cases) {
+        const RotationMode mode = parse_rotation_mode(c.order);
+        std::vector<double> v;
+        for (double d : c.deg) v.push_back(static_cast<float>(d * kDeg));
+        const Curve curve = Curve::from_euler(c.t, {Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])}, mode.order,
+                                              Method::SLERP);
+        try {
+            const KeyFit fit = fit_through_keys(curve, c.t, v, mode, 4, tol);
+            EXPECT_FALSE(c.refused) << c.order << " " << c.deg[4] << ": fitted, bound " << fit.proof.bound / kDeg << "°";
+            EXPECT_TRUE(fit.proof.proven()) << c.order << ": " << fit.proof.bound / kDeg << "°";
+            EXPECT_LE(dense_max(curve, fit.keys, mode, c.t[0], c.t[1], 640, rng), tol + 1e-6) << c.order;
+        } catch (const InvalidArgument& e) {
+            const std::string what = e.what();
+            EXPECT_TRUE(c.refused) << c.order << ": " << what;
+            char frames[64];
+            std::snprintf(frames, sizeof frames, "frames %g and %g", c.t[0], c.t[1]);
+            EXPECT_NE(what.find(frames), std::string::npos) << what;
+            EXPECT_NE(what.find("whole turn of an angle"), std::string::npos) << what;
+            EXPECT_NE(what.find("convert the target to quaternion"), std::string::npos) << what;
+        }
+    }
+}
+
 // The keys — (0°, 90°, 0°) at frame 1, (90°, 45°, 90°) at frame 4 — then spins past 180°
 // and 360° and a second key at the lock (middle angle -90°) at frame 20, in three Euler orders (the
 // same angles by position): every method proved within the tolerance at every instant, the changes of
