@@ -20,7 +20,8 @@ frame, and A, B are taken from its first sample and checked on every sample (wit
 against Blender's evaluation of the channels there. A node that fails the check (constraints,
 drivers, a parent's non-uniform scale, NLA: anything but the channels moving it) keeps the sampler
 the exporter wrote, and the result says so. The curve, sampled `subframes` times per frame over the
-sampler's frames (times as the file stores them, float32 seconds), is then reduced by the native
+sampler's frames (times as the file stores them, float32 seconds; on to a last rotation key at a
+fractional frame past them, which the exporter's whole frames stop short of), is then reduced by the native
 `quatcurve.reduce_slerp_proved` to few keys (a greedy search) whose slerp is proved within the
 tolerance of the curve at every instant (slerp is bi-invariant: the node's A·q·B of them plays the
 same motion turned); where the curve is Blender's playback of keys quatcurve does not emulate, the
@@ -344,6 +345,12 @@ def plan_sampler(doc, sampler, target, settings, fps):
     if loop is not None:  # one period: the first key to the last
         frames = np.array([loop.start, loop.end])
         how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
+    else:
+        last = last_rotation_key(target)
+        if frames[-1] < last < frames[-1] + 1.0:
+            # The exporter samples whole frames and stops at the last one before a fractional last key;
+            # from there Blender turns on to the key and holds it, so the file's keys go on to it too.
+            frames = np.append(frames, last)
     span = frames[0], frames[-1]  # the exporter's frames (the loop's period), before float32 seconds
     step = 1.0 / settings.subframes
     dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
@@ -354,6 +361,13 @@ def plan_sampler(doc, sampler, target, settings, fps):
     proved_against, why = proof_reference(target, curve, t32 * fps, loop)
     steps = blocking_steps(target, *span) if callable(curve) and loop is None else None
     return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps, steps)
+
+
+def last_rotation_key(target):
+    """The frame of the last key on the target's rotation channels in its active action (-inf: none)."""
+    found = targets.playback(target, fcurves.active_action(target.id_data)).fcurves
+    frames = fcurves.key_frames(found)
+    return float(frames[-1]) if len(frames) else -math.inf
 
 
 def blocking_steps(target, first, last):

@@ -678,3 +678,30 @@ def test_node_moved_by_a_constraint_keeps_the_exporters_samples(animated, tmp_pa
     result = gltf.export(scene, str(tmp_path / "again.glb"), gltf.ExportSettings(tolerance=TOLERANCE))
     line = next(text for text in result.lines() if text.startswith("Euler:"))
     assert "kept as sampled" in line and "1 left as sampled" in result.summary()
+
+
+def test_a_last_key_at_a_fractional_frame_is_held_as_blender_holds_it(scene, tmp_path):
+    """Blender's exporter samples whole frames and stops at the last before a fractional last key
+    (here 20.5): from frame 20 on, its file holds frame 20's rotation while Blender turns on to the key
+    (60° in that half frame) and holds it. The export's keys go on to the key: the file, played per the
+    spec at 64 points per frame and at random times up to frame 24, stays within the tolerance of
+    Blender's playback (before: 60° from frame 20.5 on)."""
+    scene.render.fps, scene.render.fps_base = FPS, 1.0
+    scene.frame_start, scene.frame_end = 1, 24
+    obj = bpy.data.objects.new("Late", None)
+    scene.collection.objects.link(obj)
+    obj.rotation_mode = "XYZ"
+    key(obj, "rotation_euler", [(1, (0, 0, 0)), (10, (40, 10, 0)), (20, (60, 30, 20)), (20.5, (60, 30, 80))],
+        interpolation="BEZIER", degrees=True)
+    out = tmp_path / "late.glb"
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
+    rng = np.random.default_rng(20)
+    times = sorted([1 + k / 64 for k in range(23 * 64 + 1)] + list(rng.uniform(1, 24, 200)))
+    want = blender_worlds(["Late"], times)["Late"]
+    ours = GltfFile(str(out))
+    node = ours.node("Late")
+    errors = [angle(ours.local(node, t / FPS), w) for t, w in zip(times, want)]
+    worst = int(np.argmax(errors))
+    print("\nfractional last key, Blender %s: max error %.4f° at frame %.4f" % (
+        bpy.app.version_string, errors[worst], times[worst]))
+    assert errors[worst] <= TOLERANCE + 1e-4, "%.4f° at frame %.4f" % (errors[worst], times[worst])
