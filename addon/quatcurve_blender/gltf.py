@@ -319,12 +319,29 @@ class SamplerPlan:
         return qc.SlerpBone(self.frames, reference=self.proved_against, cyclic=self.loop is not None, file_unit=1.0 / self.fps)
 
 
-def plan_sampler(doc, sampler, target, settings, fps):
-    """The SamplerPlan of one rotation sampler, or the reason it is kept as the exporter wrote it."""
+def exporter_slides(scene):
+    """Whether Blender's exporter slides the scene's animation in time: an active action starting before
+    frame 0, and an exporter with the option (export_negative_frame, default SLIDE: glTF has no
+    negative times), which then shifts every sampler so the earliest frame it writes is at 0 s."""
+    if "export_negative_frame" not in bpy.ops.export_scene.gltf.get_rna_type().properties:
+        return False
+    for obj in scene.objects:
+        action = fcurves.active_action(obj)
+        if action is not None and action.frame_range[0] < 0:
+            return True
+    return False
+
+
+def plan_sampler(doc, sampler, target, settings, fps, slid=False):
+    """The SamplerPlan of one rotation sampler, or the reason it is kept as the exporter wrote it
+    (slid: exporter_slides)."""
     times = doc.accessor_array(sampler["input"])[:, 0]
     exported = doc.accessor_array(sampler["output"])[:, [3, 0, 1, 2]]  # glTF x, y, z, w -> w, x, y, z
     if sampler.get("interpolation", "LINEAR") == "CUBICSPLINE" or len(times) != len(exported):
         return "kept: a CUBICSPLINE sampler"
+    if slid:
+        return ("kept as sampled: an action starts before frame 0, so Blender's exporter slid the animation to "
+                "start at 0 s and the file's times are not the scene's frames (move the keys to frame 0 or later)")
     frames = times * fps
     whole = np.round(frames)
     frames = np.where(np.abs(frames - whole) < 1e-3, whole, frames)  # float32 seconds -> the exporter's frames
@@ -351,6 +368,8 @@ def plan_sampler(doc, sampler, target, settings, fps):
             # The exporter samples whole frames and stops at the last one before a fractional last key;
             # from there Blender turns on to the key and holds it, so the file's keys go on to it too.
             frames = np.append(frames, last)
+    if len(frames) < 2:
+        return "kept: one sample (the rotation the exporter wrote for the animation's only frame)"
     span = frames[0], frames[-1]  # the exporter's frames (the loop's period), before float32 seconds
     step = 1.0 / settings.subframes
     dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
@@ -582,6 +601,7 @@ def rewrite(doc, scene, settings, fps):
     """Replaces the rotation samplers of `doc` in place; returns (the SamplerResults, the
     DistanceResults of error DISTANCE)."""
     mapped = node_targets(doc.json, scene)
+    slid = exporter_slides(scene)
     nodes = doc.json.get("nodes", [])
     users = {}
     for anim in doc.json.get("animations", []):
@@ -611,7 +631,7 @@ def rewrite(doc, scene, settings, fps):
                                              "kept: no object or bone of the scene has this name", False))
                 continue
             try:
-                planned = plan_sampler(doc, sampler, target, settings, fps)
+                planned = plan_sampler(doc, sampler, target, settings, fps, slid)
             except TargetError as e:
                 raise GltfError(str(e)) from None
             except ValueError as e:
