@@ -349,6 +349,18 @@ def test_fit_axis_angle_object_and_bone_keep_spins(scene, method, tmp_path):
               % (method, name, line.animator_keys, line.generated_keys, err.max()))
 
 
+def fit_refused(obj, method, message):
+    """The fit operator on `obj` alone refuses with an error matching `message`; its keys unchanged."""
+    select_objects(obj)
+    before = rotation_keys(obj)
+    with pytest.raises(RuntimeError, match=message):
+        bpy.ops.quatcurve.fit(method=method, tolerance=TOL)
+    for (f0, v0, t0), (f1, v1, t1) in zip(before, rotation_keys(obj)):
+        np.testing.assert_array_equal(f0, f1)
+        np.testing.assert_array_equal(v0, v1)
+        np.testing.assert_array_equal(t0, t1)
+
+
 @pytest.mark.parametrize("method", ["SQUAD", "SPLINE_C2"])
 def test_fit_axis_angle_refuses_a_turn_away_from_the_rest_pose(scene, method):
     """Keys whose angle a smooth method's path could reach only through the rest pose it passes
@@ -357,15 +369,8 @@ def test_fit_axis_angle_refuses_a_turn_away_from_the_rest_pose(scene, method):
     key(obj, "rotation_axis_angle", [(f, v) for f, v in zip([k[0] for k in AXIS_ANGLE_OFF_REST],
                                                            axis_angle_values(AXIS_ANGLE_OFF_REST))],
         interpolation="BEZIER")
-    select_objects(obj)
-    before = rotation_keys(obj)
-    with pytest.raises(RuntimeError, match=r"Axis: keys at frames 9 and 20: .*another turn of the angle.*"
-                                           r"rest pose.*no nearer than [0-9.]+° .*convert the target to quaternion"):
-        bpy.ops.quatcurve.fit(method=method, tolerance=TOL)
-    for (f0, v0, t0), (f1, v1, t1) in zip(before, rotation_keys(obj)):
-        np.testing.assert_array_equal(f0, f1)
-        np.testing.assert_array_equal(v0, v1)
-        np.testing.assert_array_equal(t0, t1)
+    fit_refused(obj, method, r"Axis: keys at frames 9 and 20: .*another turn of the angle.*"
+                             r"rest pose.*no nearer than [0-9.]+° .*convert the target to quaternion")
 
 
 @pytest.mark.parametrize("method", ["SLERP", "SPLINE_C2"])
@@ -378,15 +383,8 @@ def test_fit_euler_refuses_a_branch_change_needing_a_whole_turn(scene, method):
     obj = add_empty("Lock", "YXZ")
     key(obj, "rotation_euler", [(1, (-90, 186.093, 83.258)), (6.5, (164.499, 132.318, 104.844))],
         interpolation="BEZIER", degrees=True)
-    select_objects(obj)
-    before = rotation_keys(obj)
-    with pytest.raises(RuntimeError, match=r"Lock\.?[A-Z_0-9]*: keys at frames 1 and 6.5: .*other Euler branch.*"
-                                           r"whole turn of an angle.*convert the target to quaternion"):
-        bpy.ops.quatcurve.fit(method=method, tolerance=TOL)
-    for (f0, v0, t0), (f1, v1, t1) in zip(before, rotation_keys(obj)):
-        np.testing.assert_array_equal(f0, f1)
-        np.testing.assert_array_equal(v0, v1)
-        np.testing.assert_array_equal(t0, t1)
+    fit_refused(obj, method, r"Lock: keys at frames 1 and 6.5: .*other Euler branch.*whole turn of an angle.*"
+                             r"convert the target to quaternion")
 
 
 def test_fit_axis_angle_operator_and_refit(scene):
