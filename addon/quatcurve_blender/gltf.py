@@ -575,9 +575,18 @@ def reduce_distance(plans, settings, scene):
             raise GltfError("%s: %s" % (obj.name, error)) from None
         error = result.error
         if error.distance > distance - slack:
-            raise GltfError("%s: no keys keep every virtual vertex within %s (the float32 floor reaches %s)" % (
-                obj.name, reduce.length_text(distance, system, scale_length),
-                reduce.length_text(error.distance, system, scale_length)))
+            # The tightest keys the search tries (every bone at its smallest angle budget) leave this
+            # much: where the rotation turns faster than slerp keys follow (they keep 1/1024 frame
+            # apart: keys a hundredth of a frame apart that turn far, say), or float32 at this size.
+            where = ("" if error.bone < 0 else " at %s's %s near frame %s" % (
+                read.names[error.bone], reduce.VERTEX_NAMES[error.vertex] if error.vertex >= 0 else "pose",
+                targets.num(float(frames[error.sample]))))
+            raise GltfError("%s: no keys keep every virtual vertex within %s: the tightest still leave %s%s (the "
+                            "rotation turns there faster than the file's keys, 1/1024 frame apart at the closest, "
+                            "follow, or float32 cannot hold it at this size); export with a larger distance, or with error='ANGLE', "
+                            "which writes each sampler with the bound it reaches" % (
+                                obj.name, reduce.length_text(distance, system, scale_length),
+                                reduce.length_text(error.distance, system, scale_length), where))
         for b, plan in by_bone.items():
             if plan.steps is not None:
                 done[id(plan)] = step_keys(plan)

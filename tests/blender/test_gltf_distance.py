@@ -401,3 +401,26 @@ def test_refusals_write_nothing(scene, tmp_path, case):
         gltf.export(scene, str(path), distance_settings(**options))
     assert all(m in str(error.value) for m in message), str(error.value)
     assert not path.exists() and not glob.glob(str(tmp_path / ".quatcurve-*"))
+
+
+def test_a_distance_no_keys_reach_is_refused_naming_where(scene, tmp_path):
+    """An object whose LINEAR Euler keys turn it 150° about all three axes in 1/80 frame: slerp keys
+    (down to 1/1024 frame apart) cannot follow that path within 2 mm at 10 cm, so the export is refused
+    naming the object, the frame and the way out (a larger distance, or Error Angle, which writes the
+    sampler with the bound it reaches); nothing is written."""
+    from quatcurve_blender import gltf
+    scene.frame_start, scene.frame_end = 1, 40
+    obj = bpy.data.objects.new("Fast", None)
+    scene.collection.objects.link(obj)
+    for frame, degrees in ((1, (0, 0, 0)), (30, (0, 0, 0)), (30.0125, (150, -120, 140)), (40, (150, -120, 140))):
+        obj.rotation_euler = [math.radians(d) for d in degrees]
+        obj.keyframe_insert("rotation_euler", frame=frame)
+    for curve in fcurves.Channels.of(obj).fcurves:
+        for point in curve.keyframe_points:
+            point.interpolation = "LINEAR"
+    path = tmp_path / "out.glb"
+    with pytest.raises(gltf.GltfError) as error:
+        gltf.export(scene, str(path), distance_settings(distance=0.002, shell=0.1))
+    for part in ("Fast: no keys keep every virtual vertex within 2 mm", "near frame 30.0", "error='ANGLE'"):
+        assert part in str(error.value), str(error.value)
+    assert not path.exists() and not glob.glob(str(tmp_path / ".quatcurve-*"))
