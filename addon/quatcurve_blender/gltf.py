@@ -21,8 +21,8 @@ against Blender's evaluation of the channels there. A node that fails the check 
 drivers, a parent's non-uniform scale, NLA: anything but the channels moving it) keeps the sampler
 the exporter wrote, and the result says so. The curve, sampled `subframes` times per frame over the
 sampler's frames (times as the file stores them, float32 seconds; on to a last rotation key at a
-fractional frame past them, which the exporter's whole frames stop short of), is then reduced by the native
-`quatcurve.reduce_slerp_proved` to few keys (a greedy search) whose slerp is proved within the
+fractional frame past them, which the exporter's whole frames stop short of), is then reduced by the
+native `quatcurve.reduce_slerp_proved` to few keys (a greedy search) whose slerp is proved within the
 tolerance of the curve at every instant (slerp is bi-invariant: the node's A·q·B of them plays the
 same motion turned); where the curve is Blender's playback of keys quatcurve does not emulate, the
 keys hold at the samples (`reduce_slerp`) and the result says so. Blocking keys (every rotation key
@@ -583,8 +583,8 @@ def reduce_distance(plans, settings, scene):
                 targets.num(float(frames[error.sample]))))
             raise GltfError("%s: no keys keep every virtual vertex within %s: the tightest still leave %s%s (the "
                             "rotation turns there faster than the file's keys, 1/1024 frame apart at the closest, "
-                            "follow, or float32 cannot hold it at this size); export with a larger distance, or with error='ANGLE', "
-                            "which writes each sampler with the bound it reaches" % (
+                            "follow, or float32 cannot hold it at this size); export with a larger distance, or "
+                            "with error='ANGLE', which writes each sampler with the bound it reaches" % (
                                 obj.name, reduce.length_text(distance, system, scale_length),
                                 reduce.length_text(error.distance, system, scale_length), where))
         for b, plan in by_bone.items():
