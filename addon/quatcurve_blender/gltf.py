@@ -363,7 +363,7 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
         frames = np.array([loop.start, loop.end])
         how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
     else:
-        last = last_rotation_key(target)
+        last = rotation_end(target)
         if frames[-1] < last < frames[-1] + 1.0:
             # The exporter samples whole frames and stops at the last one before a fractional last key;
             # from there Blender turns on to the key and holds it, so the file's keys go on to it too.
@@ -382,11 +382,17 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
     return SamplerPlan(target, a, b, loop, curve, how, t32 * fps, proved_against, why, fps, steps)
 
 
-def last_rotation_key(target):
-    """The frame of the last key on the target's rotation channels in its active action (-inf: none)."""
-    found = targets.playback(target, fcurves.active_action(target.id_data)).fcurves
-    frames = fcurves.key_frames(found)
-    return float(frames[-1]) if len(frames) else -math.inf
+def rotation_end(target):
+    """The frame of the last key on the target's rotation channels in its active action, or the end of
+    the action's manual frame range if that comes first (the exporter's range: the clip ends there);
+    -inf without keys."""
+    action = fcurves.active_action(target.id_data)
+    frames = fcurves.key_frames(targets.playback(target, action).fcurves)
+    if not len(frames):
+        return -math.inf
+    if getattr(action, "use_frame_range", False):
+        return min(float(frames[-1]), float(action.frame_range[1]))
+    return float(frames[-1])
 
 
 def blocking_steps(target, first, last):

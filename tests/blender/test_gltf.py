@@ -685,7 +685,8 @@ def test_a_last_key_at_a_fractional_frame_is_held_as_blender_holds_it(scene, tmp
     (here 20.5): from frame 20 on, its file holds frame 20's rotation while Blender turns on to the key
     (60° in that half frame) and holds it. The export's keys go on to the key: the file, played per the
     spec at 64 points per frame and at random times up to frame 24, stays within the tolerance of
-    Blender's playback (before: 60° from frame 20.5 on)."""
+    Blender's playback (before: 60° from frame 20.5 on). A manual frame range ending at frame 20 ends
+    the clip there, keys and all."""
     scene.render.fps, scene.render.fps_base = FPS, 1.0
     scene.frame_start, scene.frame_end = 1, 24
     obj = bpy.data.objects.new("Late", None)
@@ -710,6 +711,13 @@ def test_a_last_key_at_a_fractional_frame_is_held_as_blender_holds_it(scene, tmp
         print("\nfractional last key, %s, Blender %s: max error %.4f° at frame %.4f" % (
             name, bpy.app.version_string, errors[worst], times[worst]))
         assert errors[worst] <= TOLERANCE + 1e-4, "%s: %.4f° at frame %.4f" % (name, errors[worst], times[worst])
+    # A manual frame range ending at frame 20 is the clip's end: the keys stop there, as the exporter's.
+    action = fcurves.active_action(obj)
+    action.use_frame_range = True
+    action.frame_start, action.frame_end = 1, 20
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE) == {"FINISHED"}
+    clipped = channel_data(GltfFile(str(out)), "rotation")[("Late", "rotation")][0]
+    assert float(np.max(clipped)) * FPS == pytest.approx(20, abs=1e-4), float(np.max(clipped)) * FPS
 
 
 def test_an_animation_slid_before_frame_0_is_kept_as_the_exporter_wrote_it(scene, tmp_path):
