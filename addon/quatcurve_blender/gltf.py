@@ -320,14 +320,15 @@ class SamplerPlan:
 
 
 def exporter_slides(scene):
-    """Whether Blender's exporter slides the scene's animation in time: an active action starting before
-    frame 0, and an exporter with the option (export_negative_frame, default SLIDE: glTF has no
-    negative times), which then shifts every sampler so the earliest frame it writes is at 0 s."""
+    """Whether Blender's exporter slides the scene's animation in time: an active action whose range
+    starts at frame -1 or before (the exporter truncates the start toward 0, as int()), and an exporter
+    with the option (export_negative_frame, default SLIDE: glTF has no negative times), which then
+    shifts every sampler so the earliest frame it writes is at 0 s."""
     if "export_negative_frame" not in bpy.ops.export_scene.gltf.get_rna_type().properties:
         return False
     for obj in scene.objects:
         action = fcurves.active_action(obj)
-        if action is not None and action.frame_range[0] < 0:
+        if action is not None and int(action.frame_range[0]) < 0:
             return True
     return False
 
