@@ -724,7 +724,8 @@ def test_an_animation_slid_before_frame_0_is_kept_as_the_exporter_wrote_it(scene
     """An action starting before frame 0: Blender's exporter (4.x, export_negative_frame SLIDE) slides
     the whole animation so it starts at 0 s, and the file's times are no longer the scene's frames.
     Every rotation sampler is then kept as the exporter wrote it, the result saying why (before: each
-    was 'kept' blaming constraints or drivers, and one with a single sample stopped the export)."""
+    was 'kept' blaming constraints or drivers, and one with a single sample stopped the export). An
+    action from frame -0.5 is not slid (the exporter truncates its start to 0) and is rewritten."""
     from quatcurve_blender import gltf
     if "export_negative_frame" not in bpy.ops.export_scene.gltf.get_rna_type().properties:
         pytest.skip("this Blender's exporter has no export_negative_frame (3.4's fails on such scenes itself)")
@@ -742,3 +743,11 @@ def test_an_animation_slid_before_frame_0_is_kept_as_the_exporter_wrote_it(scene
     for line in result.samplers:
         assert not line.rewritten and "slid the animation" in line.curve, line.curve
     assert channel_data(GltfFile(str(tmp_path / "slid.glb")), "rotation") == channel_data(exact, "rotation")
+    # An action from frame -0.5 is not slid (the exporter truncates its start to 0): rewritten as usual.
+    bpy.data.objects.remove(scene.objects["Early"])
+    obj = bpy.data.objects.new("Half", None)
+    scene.collection.objects.link(obj)
+    key(obj, "rotation_euler", [(-0.5, (0, 0, 0)), (10, (40, 0, 0)), (20, (40, 30, 60))], interpolation="BEZIER",
+        degrees=True)
+    result = gltf.export(scene, str(tmp_path / "half.glb"), gltf.ExportSettings(tolerance=TOLERANCE))
+    assert all(line.rewritten for line in result.samplers if line.node in ("Half", "Late")), result.lines()
