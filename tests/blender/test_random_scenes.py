@@ -11,6 +11,7 @@ frames and the cause) or report a bound above the tolerance (with its cause), bu
 leaves the bound it reports — and where it reports the tolerance met, the playback is within it.
 
 - fit, every method (everywhere_scenes.reference_curve is what Blender must play);
+- Live: one random key of each fitted copy changed, the incremental refit against its own bound;
 - bake with its 0.1° reduction, every method;
 - convert to each other rotation mode, against the original keys' own playback;
 - reduce at 0.1° of dense random motion (flipped quaternion signs, spins, noise, uneven spacing),
@@ -28,8 +29,8 @@ from mathutils import Euler
 
 import everywhere_scenes as es
 from everywhere_scenes import Owner, deviation
-from quatcurve_blender import bake, convert, fit, reduce
-from test_everywhere import METHODS, TASK_ERRORS, played, reported_bound, run_task
+from quatcurve_blender import bake, convert, fcurves, fit, live, reduce
+from test_everywhere import METHODS, TASK_ERRORS, played, point_at, reported_bound, run_task
 
 SEEDS = (3, 7)
 TOL = 0.05          # degrees: fit and convert
@@ -179,6 +180,54 @@ def test_convert_stays_within_the_bound_it_reports(scene, seed, tmp_path):
                 bounds[b.name] = bound
             rows += [(c, to, o) for c, o in zip(converted, original)]
     check(rows, tmp_path, "convert", lambda built, to: (bounds[built.name], TOL))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_live_refit_stays_within_the_bound_it_reports(scene, seed, tmp_path):
+    """Fitted with every method, then Live on and one random key of each copy changed (a random
+    channel, up to ±0.4): each refit — the incremental one, which keeps the segments the edit cannot
+    change — plays within the bound it proved (its KeyFit's), against the method's curve through the
+    keys as they now are. A refit the edit makes impossible is reported by Live and writes nothing."""
+    rng = np.random.default_rng(seed)
+    copies = []
+    for name in random_scene(seed):
+        for method in METHODS:
+            built = es.build(name, method)
+            keys = [fit.read_animator_keys(b.target) for b in built]
+            try:
+                run_task(built, lambda: bpy.ops.quatcurve.fit(method=method, tolerance=TOL),
+                         lambda found: fit.fit(found, fit.FitSettings(method=method, tolerance=TOL)))
+            except TASK_ERRORS:
+                continue
+            copies += [(b, method, k) for b, k in zip(built, keys)]
+    live.STATS.reset()
+    live.drag_hook = None
+    rows, bounds = [], {}
+    try:
+        bpy.context.scene.quatcurve_fit.live = True
+        bpy.context.view_layer.update()
+        for built, method, keys in copies:
+            frame, channel = float(rng.choice(keys.frames)), int(rng.integers(0, keys.values.shape[1]))
+            change = float(rng.uniform(-0.4, 0.4))
+            curve, point = point_at(built.target, channel, frame)
+            point.co[1] += change
+            point.handle_left[1] += change
+            point.handle_right[1] += change
+            curve.update()
+            errors = len(live.STATS.errors)
+            bpy.context.view_layer.update()  # the depsgraph handler refits (background mode: at once)
+            if len(live.STATS.errors) > errors:
+                assert "keys at frames" in live.STATS.errors[-1], live.STATS.errors[-1]
+                continue
+            now = fit.read_animator_keys(built.target)
+            refit = fit.last_fit(fcurves.active_action(built.target.id_data), built.target)
+            bounds[built.name] = math.degrees(refit.proof.bound)
+            rows.append((built, method, es.reference_curve(now, method)))
+    finally:
+        bpy.context.scene.quatcurve_fit.live = False
+        live.on_load()
+    assert rows
+    check(rows, tmp_path, "live", lambda built, method: (bounds[built.name], TOL))
 
 
 def dense_owner(rng, label, bone):
