@@ -501,12 +501,23 @@ FLOAT32_EPS = 2.0 ** -24
 
 
 def length_text(value, system="METRIC", scale_length=1.0):
-    """A length in scene units as Blender's unit display shows it ('1 mm', '0.98 mm')."""
+    """A length in scene units as Blender's unit display shows it ('1 mm', '0.98 mm'). Where that
+    display loses the value (below 1 µm it reads '0 m'; a few µm in feet keep one digit) it is
+    written in µm or thou (without units: the number), so a printed bound reads what it is."""
     import bpy
+    meters = value * scale_length
     try:
-        return bpy.utils.units.to_string(system, "LENGTH", value * scale_length, precision=4)
+        text = bpy.utils.units.to_string(system, "LENGTH", meters, precision=4)
+        shown = bpy.utils.units.to_value(system, "LENGTH", text)
     except (ValueError, TypeError):
         return "%g" % value
+    if abs(shown - meters) <= 1e-3 * abs(meters):
+        return text.strip()
+    if system == "IMPERIAL":
+        return "%.4g thou" % (meters / 2.54e-5)
+    if system == "METRIC":
+        return "%.4g µm" % (meters * 1e6)
+    return "%.4g" % meters
 
 
 def scene_lengths(settings, scene):

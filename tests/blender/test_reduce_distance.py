@@ -203,3 +203,14 @@ def test_refusals_name_the_bone_and_write_nothing(scene):
         bpy.ops.quatcurve.reduce(error="DISTANCE")
     assert fcurves.active_action(rig) == action
     assert sorted(a.name for a in bpy.data.actions) == [action.name]
+
+
+def test_lengths_read_what_they_are_below_blenders_unit_display():
+    """A bound or error below what Blender's unit display keeps is written in µm or thou, not as the
+    '0 m' (0.2 µm) or one-digit feet (1.254 µm) Blender shows; lengths it shows are its text."""
+    assert reduce.length_text(0.002) == "2 mm" and reduce.length_text(0.1, "METRIC", 0.01) == "1 mm"
+    assert reduce.length_text(2e-7) == "0.2 µm"
+    assert reduce.length_text(1.254e-6, "IMPERIAL") == "0.04937 thou"
+    assert reduce.length_text(0.002, "IMPERIAL") == "78.74 thou"
+    assert reduce.length_text(2e-7, "NONE") == "2e-07" and reduce.length_text(0.5, "NONE") == "0.5"
+    assert reduce.length_text(0.0) == "0 m"
