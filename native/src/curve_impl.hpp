@@ -127,11 +127,14 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
 // QUATCURVE_NO_MULTIVERSION to build the baseline only.
 // QUATCURVE_HOT_UNFUSED: the same clones without contracting a·b + c into an FMA, for kernels
 // whose every bit must match baseline scalar code (which has no FMA to contract into).
+// QUATCURVE_MULTIVERSION is 1 where they exist, for a sampler whose versions differ (curve_squad.cpp).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(QUATCURVE_NO_MULTIVERSION)
+#define QUATCURVE_MULTIVERSION 1
 #define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #define QUATCURVE_HOT_UNFUSED __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), optimize("fp-contract=off")))
 #else
+#define QUATCURVE_MULTIVERSION 0
 #define QUATCURVE_HOT
 #define QUATCURVE_HOT_UNFUSED
 #endif

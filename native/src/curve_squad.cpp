@@ -81,45 +81,50 @@ SquadSeg make_squad_seg(const Curve::Impl& m, std::size_t i, const Vec3& out, co
     return g;
 }
 
-// Per run of times in one segment, four samples at a time (curve_simd.hpp): squad_from's formula
+// Per run of times in one segment, four or eight samples at a time (curve_simd.hpp): squad_from's formula
 // lane by lane, A and B by polynomial (series lengths chosen once per segment from |r| ≤ π and
 // |ψ| < 2π), X's log by the branch-free atan2_over_n_any4, the outer exp with 10 terms (g ≤ 1/2 and
 // |χ| ≤ 2π, so g·|χ| ≤ π; 6 terms for a small log, |χ| ≤ 1).
 namespace {
 
-// Times within segment g, four at a time: groups(f) calls f(t, q) for each group of four times
-// (for_groups or for_groups_columns, curve_simd.hpp).
+// Times within segment g, four or eight at a time: groups(f) calls f(t, q) for each group of four
+// times or pair of groups (for_groups, for_group_pairs or for_groups_columns, curve_simd.hpp).
 template <class Groups>
 QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
     auto eval = [&](auto terms_a, auto terms_b, auto small_log) QUATCURVE_LAMBDA_INLINE {
-        groups([&](const V4& t, QV& q) QUATCURVE_LAMBDA_INLINE {
-            const V4 s = (t - g.t0) * g.inv_h;
-            const V4 s2 = s * s;
-            V4 c1, k1, c2, k2;
+        groups([&](const auto& t, auto& q) QUATCURVE_LAMBDA_INLINE {  // V4 or V4x2 times
+            using V = std::decay_t<decltype(t)>;
+            const V s = (t - g.t0) * g.inv_h;
+            const V s2 = s * s;
+            V c1, k1, c2, k2;
             exp_coeffs4<decltype(terms_a)::value>(s2 * g.r2, c1, k1);
             exp_coeffs4<decltype(terms_b)::value>(s2 * g.psi2, c2, k2);
-            QV A, B, X;
+            QVOf<V> A, B, X;
             combine(g.A, g.BA, c1, k1 * s, A);
             combine(g.a, g.Ba, c2, k2 * s, B);
             cmul(A, B, X);
-            const V4 n2 = X.x * X.x + X.y * X.y + X.z * X.z;
-            V4 f;  // χ = f·vec(X)
+            const V xx = X.x * X.x;  // products named in order (curve_simd.hpp: sums of two products)
+            const V yy = X.y * X.y;
+            const V n2 = xx + yy + X.z * X.z;
+            V f;  // χ = f·vec(X)
             if constexpr (decltype(small_log)::value) {
                 f = 2.0 * atan2_over_n_small4(sqrt4(n2), X.w);
             } else {
                 f = 2.0 * atan2_over_n_any4(sqrt4(n2), X.w);
             }
-            const V4 gf = 2.0 * s * (1.0 - s) * f;
-            V4 c3, k3;
+            const V gf = 2.0 * s * (1.0 - s) * f;
+            V c3, k3;
             // g·|χ| ≤ π: θ² ≤ π² < 10; a small log: |χ| ≤ 1, θ² ≤ 1/4
             exp_coeffs4<decltype(small_log)::value ? 6 : 10>(gf * gf * n2, c3, k3);
             k3 *= gf;
             // A·(c3, k3·vec X) = (c3 − k3·X.w)·A + k3·A·X, and A·X = B (A is a unit quaternion).
-            const V4 ca = c3 - k3 * X.w;
-            q.w = ca * A.w + k3 * B.w;
-            q.x = ca * A.x + k3 * B.x;
-            q.y = ca * A.y + k3 * B.y;
-            q.z = ca * A.z + k3 * B.z;
+            const V ca = c3 - k3 * X.w;
+            const V aw = ca * A.w, ax = ca * A.x, ay = ca * A.y, az = ca * A.z;
+            const V bw = k3 * B.w, bx = k3 * B.x, by = k3 * B.y, bz = k3 * B.z;
+            q.w = aw + bw;
+            q.x = ax + bx;
+            q.y = ay + by;
+            q.z = az + bz;
         });
     };
     // A: |r| ≤ π, so 8 or 10 terms; B: |ψ| < 2π, so 8, 10 or 12 (exp_terms). A small log (|r| ≤ 1 and
@@ -147,22 +152,63 @@ QUATCURVE_INLINE void squad_groups(const SquadSeg& g, Groups&& groups) {
     }
 }
 
-// Samples i0 … i1 − 1 of `times`, all within segment g, as rows (w, x, y, z) at out + 4·i.
+// Samples i0 … i1 − 1 of `times`, all within segment g, as rows (w, x, y, z) at out + 4·i; with
+// Pairs, two groups at a time (for_group_pairs).
+template <bool Pairs>
 QUATCURVE_INLINE void squad_segment_run(const SquadSeg& g, const double* times, std::size_t i0, std::size_t i1,
                                         double* out) {
-    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE { for_groups(times, i0, i1, out, f); });
+    squad_groups(g, [&](auto&& f) QUATCURVE_LAMBDA_INLINE {
+        if constexpr (Pairs) {
+            for_group_pairs(times, i0, i1, out, f);
+        } else {
+            for_groups(times, i0, i1, out, f);
+        }
+    });
 }
 
-}  // namespace
-
-QUATCURVE_HOT void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+template <bool Pairs>
+QUATCURVE_INLINE void sample_squad_runs(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SquadSeg* seg = m.squad.data();
     drive_runs(
         m.kt, times, n,
         [&](std::size_t j, std::size_t i0, std::size_t i1) QUATCURVE_LAMBDA_INLINE {
-            squad_segment_run(seg[j], times, i0, i1, out);
+            squad_segment_run<Pairs>(seg[j], times, i0, i1, out);
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
+}
+
+}  // namespace
+
+// Two groups at a time where the code has AVX2's sixteen 256-bit registers or AVX-512's 32 (two
+// chains side by side: 1.4–1.5× on this kernel); the baseline's SSE2 code, which splits every V4
+// in two already, would spill them (1.5× slower), so it takes one group at a time. These are GCC's
+// function versions, chosen at load time like the target clones; GCC makes their dispatcher where
+// they are called, so they are called here (sample_squad below).
+#if QUATCURVE_MULTIVERSION
+namespace {
+__attribute__((target("default"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
+                                                   double* out) {
+    sample_squad_runs<false>(m, times, n, out);
+}
+__attribute__((target("arch=x86-64-v3"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
+                                                          double* out) {
+    sample_squad_runs<true>(m, times, n, out);
+}
+__attribute__((target("arch=x86-64-v4"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
+                                                          double* out) {
+    sample_squad_runs<true>(m, times, n, out);
+}
+}  // namespace
+#else
+namespace {
+void squad_runs(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    sample_squad_runs<false>(m, times, n, out);
+}
+}  // namespace
+#endif
+
+void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    squad_runs(m, times, n, out);
 }
 
 // The first sample is g.A itself: at s = 0 the formula gives A = Q exactly (c1 = 1, k1·s = 0 and
