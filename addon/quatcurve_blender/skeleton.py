@@ -17,6 +17,7 @@ Parenting, an action (slot) that also animates another armature. (B-Bone segment
 deformation only, not pose_bone.matrix: not refused.)
 """
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,8 +55,17 @@ class ReadSkeleton:
         return [t.bone if t.bone is not None else t.object.name for t in self.targets]
 
     def skeleton(self):
-        return native.require().Skeleton(self.parents, self.rest, self.lengths, self.inherit_rotation,
-                                          self.connected, self.inherit_scale)
+        """The quatcurve.Skeleton of these bones. Raises TargetError naming the object and bone where
+        the native skeleton refuses one (a rest matrix that is not a rigid transform, say)."""
+        try:
+            return native.require().Skeleton(self.parents, self.rest, self.lengths, self.inherit_rotation,
+                                              self.connected, self.inherit_scale)
+        except ValueError as error:
+            names = self.names
+            text = re.sub(r"\b(parents|rest|lengths|inherit_rotation|connected|inherit_scale)\[(\d+)\]",
+                          lambda m: "bone '%s' (%s)" % (names[int(m.group(2))], m.group(1))
+                          if int(m.group(2)) < len(names) else m.group(0), str(error))
+            raise TargetError("%s: %s" % (self.object.name, text)) from None
 
 
 def _parent_first(bones):
@@ -207,7 +217,7 @@ def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted, span=None):
         scales.append(values["scale"])
         props.append(prop)
         keys_before.append(sum(fcurves.key_count(f) for f in found[prop] if f is not None))
-    return ReadSkeleton(
+    read = ReadSkeleton(
         obj, [t for t, *_ in per_bone],
         np.array([index[b.parent.name] if b.parent is not None else -1 for b in bones]),
         np.array([np.array(b.matrix_local) for b in bones]).reshape(len(bones), 4, 4),
@@ -215,6 +225,8 @@ def _sampled_skeleton(obj, bones, per_bone, keyed, index, wanted, span=None):
         np.array([b.use_inherit_rotation for b in bones]), np.array([b.use_connect for b in bones]),
         [b.inherit_scale for b in bones], frames, rotations, np.array(locations), np.array(scales),
         np.array([b.name in wanted for b in bones]), props, np.array(keys_before))
+    read.skeleton()  # refused here, naming the bone, rather than where the reduction first needs it
+    return read
 
 
 def read_object(obj, span=None, keys_required=True):

@@ -57,11 +57,12 @@ CHAIN = (
 )
 
 
-def build_chain_rig(name="Chain", frames=60, seed=5):
-    """A Rigify-like armature (CHAIN) keyed at every frame 1..frames with smooth random motion in
-    each bone's rotation mode (BEZIER keys), location keys on the root and on one connected bone
-    (unused by Blender), scale keys on the shoulder; the rig is selected and active, in Pose mode,
-    every bone selected. Returns the rig."""
+def build_chain_rig(name="Chain", frames=60, seed=5, chain=None):
+    """A Rigify-like armature (CHAIN, or `chain`: rows as CHAIN's) keyed at every frame 1..frames
+    with smooth random motion in each bone's rotation mode (BEZIER keys), location keys on the root
+    and on one connected bone (unused by Blender), scale keys on the shoulder (where the chain has
+    them); the rig is selected and active, in Pose mode, every bone selected. Returns the rig."""
+    chain = CHAIN if chain is None else chain
     arm = bpy.data.armatures.new(name)
     rig = bpy.data.objects.new(name, arm)
     bpy.context.scene.collection.objects.link(rig)
@@ -69,7 +70,7 @@ def build_chain_rig(name="Chain", frames=60, seed=5):
         obj.select_set(obj == rig)
     bpy.context.view_layer.objects.active = rig
     bpy.ops.object.mode_set(mode="EDIT")
-    for bone_name, parent, head, tail, connected, inherit_rotation, inherit_scale, _ in CHAIN:
+    for bone_name, parent, head, tail, connected, inherit_rotation, inherit_scale, _ in chain:
         bone = arm.edit_bones.new(bone_name)
         bone.head, bone.tail = head, tail
         if parent:
@@ -98,7 +99,7 @@ def build_chain_rig(name="Chain", frames=60, seed=5):
             # Blender's automatic handles, as keys an animator sets get them (the bulk write leaves them at 0).
             channels.write(path, i, t, values[:, i], group=pb.name, interpolation="BEZIER").update()
 
-    for bone_name, *_, mode in CHAIN:
+    for bone_name, *_, mode in chain:
         pb = rig.pose.bones[bone_name]
         pb.rotation_mode = mode
         angles = wave(3, 0.6)
@@ -115,7 +116,8 @@ def build_chain_rig(name="Chain", frames=60, seed=5):
             pb.select = True
         else:
             pb.bone.select = True
-    key(rig.pose.bones["root"], "location", wave(3, 0.3))
-    key(rig.pose.bones["forearm.L"], "location", wave(3, 0.1))   # connected: Blender ignores it
-    key(rig.pose.bones["shoulder.L"], "scale", 1.0 + wave(3, 0.2))
+    if chain is CHAIN:
+        key(rig.pose.bones["root"], "location", wave(3, 0.3))
+        key(rig.pose.bones["forearm.L"], "location", wave(3, 0.1))   # connected: Blender ignores it
+        key(rig.pose.bones["shoulder.L"], "scale", 1.0 + wave(3, 0.2))
     return rig

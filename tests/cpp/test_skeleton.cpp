@@ -322,6 +322,12 @@ TEST(Skeleton, RefusesBadInputNamingIt) {
     bad = sk;
     bad.rest[1][0][0] = 2.0;
     EXPECT_NE(message(bad, p).find("rest[1]"), std::string::npos);
+    bad.rest[1][0][0] = 1.01;  // a 1 % scale
+    EXPECT_NE(message(bad, p).find("rest[1]: not a rigid transform"), std::string::npos);
+    // Blender's float32 matrix_local three bones down a chain: 1.3e-5 off orthonormal, posed as it is
+    bad.rest[1][0][0] = 1.0 + 1.3e-5;
+    bad.rest[1][1][0] = 8e-6;
+    EXPECT_EQ(message(bad, p), "");
     bad = sk;
     bad.lengths[0] = -1.0;
     EXPECT_NE(message(bad, p).find("lengths[0]"), std::string::npos);
