@@ -332,9 +332,9 @@ def set_turns(found, turns):
     axis-angle target and refits it with its settings and eases (the last key has no segment: its
     selection is ignored). Quaternion targets store the turns per key (Action.quatcurve_turns);
     axis-angle targets hold them in their angle keys (axis_angle_turns: the later keys' angles move by
-    whole turns, each key the same rotation). Returns the number of keys set. Raises FitError naming
-    target and key frame (Euler targets, targets not fitted, no selected key, a still segment without
-    an axis to turn about) before anything is written."""
+    whole turns, each key the same rotation). Returns a RefitResult (the keys set; each refit's bound
+    and notes). Raises FitError naming target and key frame (Euler targets, targets not fitted, no
+    selected key, a still segment without an axis to turn about) before anything is written."""
     if not math.isfinite(turns) or int(turns) != turns or abs(turns) > 10000:
         raise FitError("turns %r: must be a whole number from -10000 to 10000" % (turns,))
     plans, changed = [], 0
@@ -369,7 +369,35 @@ def set_turns(found, turns):
                            "that starts the segment to turn)")
         for plan, target in plans:
             write_plan(plan, target)
-    return changed
+    return RefitResult("%+d turn%s" % (turns, "" if abs(turns) == 1 else "s"), changed, [p for p, _ in plans])
+
+
+@dataclass
+class RefitResult:
+    """What set_turns and set_ease did: the keys they changed and the refit of each target (the
+    bound it proved at every instant, its notes), reported as a fit's are."""
+    what: str                 # '+2 turns', 'Ease in 0.50 / out 0.00'
+    changed: int
+    plans: list               # FitPlan per refitted target
+
+    def targets(self):
+        return [(TargetResult(p.keys.name, p.keys.mode, len(p.keys.frames), p.generated_count,
+                              math.degrees(p.max_error), notes=p.notes), p.settings.tolerance) for p in self.plans]
+
+    def above(self):
+        return [t.name for t, tolerance in self.targets() if t.max_error_deg > tolerance]
+
+    def summary(self):
+        rows = self.targets()
+        above = self.above()
+        return "%s on %d key%s, refit %d target%s: max error %.4f°%s" % (
+            self.what, self.changed, "" if self.changed == 1 else "s", len(rows), "" if len(rows) == 1 else "s",
+            max([t.max_error_deg for t, _ in rows] or [0.0]),
+            " — ABOVE the tolerance on %s (see the fit's lines)" % ", ".join(above) if above else "")
+
+    def lines(self):
+        rows = self.targets()
+        return [t.line(tolerance) for t, tolerance in rows] + [n for t, _ in rows for n in t.notes]
 
 
 # ---- reading the animator's keys ---------------------------------------------------------------------

@@ -218,18 +218,28 @@ class QUATCURVE_OT_set_ease(bpy.types.Operator):
         opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("ease_in", "ease_out"))
         try:
             native.require()
-            changed = set_ease(targets.gather_targets(context, verb="ease"), self.ease_in, self.ease_out)
+            result = set_ease(targets.gather_targets(context, verb="ease"), self.ease_in, self.ease_out)
         except (TargetError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self.report({"INFO"}, "Ease in %.2f / out %.2f on %d key%s" % (
-            self.ease_in, self.ease_out, changed, "" if changed == 1 else "s"))
-        return {"FINISHED"}
+        return report_refit(self, context, result)
+
+
+def report_refit(operator, context, result):
+    """Reports a fit.RefitResult as the fit reports its result: the summary (a warning where a
+    refit's bound is above its tolerance), and the lines for the panel."""
+    settings = getattr(context.scene, "quatcurve_fit", None)
+    if settings is not None:
+        settings.last_summary = result.summary()
+        settings.last_lines = "\n".join(result.lines())
+    operator.report({"WARNING"} if result.above() else {"INFO"}, result.summary())
+    return {"FINISHED"}
 
 
 def set_ease(found, ease_in, ease_out):
     """Sets the ease of the selected animator keys of each fitted target and refits it with its own
-    settings. Returns the number of keys changed. Raises FitError for a target that is not fitted."""
+    settings. Returns a fit.RefitResult (the keys changed; each refit's bound and notes). Raises
+    FitError for a target that is not fitted."""
     plans, changed = [], 0
     for target in found:
         keys = fit.read_animator_keys(target)
@@ -249,7 +259,7 @@ def set_ease(found, ease_in, ease_out):
             plans.append((plan, target))
     for plan, target in plans:
         fit.write_plan(plan, target)
-    return changed
+    return fit.RefitResult("Ease in %.2f / out %.2f" % (ease_in, ease_out), changed, [p for p, _ in plans])
 
 
 class QUATCURVE_OT_set_turns(bpy.types.Operator):
@@ -264,13 +274,11 @@ class QUATCURVE_OT_set_turns(bpy.types.Operator):
         opsutil.take_scene_settings(self, getattr(context.scene, "quatcurve_fit", None), ("turns",))
         try:
             native.require()
-            changed = fit.set_turns(targets.gather_targets(context, verb="turn"), self.turns)
+            result = fit.set_turns(targets.gather_targets(context, verb="turn"), self.turns)
         except (TargetError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self.report({"INFO"}, "%+d turn%s on %d key%s" % (
-            self.turns, "" if abs(self.turns) == 1 else "s", changed, "" if changed == 1 else "s"))
-        return {"FINISHED"}
+        return report_refit(self, context, result)
 
 
 _classes = (QuatCurveFitRecord, QuatCurveEaseRecord, QuatCurveTurnsRecord, QuatCurveFitSettings, QUATCURVE_OT_fit,

@@ -159,15 +159,43 @@ def test_refit_live_refit_and_moved_keys_keep_the_turns(scene):
     assert len(action.quatcurve_turns) == 0
 
 
+def test_the_refit_reports_its_bound_and_warns_above_the_tolerance(scene):
+    """Set Turns and Set Ease refit, and report the refit's bound as a fit does: 2 turns on a 12-frame
+    segment keep the tolerance; 50 turns on an NLERP segment of 1.7 frames cannot (its quaternion keys
+    would need to be closer than a fit writes them) — the report says so, with the bound Blender's
+    playback keeps, where it once said only '+50 turns on 1 key' (found by random keys)."""
+    obj = spin_object("Kept")
+    select_keys(obj, {1})
+    assert bpy.ops.quatcurve.set_turns(turns=2) == {"FINISHED"}
+    summary = bpy.context.scene.quatcurve_fit.last_summary
+    assert summary.startswith("+2 turns on 1 key, refit 1 target: max error ") and "ABOVE" not in summary, summary
+    assert float(summary.split("max error ")[1].split("°")[0]) <= TOL
+    assert bpy.ops.quatcurve.set_ease(ease_in=0.5) == {"FINISHED"}
+    assert bpy.context.scene.quatcurve_fit.last_summary.startswith("Ease in 0.50 / out 0.00 on 1 key, refit 1 target")
+
+    frames = (1000.0, 1002.81, 1004.5122)
+    quats = ((-0.01256, 0.51669, -0.62644, -0.58348), (0.21193, 0.35880, -0.51923, -0.74616),
+             (0.21193, 0.35880, -0.51923, -0.74616))
+    fast = spin_object("Fast", list(zip(frames, quats)), method="NLERP")
+    select_keys(fast, {np.float32(1002.81)})
+    assert bpy.ops.quatcurve.set_turns(turns=50) == {"FINISHED"}
+    summary = bpy.context.scene.quatcurve_fit.last_summary
+    assert "+50 turns on 1 key, refit 1 target: max error" in summary and "ABOVE the tolerance on Fast" in summary, summary
+    bound = float(summary.split("max error ")[1].split("°")[0])
+    assert bound > TOL
+    lines = bpy.context.scene.quatcurve_fit.last_lines
+    assert "Fast: QUATERNION" in lines and "ABOVE the tolerance" in lines, lines
+
+
 def test_set_turns_from_python(scene):
     """fit.set_turns is the operator's function: scripts call it on Targets."""
     obj = spin_object("Script")
     select_keys(obj, {1, 21})  # the last key has no segment: its selection is ignored
-    assert fit.set_turns([fit.targets.Target(obj)], 3) == 1
+    assert fit.set_turns([fit.targets.Target(obj)], 3).changed == 1
     action = fcurves.active_action(obj)
     np.testing.assert_array_equal(fit.key_turns(action, fit.targets.Target(obj), np.array([1, 13, 21.0])), [3, 0, 0])
     select_keys(obj, {1})
-    assert fit.set_turns([fit.targets.Target(obj)], 0) == 1
+    assert fit.set_turns([fit.targets.Target(obj)], 0).changed == 1
     assert len(action.quatcurve_turns) == 0
     for bad in (0.5, float("nan"), 1e9):
         with pytest.raises(fit.FitError, match="must be a whole number"):
