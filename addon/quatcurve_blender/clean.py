@@ -28,7 +28,7 @@ from its head); the pose is measured natively (quatcurve.Skeleton.vertex_distanc
 float32 values) and the budgets of a chain that exceeds it are tightened until every frame holds.
 
 Refused (ReduceError's message names the target and cause, nothing written): targets reduce refuses
-(NLA only without an action, drivers, library data, F-curve modifiers), loops (Cycles modifiers: a
+(drivers, library data, F-curve modifiers), loops (Cycles modifiers: a
 capture clip is not cleaned as a loop), and clips of fewer than 3 frames; under DISTANCE what
 reduce's distance bound refuses (skeleton.py: constraints, inherit scale modes, …) and `reduce`.
 """
