@@ -290,6 +290,18 @@ QUATCURVE_INLINE void for_groups_columns(const double* times, std::size_t n, std
     }
 }
 
+// A run of fewer than four times [i0, i1): one group padded with its last time, only the run's own
+// rows stored at out + 4·i.
+template <class F>
+QUATCURVE_INLINE void short_run(const double* times, std::size_t i0, std::size_t i1, double* out, F&& f) {
+    QV q;
+    double t[4], rows[16];
+    for (std::size_t k = 0; k < 4; ++k) t[k] = times[i0 + k < i1 ? i0 + k : i1 - 1];
+    f(load4(t), q);
+    store_rows(q, rows);
+    for (std::size_t k = 0; i0 + k < i1; ++k) std::memcpy(out + 4 * (i0 + k), rows + 4 * k, 4 * sizeof(double));
+}
+
 // Calls f(t, q) for the times [i0, i1) four at a time (q: the four samples' quaternions) and stores
 // q at out + 4·i. A run of four or more ends with a group that overlaps the one before (lanes are
 // independent, so the rows written twice get the same values); a shorter run is padded with its last
@@ -309,14 +321,10 @@ QUATCURVE_INLINE void for_groups(const double* times, std::size_t i0, std::size_
         }
         return;
     }
-    double t[4], rows[16];
-    for (std::size_t k = 0; k < 4; ++k) t[k] = times[i0 + k < i1 ? i0 + k : i1 - 1];
-    f(load4(t), q);
-    store_rows(q, rows);
-    for (std::size_t k = 0; i0 + k < i1; ++k) std::memcpy(out + 4 * (i0 + k), rows + 4 * k, 4 * sizeof(double));
+    short_run(times, i0, i1, out, f);
 }
 
-// for_groups (below) with the groups of a run taken two at a time (V4x2) where it has two: f(t, q)
+// for_groups (above) with the groups of a run taken two at a time (V4x2) where it has two: f(t, q)
 // is called with V4x2 times (groups starting at i and j) or V4 times (a run's lone last group, a
 // run shorter than four padded with its last time), and q's rows are stored at out + 4·(start). The
 // groups are for_groups': a run's starts are i0, i0 + 4, … and, where four do not divide it, i1 − 4.
@@ -333,17 +341,13 @@ QUATCURVE_INLINE void for_group_pairs(const double* times, std::size_t i0, std::
         i = j + 4;
     }
     if (i == i1) return;
-    QV q;
     if (i1 - i0 >= 4) {  // the last group, overlapping the one before where four do not divide the run
+        QV q;
         f(load4(times + i1 - 4), q);
         store_rows(q, out + 4 * (i1 - 4));
         return;
     }
-    double t[4], rows[16];
-    for (std::size_t k = 0; k < 4; ++k) t[k] = times[i0 + k < i1 ? i0 + k : i1 - 1];
-    f(load4(t), q);
-    store_rows(q, rows);
-    for (std::size_t k = 0; i0 + k < i1; ++k) std::memcpy(out + 4 * (i0 + k), rows + 4 * k, 4 * sizeof(double));
+    short_run(times, i0, i1, out, f);
 }
 
 }  // namespace quatcurve::detail
