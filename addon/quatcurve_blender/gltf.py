@@ -707,6 +707,16 @@ def rewrite(doc, scene, settings, fps):
     return results, distances
 
 
+def exporter_fps(scene):
+    """The frames per second Blender's glTF exporter writes times with, so that the rewritten rotation
+    keys run on the clock of the file's other samplers: render.fps × render.fps_base from Blender 4.1
+    (glTF-Blender-IO #2080; the importer reads with it too), render.fps alone before. Neither is the
+    scene's own rate fps / fps_base unless fps_base is 1."""
+    if bpy.app.version >= (4, 1, 0):
+        return scene.render.fps * scene.render.fps_base
+    return float(scene.render.fps)
+
+
 def export(scene, filepath, settings=None):
     """Exports `scene` to `filepath` (.glb) with Blender's glTF exporter, rotation samplers replaced
     (module docstring); returns an ExportResult. Raises GltfError, leaving `filepath` untouched."""
@@ -719,7 +729,7 @@ def export(scene, filepath, settings=None):
         raise GltfError("Nothing to export: the scene '%s' has no objects" % scene.name)
     filepath = os.path.abspath(filepath)
     folder = os.path.dirname(filepath)
-    fps = scene.render.fps / scene.render.fps_base
+    fps = exporter_fps(scene)
     fd, sampled = tempfile.mkstemp(prefix=".quatcurve-", suffix=".glb", dir=folder)
     os.close(fd)
     fd, rewritten = tempfile.mkstemp(prefix=".quatcurve-", suffix=".glb", dir=folder)

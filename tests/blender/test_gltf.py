@@ -751,3 +751,30 @@ def test_an_animation_slid_before_frame_0_is_kept_as_the_exporter_wrote_it(scene
         degrees=True)
     result = gltf.export(scene, str(tmp_path / "half.glb"), gltf.ExportSettings(tolerance=TOLERANCE))
     assert all(line.rewritten for line in result.samplers if line.node in ("Half", "Late")), result.lines()
+
+
+def test_a_scene_at_23_976_fps_keeps_the_exporters_clock(scene, tmp_path):
+    """render.fps 24, fps_base 1.001 (NTSC 23.976): Blender's exporter writes times with fps × fps_base
+    since 4.1 (fps alone before); the rewritten rotation keys do too, so a node's rotation and
+    translation run on one clock and the rotation is rewritten, not kept for being 0.96° from the
+    channels at that rate (before: rotation on fps / fps_base, 0.48 frame off the translation at
+    frame 241, and a node 'kept' blaming constraints or drivers that were not there)."""
+    from quatcurve_blender import gltf
+    scene.render.fps, scene.render.fps_base = FPS, 1.001
+    scene.frame_start, scene.frame_end = 1, 241
+    obj = bpy.data.objects.new("Spin", None)
+    scene.collection.objects.link(obj)
+    key(obj, "rotation_euler", [(1, (0, 0, 0)), (241, (0, 0, 480))], interpolation="LINEAR", degrees=True)
+    key(obj, "location", [(1, (0, 0, 0)), (241, (2.4, 0, 0))], interpolation="LINEAR")
+    out = tmp_path / "ntsc.glb"
+    result = gltf.export(scene, str(out), gltf.ExportSettings(tolerance=TOLERANCE))
+    assert all(line.rewritten for line in result.samplers), result.lines()
+    fps = gltf.exporter_fps(scene)
+    assert fps == pytest.approx(FPS * 1.001 if bpy.app.version >= (4, 1, 0) else FPS)
+    file = GltfFile(str(out))
+    rotation = channel_data(file, "rotation")[("Spin", "rotation")][0]
+    translation = channel_data(file, "translation")[("Spin", "translation")][0]
+    assert rotation[0] == translation[0] and rotation[-1] == translation[-1], (rotation, translation)
+    want = blender_worlds(["Spin"], [1, 60.5, 120, 200.25, 241])["Spin"]
+    errors = [angle(file.local(file.node("Spin"), f / fps), w) for f, w in zip([1, 60.5, 120, 200.25, 241], want)]
+    assert max(errors) <= TOLERANCE, errors
