@@ -373,7 +373,8 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
         return "kept: one sample (the rotation the exporter wrote for the animation's only frame)"
     span = frames[0], frames[-1]  # the exporter's frames (the loop's period), before float32 seconds
     step = 1.0 / settings.subframes
-    dense = frames[0] + step * np.arange(int(round((frames[-1] - frames[0]) / step)) + 1)
+    # Both ends at least: keys closer than a subframe (3 to 3.25 at one sample a frame) are two samples.
+    dense = frames[0] + step * np.arange(max(1, int(round((frames[-1] - frames[0]) / step))) + 1)
     dense[-1] = frames[-1]
     # The times the file stores (float32 seconds), as frames.
     t32 = (dense / fps).astype(np.float32).astype(np.float64)

@@ -711,6 +711,12 @@ def test_a_last_key_at_a_fractional_frame_is_held_as_blender_holds_it(scene, tmp
         print("\nfractional last key, %s, Blender %s: max error %.4f° at frame %.4f" % (
             name, bpy.app.version_string, errors[worst], times[worst]))
         assert errors[worst] <= TOLERANCE + 1e-4, "%s: %.4f° at frame %.4f" % (name, errors[worst], times[worst])
+    # One sample a frame: Short's keys, a quarter frame apart, are still two samples (before: the
+    # export stopped with "times: at least two samples").
+    assert bpy.ops.quatcurve.export_gltf(filepath=str(out), tolerance=TOLERANCE, subframes=1) == {"FINISHED"}
+    ours = GltfFile(str(out))
+    errors = [angle(ours.local(ours.node("Short"), t / FPS), w) for t, w in zip(times, want["Short"])]
+    assert max(errors) <= TOLERANCE + 1e-4, max(errors)
     # A manual frame range ending at frame 20 is the clip's end: the keys stop there, as the exporter's.
     action = fcurves.active_action(obj)
     action.use_frame_range = True
