@@ -499,6 +499,12 @@ def prepare(found, settings):
             targets.check_editable(target, settings.new_action)
         with fcurves.read_cache():
             sources = [fit.source_keys(t) for t in found]
+        if settings.method == "EULER":
+            for target, source in zip(found, sources):
+                if not source.is_euler:
+                    raise BakeError("%s: method %s interpolates Euler angle keys, and its keys are %s (bake it with "
+                                    "another method, or convert its keys to an Euler order first)"
+                                    % (target.name, methods.label("EULER"), source.mode))
         loops = [cycles.loop_of_keys(t, s) for t, s in zip(found, sources)]
         if settings.rotation_mode != "KEEP":
             for target in found:

@@ -63,6 +63,16 @@ def test_keys_in_another_rotation_mode_are_named(keyed):
     refused("Cube: no rotation animation .*rotation_euler is keyed")
 
 
+def test_euler_method_for_quaternion_keys_is_named(scene):
+    """Method EULER lerps Euler angle keys: a quaternion or axis-angle target is refused naming it and
+    its mode (before: the native API's 'build it with Curve::from_euler'; found by random scenes)."""
+    obj = add_empty("Quat", "QUATERNION")
+    key(obj, "rotation_quaternion", [(1, (1, 0, 0, 0)), (11, (0.7071, 0, 0, 0.7071))])
+    select_objects(obj)
+    refused(r"Quat: method Euler \(linear angles\) interpolates Euler angle keys, and its keys are QUATERNION",
+            method="EULER")
+
+
 def test_unselected_bone_without_animation_is_not_a_target_but_a_selected_one_is(scene):
     rig = add_rig()
     key(rig.pose.bones["B0"], "rotation_quaternion", [(1, (1, 0, 0, 0)), (5, (0, 1, 0, 0))])
