@@ -16,7 +16,8 @@ The glTF node's rotation is not the target's channel rotation: the exporter conv
 expresses bones relative to their parent's rest pose. For a node whose rotation comes from its
 channels only, the two differ by fixed rotations on both sides, g(t) = A·q(t)·B (B: the exporter's
 axis conversion, or none). The exporter's own output finds them: it is exported sampled at every
-frame, and A, B are taken from its first sample and checked on every sample (within MAP_TOLERANCE)
+frame, and A, B are taken from its first sample and checked on every sample (within MAP_TOLERANCE;
+where samples cannot tell the two B apart, an object's is the Y-up turn and a bone's none)
 against Blender's evaluation of the channels there. A node that fails the check (constraints,
 drivers, a parent's non-uniform scale, NLA: anything but the channels moving it) keeps the sampler
 the exporter wrote, and the result says so. The curve, sampled `subframes` times per frame over the
@@ -271,19 +272,21 @@ def proof_reference(target, curve, frames, loop):
     return (original[0], original[1], target.owner.rotation_mode), ""
 
 
-def node_map(exported, played):
+def node_map(exported, played, is_object=True):
     """(A, B, residual): fixed rotations with exported ≈ A·played·B at every sample (either sign), B the
-    exporter's axis conversion or none, A from the first sample; residual: the largest angle left."""
+    exporter's axis conversion or none, A from the first sample; residual: the largest angle left.
+    Where both fit (one sample, or samples that do not tell them apart), B is what the exporter does:
+    an object's rotation is turned to Y up on both sides (B = Y_UP⁻¹), a bone's is not (B = 1)."""
     qc = native.require()
-    best = None
+    fits = []
     for b in (qc.quat_conjugate(Y_UP), np.array([1.0, 0.0, 0.0, 0.0])):
         a = qc.quat_multiply(qc.quat_multiply(exported[0], qc.quat_conjugate(b)), qc.quat_conjugate(played[0]))
         a = a / np.linalg.norm(a)
         mapped = qc.quat_multiply(qc.quat_multiply(a, played), b)
-        residual = float(np.max(qc.angle_between(mapped, exported)))
-        if best is None or residual < best[2]:
-            best = (a, b, residual)
-    return best
+        fits.append((a, b, float(np.max(qc.angle_between(mapped, exported)))))
+    if all(f[2] <= MAP_TOLERANCE for f in fits):
+        return fits[0] if is_object else fits[1]
+    return min(fits, key=lambda f: f[2])
 
 
 # ---- the rewrite --------------------------------------------------------------------------------------------
@@ -356,7 +359,7 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
             raise
         loop = None  # Blender's playback of any modifiers, over the exporter's frames, as before
     played = playback(target, frames)
-    a, b, residual = node_map(exported, played)
+    a, b, residual = node_map(exported, played, is_object=target.bone is None)
     if residual > MAP_TOLERANCE:
         return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: "
                 "constraints, drivers, NLA or a parent's scale move it)" % math.degrees(residual))
