@@ -376,9 +376,13 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
         return "kept: one sample (the rotation the exporter wrote for the animation's only frame)"
     span = frames[0], frames[-1]  # the exporter's frames (the loop's period), before float32 seconds
     step = 1.0 / settings.subframes
-    # Both ends at least: keys closer than a subframe (3 to 3.25 at one sample a frame) are two samples.
-    dense = frames[0] + step * np.arange(max(1, int(round((frames[-1] - frames[0]) / step))) + 1)
-    dense[-1] = frames[-1]
+    # Every subframe from the first frame, and the last frame: a last key off the grid (10.6 after 10.5,
+    # or 3.25 a quarter frame after 3 at one sample a frame) is added, never put in a subframe's place.
+    dense = frames[0] + step * np.arange(int(math.floor((frames[-1] - frames[0]) / step + 1e-9)) + 1)
+    if frames[-1] - dense[-1] > 1e-9:
+        dense = np.append(dense, frames[-1])
+    else:
+        dense[-1] = frames[-1]
     # The times the file stores (float32 seconds), as frames.
     t32 = (dense / fps).astype(np.float32).astype(np.float64)
     t32 = t32[np.concatenate(([True], t32[1:] > t32[:-1]))]  # float32 may merge very close times

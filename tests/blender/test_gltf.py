@@ -817,3 +817,31 @@ def test_keys_within_one_frame_keep_an_objects_axes(scene, tmp_path):
     for name in names:
         worst = max(angle(file.world(name, t / FPS), w) for t, w in zip(times, want[name]))
         assert worst <= TOLERANCE, "%s: %.4f°" % (name, worst)
+
+
+def test_checked_points_include_every_subframe_before_a_fractional_last_key(scene, tmp_path):
+    """Euler X CONSTANT (a step at the last key, frame 10.6), Z LINEAR: the sampler is held at the
+    checked points (every 1/subframes frame and the last key), which must include 10.5 — the last key
+    took its place, and the file turned toward the post-step rotation from 10.25 while Blender holds
+    until 10.6: 49° at 10.5 under a line saying 0.0000° at the checked points (found by random scenes)."""
+    from quatcurve_blender import gltf
+    scene.render.fps, scene.render.fps_base = FPS, 1.0
+    scene.frame_start, scene.frame_end = 1, 12
+    obj = bpy.data.objects.new("Step", None)
+    scene.collection.objects.link(obj)
+    for frame, x, z in ((1, 0.0, 0.0), (10.6, 1.2, 0.3)):
+        obj.rotation_euler = (x, 0, z)
+        obj.keyframe_insert("rotation_euler", frame=frame, index=0)
+        obj.keyframe_insert("rotation_euler", frame=frame, index=2)
+    for curve in fcurves.Channels.of(obj).fcurves:
+        for point in curve.keyframe_points:
+            point.interpolation = "CONSTANT" if curve.array_index == 0 else "LINEAR"
+    checked = [1 + k / 4 for k in range(int(9.5 * 4) + 1)] + [10.6, 11, 12]
+    want = blender_worlds(["Step"], checked)["Step"]
+    out = tmp_path / "step.glb"
+    result = gltf.export(scene, str(out), gltf.ExportSettings(tolerance=TOLERANCE, subframes=4))
+    assert "at the checked points" in result.lines()[0], result.lines()
+    file = GltfFile(str(out))
+    errors = [angle(file.world("Step", t / FPS), w) for t, w in zip(checked, want)]
+    worst = int(np.argmax(errors))
+    assert errors[worst] <= TOLERANCE, "%.4f° at checked frame %s" % (errors[worst], checked[worst])
