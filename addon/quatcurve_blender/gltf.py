@@ -361,8 +361,15 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
     played = playback(target, frames)
     a, b, residual = node_map(exported, played, is_object=target.bone is None)
     if residual > MAP_TOLERANCE:
-        return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: "
-                "constraints, drivers, NLA or a parent's scale move it)" % math.degrees(residual))
+        bone = target.object.data.bones[target.bone] if target.bone is not None else None
+        if bone is not None and bone.parent is not None and not (bone.use_inherit_rotation and
+                                                                 bone.inherit_scale == "FULL"):
+            cause = ("Inherit Rotation off" if not bone.use_inherit_rotation else
+                     "inherit scale %s" % bone.inherit_scale) + ": the exporter writes its pose relative to its parent's"
+        else:
+            cause = "constraints, drivers, NLA or a parent's scale move it"
+        return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: %s)"
+                % (math.degrees(residual), cause))
     if loop is not None:  # one period: the first key to the last
         frames = np.array([loop.start, loop.end])
         how += ", one period of a loop (frames %s–%s)" % (targets.num(loop.start), targets.num(loop.end))
@@ -572,6 +579,14 @@ def reduce_distance(plans, settings, scene):
         by_bone = {}
         for plan in group:
             b = index[plan.target.bone if is_armature else read.names[0]]
+            if is_armature and read.parents[b] >= 0 and not read.inherit_rotation[b]:
+                # A glTF node inherits its parent's rotation: rewritten, such a bone's keys would carry
+                # its parent's key error in the file, which its own Blender pose (not inheriting the
+                # parent's rotation) does not show. Its exporter samples are kept and measured as they are.
+                done[id(plan)] = ("kept as sampled: Inherit Rotation off, and a glTF node inherits its parent's "
+                                  "rotation, so under the distance bound the file keeps the exporter's pose of it "
+                                  "relative to its parent")
+                continue
             rotations[b] = plan.sample(frames)
             # Blocking keys: the STEP sampler plays the pose Blender does, so the bone is not reduced.
             bones[b] = plan.slerp_bone() if plan.steps is None else None
@@ -670,6 +685,9 @@ def rewrite(doc, scene, settings, fps):
         found, distances = reduce_distance([plan for _, plan, _ in plans], settings, scene)
     written = []
     for sampler, plan, result in plans:
+        if settings.error == "DISTANCE" and isinstance(found[id(plan)], str):  # kept (reduce_distance)
+            result.keys_after, result.curve, result.rewritten = result.keys_before, found[id(plan)], False
+            continue
         try:
             key_frames, keys, error, how = found[id(plan)] if settings.error == "DISTANCE" else \
                 reduce_sampler(plan, settings)
