@@ -427,7 +427,12 @@ def reduce(found, settings):
     def read_all():
         with fcurves.read_cache():  # closed once the last target is read, before any write
             for target in found:
-                yield read_target(target)
+                item = read_target(target)
+                if not item.keys_before:  # no action keys: the rotation plays from NLA strips alone
+                    raise ReduceError("%s: no rotation keys of its own: its rotation plays from NLA strips, and "
+                                      "reduction thins an action's keys (bake it first, or clean it, which reads "
+                                      "what Blender plays)" % target.name)
+                yield item
 
     def reduce_item(item):
         try:

@@ -579,6 +579,19 @@ def test_fcurve_modifiers_are_refused(reducer):
         reduce.reduce([targets.Target(obj)], reduce.ReduceSettings())
 
 
+def test_a_target_playing_from_nla_strips_alone_is_refused(reducer):
+    """No active action, an NLA strip playing its keys: nothing of its own to thin (before: 'Reduced 1
+    target, rotation keys 0 → 0', nothing changed)."""
+    name, frames, q, _, _ = motion(1)[0]
+    obj = keyed_object("strip", frames, q, "QUATERNION")
+    action = fcurves.active_action(obj)
+    obj.animation_data.nla_tracks.new().strips.new("S", int(frames[0]), action)
+    obj.animation_data.action = None
+    select_only(obj)
+    refused("strip: no rotation keys of its own: its rotation plays from NLA strips")
+    assert obj.animation_data.action is None and len(obj.animation_data.nla_tracks[0].strips) == 1
+
+
 def test_no_rotation_animation_and_bad_settings(reducer):
     obj = bpy.data.objects.new("static", None)
     bpy.context.scene.collection.objects.link(obj)
