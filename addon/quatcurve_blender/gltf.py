@@ -366,6 +366,11 @@ def plan_sampler(doc, sampler, target, settings, fps, slid=False):
                                                                  bone.inherit_scale == "FULL"):
             cause = ("Inherit Rotation off" if not bone.use_inherit_rotation else
                      "inherit scale %s" % bone.inherit_scale) + ": the exporter writes its pose relative to its parent's"
+        elif target.bone is None and target.object.parent is not None and \
+                target.object.parent.type in ("CAMERA", "LIGHT"):
+            cause = ("a child of the %s %s: the exporter turns the parent's axes to glTF's %s convention, and the "
+                     "child's against them" % (target.object.parent.type.lower(), target.object.parent.name,
+                                               target.object.parent.type.lower()))
         else:
             cause = "constraints, drivers, NLA or a parent's scale move it"
         return ("kept as sampled: the exported rotation is not the rotation channels' (%.3g° apart at best: %s)"

@@ -845,3 +845,22 @@ def test_checked_points_include_every_subframe_before_a_fractional_last_key(scen
     errors = [angle(file.world("Step", t / FPS), w) for t, w in zip(checked, want)]
     worst = int(np.argmax(errors))
     assert errors[worst] <= TOLERANCE, "%.4f° at checked frame %s" % (errors[worst], checked[worst])
+
+
+def test_a_child_of_a_camera_is_kept_naming_the_camera(scene, tmp_path):
+    """The exporter turns a camera's axes to glTF's convention and its children's against them, so a
+    child's exported rotation is not its channels' under fixed maps: it keeps the exporter's samples,
+    and its line names the camera (it blamed constraints, drivers, NLA or a parent's scale)."""
+    from quatcurve_blender import gltf
+    scene.render.fps, scene.render.fps_base = FPS, 1.0
+    scene.frame_start, scene.frame_end = 1, 10
+    camera = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
+    scene.collection.objects.link(camera)
+    child = bpy.data.objects.new("Rider", None)
+    scene.collection.objects.link(child)
+    child.parent = camera
+    key(camera, "rotation_euler", [(1, (0, 0, 0)), (10, (30, 40, 50))], degrees=True)
+    key(child, "rotation_euler", [(1, (0, 0, 0)), (10, (30, 40, 50))], degrees=True)
+    result = gltf.export(scene, str(tmp_path / "cam.glb"), gltf.ExportSettings(tolerance=TOLERANCE))
+    line = next(line for line in result.lines() if line.startswith("Rider:"))
+    assert "kept as sampled" in line and "a child of the camera Cam" in line, line
