@@ -56,7 +56,7 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         // Nothing to build when the forced keys alone cannot beat the other result.
         if (forced * static_cast<std::size_t>(C) >= beat) return false;
         State s = empty_state(p, !sync);
-        Fitter fitter(p, ipo, s);
+        Fitter fitter(p, ipo, s, tolerance >= kHandleFreeMinTolerance);
         std::vector<std::vector<int>> groups;
         if (tolerance == 0.0 || p.n <= 2) {
             // Every sample is a key (tolerance 0, or nothing to remove).

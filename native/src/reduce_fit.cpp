@@ -61,6 +61,73 @@ void bernstein(double u, double b[4]) {
     b[3] = u * u * u;
 }
 
+// Newton's solve of bezier_time_parameter (below), kept inside a shrinking bracket.
+double solve_time_parameter(double tau, double a1, double a2) {
+    double lo = 0.0, hi = 1.0, s = tau;
+    const double b = 1.0 - a2;
+    for (int it = 0; it < 40; ++it) {
+        const double v = 1.0 - s;
+        const double x = 3.0 * v * v * s * a1 + 3.0 * v * s * s * b + s * s * s - tau;
+        if (x < 0.0) lo = s;
+        else hi = s;
+        const double dx = 3.0 * v * v * a1 + 6.0 * v * s * (b - a1) + 3.0 * s * s * (1.0 - b);
+        double next = dx > 0.0 ? s - x / dx : 0.5 * (lo + hi);
+        if (!(next >= lo && next <= hi)) next = 0.5 * (lo + hi);
+        // Newton converges quadratically: a step this small leaves an error far below it.
+        if (std::fabs(next - s) <= 1e-14) return next;
+        s = next;
+    }
+    return s;
+}
+
+// solve_time_parameter for the pairs of kHandleFractions, from a table: the parameter and its slope
+// ds/dτ = 1/X'(s) at kTableSize + 1 evenly spaced frames, joined by cubic Hermite pieces (error below
+// 1e-12 in s: the fit is verified against Blender's own float32 parameter anyway). The Newton solve
+// per sample and pair was a third of a reduction's time.
+constexpr int kTableSize = 1024;
+}  // namespace
+
+struct ParameterTable {
+    double a1, a2;
+    double s[kTableSize + 1], ds[kTableSize + 1];
+};
+
+namespace {
+
+const ParameterTable* parameter_table(double a1, double a2) {
+    static const std::vector<ParameterTable> tables = [] {
+        std::vector<ParameterTable> out(kHandleAlternatives);
+        for (int alt = 0; alt < kHandleAlternatives; ++alt) {
+            ParameterTable& t = out[alt];
+            t.a1 = kHandleFractions[alt][0];
+            t.a2 = kHandleFractions[alt][1];
+            const double b = 1.0 - t.a2;
+            for (int k = 0; k <= kTableSize; ++k) {
+                const double s = solve_time_parameter(double(k) / kTableSize, t.a1, t.a2), v = 1.0 - s;
+                t.s[k] = s;
+                t.ds[k] = 1.0 / (3.0 * v * v * t.a1 + 6.0 * v * s * (b - t.a1) + 3.0 * s * s * (1.0 - b));
+            }
+        }
+        return out;
+    }();
+    for (const ParameterTable& t : tables)
+        if (t.a1 == a1 && t.a2 == a2) return &t;
+    return nullptr;
+}
+
+// The parameter s ∈ [0, 1] of a Bezier segment whose frame runs 0, a1, 1 − a2, 1 (fractions of the
+// segment) at which the frame is tau ∈ [0, 1]: X(s) = 3(1−s)²s·a1 + 3(1−s)s²·(1 − a2) + s³ rises
+// (a1, a2 ≥ 0, a1 + a2 ≤ 1). `table`: parameter_table(a1, a2), or null to solve (Newton's steps kept
+// inside a shrinking bracket).
+double bezier_time_parameter(double tau, double a1, double a2, const ParameterTable* table) {
+    if (!table) return solve_time_parameter(tau, a1, a2);
+    const double x = std::min(std::max(tau, 0.0), 1.0) * kTableSize;
+    const int k = std::min(static_cast<int>(x), kTableSize - 1);
+    const double h = 1.0 / kTableSize, r = x - k, r2 = r * r, r3 = r2 * r;
+    return (2 * r3 - 3 * r2 + 1) * table->s[k] + (r3 - 2 * r2 + r) * h * table->ds[k] +
+           (-2 * r3 + 3 * r2) * table->s[k + 1] + (r3 - r2) * h * table->ds[k + 1];
+}
+
 // |f|² ≥ (kMinNormRatio)²·norm2: of the quaternion, or of the axis (f[1..3]) for axis-angle.
 bool norm_ok(const Problem& p, const double* f, double norm2) {
     const double f2 = (p.kind == Kind::QUAT ? f[0] * f[0] : 0.0) + f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
@@ -85,11 +152,15 @@ State empty_state(const Problem& p, bool one_by_one) {
     s.keys.assign(p.C, {});
     s.h1.assign(p.n * p.C, 0.0);
     s.h2.assign(p.n * p.C, 0.0);
+    s.a1.assign(p.n * p.C, 1.0 / 3.0);
+    s.a2.assign(p.n * p.C, 1.0 / 3.0);
     s.exact_param.assign(p.n * p.C, 0);
     return s;
 }
 
-Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s) : p_(p), ipo_(ipo), s_(s) {
+Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handle_frames)
+    : p_(p), ipo_(ipo), s_(s),
+      free_handle_frames_(free_handle_frames && p.kind == Kind::QUAT && ipo == KeyInterpolation::BEZIER) {
     buf_.reset(new double[p.n * p.C]);
     bern_.reset(new double[p.n * 4]);
     u_.reset(new double[p.n]);
@@ -102,19 +173,13 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
     const int C = p_.C;
     if (!force && j - i >= 2 && p_.breaks[j] != p_.breaks[i]) return false;
     const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
-    // Parameters of the interior samples.
-    for (std::size_t k = i + 1; k < j; ++k) u_[k] = (p_.t[k] - ti) / d;
+    // A refit with Blender's parameter keeps the segment's committed handle frames.
+    double a1 = 1.0 / 3.0, a2 = 1.0 / 3.0;
     if (exact_param && ipo_ == KeyInterpolation::BEZIER) {
-        float hx[2];
-        handle_frames(i, j, hx);
-        for (std::size_t k = i + 1; k < j; ++k) {
-            const float r = blender_bezier_parameter(float(p_.t[k]), float(ti), hx[0], hx[1],
-                                                     float(tj));
-            if (r >= 0.0f) u_[k] = r;
-        }
+        a1 = s_.a1[i * C + chans[0]];
+        a2 = s_.a2[i * C + chans[0]];
     }
-    if (ipo_ == KeyInterpolation::BEZIER)
-        for (std::size_t k = i + 1; k < j; ++k) bernstein(u_[k], &bern_[k * 4]);
+    set_parameters(i, j, a1, a2, exact_param);
     if (p_.kind == Kind::QUAT && nc == 1) other_channels(i, j, chans[0]);
     double p1[kMaxChannels] = {}, p2[kMaxChannels] = {};
     bool ok;
@@ -134,45 +199,95 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
         ok = evaluate(i, j, chans, nc, p1, p2, limit,
                       force ? std::numeric_limits<double>::infinity() : limit) <= limit;
     } else {
-        ok = false;
-        double kappa = 4.0;  // quaternion and axis-angle metric: radial direction free
-        for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
-            if (attempt == 1) {
-                // The norm dipped: refit with radial errors weighted.
-                if (p_.kind == Kind::EULER || !between_failed_) break;
-                kappa = 4.0 - kRadialWeight;
-            }
-            for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
-            const int iterations = nc != 1                  ? kReweightIterations
-                                   : p_.kind == Kind::QUAT ? kReweightIterationsQuatChannel
-                                                           : kReweightIterationsSingle;
-            for (int it = 0; it <= iterations; ++it) {
-                solve_handles(i, j, chans, nc, kappa, p1, p2);
-                // The last round keeps the first round's bound: over the limit it fails anyway,
-                // but a norm dip further on is still found (and refitted with radial weights).
-                const double give_up = force ? std::numeric_limits<double>::infinity()
-                                       : it < iterations ? kHopeless[it] * limit
-                                                         : kHopeless[0] * limit;
-                const double worst = evaluate(i, j, chans, nc, p1, p2, limit, give_up);
-                if (worst <= limit) {
+        double worst0;
+        ok = fit_handles(i, j, chans, nc, limit, force, p1, p2, worst0);
+        // Other handle frames, while the thirds came near (kHandleFractions). A forced fit that none
+        // of them passes keeps the thirds' fit, refitted (the trials overwrote the samples' values).
+        if (!ok && free_handle_frames_ && !exact_param && j - i > kHandleFreeSamples &&
+            worst0 <= kHandleFreeHopeless * limit) {
+            double q1[kMaxChannels], q2[kMaxChannels], w;
+            for (int alt = 0; alt < kHandleAlternatives && !ok; ++alt) {
+                set_parameters(i, j, kHandleFractions[alt][0], kHandleFractions[alt][1], false);
+                if (fit_handles(i, j, chans, nc, limit, false, q1, q2, w)) {
                     ok = true;
-                    break;
+                    std::copy(q1, q1 + nc, p1);
+                    std::copy(q2, q2 + nc, p2);
                 }
-                // Reweighting cannot fix the norm, nor hopeless segments (too far over the limit
-                // for the rounds left).
-                if (between_failed_ || worst > give_up || it == iterations) break;
-                // Lawson-style reweighting toward the minimax fit: w ← w·err, normalized.
-                double total = 0.0;
-                for (std::size_t k = i + 1; k < j; ++k) {
-                    w_[k] *= std::sqrt(err_[k]) + 1e-300;  // ≈ θ/2
-                    total += w_[k];
-                }
-                const double scale = static_cast<double>(j - i - 1) / total;
-                for (std::size_t k = i + 1; k < j; ++k) w_[k] = std::max(w_[k] * scale, 1e-6);
+            }
+            if (!ok && force) {
+                set_parameters(i, j, 1.0 / 3.0, 1.0 / 3.0, false);
+                fit_handles(i, j, chans, nc, limit, true, p1, p2, w);
             }
         }
     }
     if (ok || force) commit(i, j, chans, nc, p1, p2, exact_param);
+    return ok;
+}
+
+void Fitter::set_parameters(std::size_t i, std::size_t j, double a1, double a2, bool exact_param) {
+    const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
+    frac1_ = a1;
+    frac2_ = a2;
+    const bool thirds = a1 == 1.0 / 3.0 && a2 == 1.0 / 3.0;
+    table_ = thirds ? nullptr : parameter_table(a1, a2);
+    for (std::size_t k = i + 1; k < j; ++k) {
+        const double tau = (p_.t[k] - ti) / d;
+        u_[k] = thirds ? tau : bezier_time_parameter(tau, a1, a2, table_);
+    }
+    if (exact_param && ipo_ == KeyInterpolation::BEZIER) {
+        float hx[2];
+        handle_frames(i, j, a1, a2, hx);
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const float r = blender_bezier_parameter(float(p_.t[k]), float(ti), hx[0], hx[1],
+                                                     float(tj));
+            if (r >= 0.0f) u_[k] = r;
+        }
+    }
+    if (ipo_ == KeyInterpolation::BEZIER)
+        for (std::size_t k = i + 1; k < j; ++k) bernstein(u_[k], &bern_[k * 4]);
+}
+
+bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit,
+                         bool force, double* p1, double* p2, double& worst0) {
+    bool ok = false;
+    worst0 = std::numeric_limits<double>::infinity();
+    double kappa = 4.0;  // quaternion and axis-angle metric: radial direction free
+    for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
+        if (attempt == 1) {
+            // The norm dipped: refit with radial errors weighted.
+            if (p_.kind == Kind::EULER || !between_failed_) break;
+            kappa = 4.0 - kRadialWeight;
+        }
+        for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
+        const int iterations = nc != 1                  ? kReweightIterations
+                               : p_.kind == Kind::QUAT ? kReweightIterationsQuatChannel
+                                                       : kReweightIterationsSingle;
+        for (int it = 0; it <= iterations; ++it) {
+            solve_handles(i, j, chans, nc, kappa, p1, p2);
+            // The last round keeps the first round's bound: over the limit it fails anyway,
+            // but a norm dip further on is still found (and refitted with radial weights).
+            const double give_up = force ? std::numeric_limits<double>::infinity()
+                                   : it < iterations ? kHopeless[it] * limit
+                                                     : kHopeless[0] * limit;
+            const double worst = evaluate(i, j, chans, nc, p1, p2, limit, give_up);
+            if (attempt == 0 && it == 0) worst0 = between_failed_ ? 0.0 : worst;
+            if (worst <= limit) {
+                ok = true;
+                break;
+            }
+            // Reweighting cannot fix the norm, nor hopeless segments (too far over the limit
+            // for the rounds left).
+            if (between_failed_ || worst > give_up || it == iterations) break;
+            // Lawson-style reweighting toward the minimax fit: w ← w·err, normalized.
+            double total = 0.0;
+            for (std::size_t k = i + 1; k < j; ++k) {
+                w_[k] *= std::sqrt(err_[k]) + 1e-300;  // ≈ θ/2
+                total += w_[k];
+            }
+            const double scale = static_cast<double>(j - i - 1) / total;
+            for (std::size_t k = i + 1; k < j; ++k) w_[k] = std::max(w_[k] * scale, 1e-6);
+        }
+    }
     return ok;
 }
 
@@ -219,10 +334,10 @@ void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
     }
 }
 
-void Fitter::handle_frames(std::size_t i, std::size_t j, float hx[2]) const {
+void Fitter::handle_frames(std::size_t i, std::size_t j, double a1, double a2, float hx[2]) const {
     const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
-    hx[0] = float(ti + d / 3.0);
-    hx[1] = float(tj - d / 3.0);
+    hx[0] = float(ti + handle_offset(d, a1));
+    hx[1] = float(tj - handle_offset(d, a2));
 }
 
 // Weighted least squares for the inner control values: minimize
@@ -492,10 +607,15 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
     if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
         // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
         const double tan_fit = between_tan(limit);
+        const bool thirds = linear || (frac1_ == 1.0 / 3.0 && frac2_ == 1.0 / 3.0);
         double prev_u = 0.0;
         for (std::size_t k = i; k < j; ++k) {
             const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
-            const double u = 0.5 * (prev_u + next_u);
+            // Midway in frames: halfway in the parameter where it is linear in the frame.
+            const double u = thirds ? 0.5 * (prev_u + next_u)
+                                    : bezier_time_parameter(
+                                          (0.5 * (p_.t[k] + p_.t[k + 1]) - p_.t[i]) / (p_.t[j] - p_.t[i]),
+                                          frac1_, frac2_, table_);
             prev_u = next_u;
             double f[kMaxChannels] = {}, b[4];
             if (NC < C && !other)
@@ -556,6 +676,8 @@ void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, cons
         }
         s_.h1[i * C + c] = p1[a];
         s_.h2[i * C + c] = p2[a];
+        s_.a1[i * C + c] = frac1_;
+        s_.a2[i * C + c] = frac2_;
         s_.exact_param[i * C + c] = exact_param ? 1 : 0;
     }
 }

@@ -6,8 +6,9 @@
 //   reduce_problem.cpp  admit the input (argument checks, float32 storage) and build the Problem:
 //                       channel values, reference rotations, error metric, discontinuities, slopes;
 //   reduce_fit.cpp      the Fitter: one segment of some channels — the LINEAR chord, or the Bezier
-//                       inner control values by weighted least squares and reweighting — and the
-//                       exact error test at the samples (and between them);
+//                       inner control values by weighted least squares and reweighting, at the
+//                       handle frames of kHandleFractions — and the exact error test at the samples
+//                       (and between them);
 //   reduce_select.cpp   key choice: greedy farthest feasible end, then key removal;
 //   reduce_verify.cpp   the F-curves of the result, evaluated as Blender does (blender_eval.hpp),
 //                       refitted or split until every sample passes.
@@ -72,6 +73,31 @@ constexpr double kMinNormRatio = 0.5;
 // rotation step between the two samples.
 constexpr double kBetweenFactor = 2.0;
 constexpr double kBetweenStep = 0.25;
+// BEZIER handle frames, as fractions of the segment from its left key (a1) and from its right key
+// (a2): first 1/3 and 1/3, where the frame is linear in the curve's parameter. A quaternion segment of
+// more than kHandleFreeSamples samples inside that fails there is fitted again with each pair of
+// kHandleFractions, in order, and the first that passes is kept: a short handle on one side lets the
+// curve change speed near that key, as captured motion does where it starts or stops. a1 + a2 ≤ 1
+// keeps the segment's frame monotone in its parameter, so Blender plays the handles as stored (no
+// correction). A pair is tried only while the thirds' first fit is within kHandleFreeHopeless × the
+// limit (tan²): on the motion-capture clips at 0.1° (reduce_keys_proved) 4 gave 13 % fewer keys, 16
+// no more for 1.7× the time, 2 and 1.5 only 9 % and 5 %. Pairs in order of how often they passed
+// there; three more — (0.2, 0.2), (0.2, 1/3), (1/3, 0.2) — passed in 6 % of the cases and are not
+// tried. Not for Euler and axis-angle channels (a live refit of Euler keys, SPLINE_C2 in
+// tests/blender/test_everywhere.py, then ended at 0.065° on a 0.05° tolerance), nor below
+// kHandleFreeMinTolerance (a mocap hip reduced at 0.001°, tests/blender/test_reduce.py, then stayed
+// at 0.0011° after all the proof's rounds; with the thirds, whose frame→parameter map is linear, it
+// is proved).
+constexpr int kHandleFreeSamples = 3;
+constexpr double kHandleFreeHopeless = 4.0;
+constexpr double kHandleFreeMinTolerance = 0.01 * kPi / 180.0;
+constexpr double kHandleFractions[][2] = {{0.5, 0.5}, {0.2, 0.5}, {0.5, 0.2}, {1.0 / 3.0, 0.5},
+                                          {0.5, 1.0 / 3.0}};
+constexpr int kHandleAlternatives = sizeof(kHandleFractions) / sizeof(kHandleFractions[0]);
+
+// A handle's frame offset from its key in a segment of d frames, for the fraction a (the thirds
+// divided, as Blender's own thirds are).
+inline double handle_offset(double d, double a) { return a == 1.0 / 3.0 ? d / 3.0 : d * a; }
 
 // x rounded to float32, as Blender stores it.
 inline double f32(double x) { return static_cast<double>(static_cast<float>(x)); }
@@ -243,15 +269,19 @@ struct State {
     std::vector<double> F;                           // n·C fitted values (one-by-one runs)
     std::vector<std::vector<std::size_t>> keys;      // per channel
     std::vector<double> h1, h2;                      // n·C: control values of the segment starting at i
+    std::vector<double> a1, a2;                      // n·C: its handle frames' fractions (kHandleFractions)
     std::vector<unsigned char> exact_param;          // n·C: segment refitted with Blender's parameter
 };
 
 // A State with no keys; for a run that fits channels one by one (one_by_one), F at the samples.
 State empty_state(const Problem& p, bool one_by_one);
 
+struct ParameterTable;  // reduce_fit.cpp
+
 class Fitter {
 public:
-    Fitter(const Problem& p, KeyInterpolation ipo, State& s);
+    // free_handle_frames: try kHandleFractions where the thirds fail (quaternion BEZIER only).
+    Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handle_frames = false);
 
     // Fits channels `chans` (count nc) on [i, j] with the other channels at their current F and tests
     // every sample strictly inside against tan²(θ/2) ≤ limit. On success (or when `force`) the fit is
@@ -260,8 +290,8 @@ public:
     bool fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
              bool exact_param = false);
 
-    // Handle frames of segment [i, j] as Blender stores them (float32), at 1/3 and 2/3.
-    void handle_frames(std::size_t i, std::size_t j, float hx[2]) const;
+    // Handle frames of segment [i, j] as Blender stores them (float32) for the fractions a1, a2.
+    void handle_frames(std::size_t i, std::size_t j, double a1, double a2, float hx[2]) const;
 
 private:
     void solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
@@ -280,6 +310,11 @@ private:
     double between_tan(double limit);
     void commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                 const double* p2, bool exact_param);
+    // u_ (and the Bezier basis) of the samples inside [i, j] for the handle fractions a1, a2.
+    void set_parameters(std::size_t i, std::size_t j, double a1, double a2, bool exact_param);
+    // The fit of one parameterization (fit's reweighting rounds); worst0: the plain fit's worst.
+    bool fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
+                     double* p1, double* p2, double& worst0);
 
     // Quaternion fits of one channel among fixed others (per-channel key choice): per sample, what
     // the other channels contribute to the error terms, so that a fit computes only its channel's
@@ -317,6 +352,10 @@ private:
     // between_tan's last limit and result (the limit is the same for many fits in a row).
     double between_limit_ = -1.0, between_tan_ = 0.0;
     bool between_failed_ = false;  // the last evaluate() failed a between-samples guard
+    // The handle fractions of the parameterization in u_ (1/3, 1/3: u is linear in the frame).
+    double frac1_ = 1.0 / 3.0, frac2_ = 1.0 / 3.0;
+    const ParameterTable* table_ = nullptr;  // their parameter table (reduce_fit.cpp), if any
+    bool free_handle_frames_;
 };
 
 // ---- stage 3: key selection (reduce_select.cpp) ----------------------------------------------------

@@ -231,10 +231,11 @@ TEST(Reduce, ConstantMotionGivesTwoKeysOneSampleOneKey) {
     }
 }
 
-TEST(Reduce, KeysAreFloat32InputValuesAndHandlesSitAtThirds) {
+TEST(Reduce, KeysAreFloat32InputValuesAndHandlesSitInsideTheirSegment) {
     const std::vector<Quat> q = smooth_quats(7, 200);
     const std::vector<double> t = frames_of(q.size(), 3.0, 0.7);
     const ReducedKeys r = reduce_keys(t, q, 0.2 * kDeg, KeyInterpolation::BEZIER, false);
+    int thirds = 0, others = 0;
     for (int c = 0; c < 4; ++c) {
         const ReducedChannel& ch = r.channels[c];
         for (std::size_t a = 0; a < ch.indices.size(); ++a) {
@@ -243,12 +244,53 @@ TEST(Reduce, KeysAreFloat32InputValuesAndHandlesSitAtThirds) {
             EXPECT_EQ(ch.values[a], double(float(v[c])));
             EXPECT_EQ(ch.frames[a], double(float(t[k])));
             if (a + 1 < ch.indices.size()) {
+                // The handle frames at the fractions the reducer tries (1/3 first, then 0.2 or 0.5),
+                // together at most the segment: Blender plays them uncorrected.
                 const double d = ch.frames[a + 1] - ch.frames[a];
-                EXPECT_NEAR(ch.handle_right[2 * a] - ch.frames[a], d / 3, 1e-5);
-                EXPECT_NEAR(ch.frames[a + 1] - ch.handle_left[2 * (a + 1)], d / 3, 1e-5);
+                const double a1 = (ch.handle_right[2 * a] - ch.frames[a]) / d;
+                const double a2 = (ch.frames[a + 1] - ch.handle_left[2 * (a + 1)]) / d;
+                for (double f : {a1, a2}) {
+                    EXPECT_TRUE(std::fabs(f - 1.0 / 3.0) < 1e-5 || std::fabs(f - 0.2) < 1e-5 ||
+                                std::fabs(f - 0.5) < 1e-5)
+                        << "channel " << c << " key " << a << ": fraction " << f;
+                }
+                EXPECT_LE(ch.handle_right[2 * a], ch.handle_left[2 * (a + 1)]);
+                (std::fabs(a1 - 1.0 / 3.0) < 1e-5 && std::fabs(a2 - 1.0 / 3.0) < 1e-5 ? thirds : others)++;
             }
         }
     }
+    EXPECT_GT(thirds, 0);
+    EXPECT_LE(quat_max_error(r, t, q), 0.2 * kDeg);
+}
+
+// A turn about Z whose quaternion's z channel is a Bezier segment with handle frames at 0.2 and 0.5 of
+// it (an ease out of the first key, a late ease into the last): cubic in its parameter, not in the
+// frame. Handles at the thirds need a key in between at 0.1°; the reducer's other handle frames take
+// it in one segment, handles where they were.
+TEST(Reduce, OtherHandleFramesTakeAnEaseInOneSegment) {
+    const double a1 = 0.2, a2 = 0.5, y0 = 0.0, y1 = 0.1, y2 = 0.9, y3 = 1.0;
+    const std::size_t n = 31;
+    const std::vector<double> t = frames_of(n);
+    std::vector<Quat> q(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        const double tau = t[k] / t[n - 1];
+        double lo = 0.0, hi = 1.0;
+        for (int it = 0; it < 200; ++it) {
+            const double s = 0.5 * (lo + hi), v = 1.0 - s;
+            (3 * v * v * s * a1 + 3 * v * s * s * (1 - a2) + s * s * s < tau ? lo : hi) = s;
+        }
+        const double s = 0.5 * (lo + hi), v = 1.0 - s;
+        const double z = v * v * v * y0 + 3 * v * v * s * y1 + 3 * v * s * s * y2 + s * s * s * y3;
+        q[k] = Quat(1.0, 0.0, 0.0, z);  // the rotation of its direction; the scale is kept as given
+    }
+    const ReducedKeys r = reduce_keys(t, q, 0.1 * kDeg, KeyInterpolation::BEZIER, true);
+    EXPECT_LE(quat_max_error(r, t, q), 0.1 * kDeg);
+    const ReducedChannel& z = r.channels[3];
+    ASSERT_EQ(z.indices, (std::vector<std::size_t>{0, n - 1}));
+    EXPECT_NEAR(z.handle_right[0], a1 * t[n - 1], 1e-4);
+    EXPECT_NEAR(z.handle_left[2], t[n - 1] * (1.0 - a2), 1e-4);
+    EXPECT_NEAR(z.handle_right[1], y1, 1e-4);
+    EXPECT_NEAR(z.handle_left[3], y2, 1e-4);
 }
 
 TEST(Reduce, HemisphereFlipForcesKeysOnBothSides) {

@@ -12,9 +12,12 @@
 //           three angles, for axis-angle the rotation of the angle about the normalized axis (a
 //           zero axis: the identity). Keys are input samples, stored as given (rounded to float32).
 //   BEZIER  Blender's Bezier segment: a cubic in (frame, value) through the two keys with the left
-//           key's right handle and the right key's left handle as inner control points. We place
-//           handle frames at 1/3 and 2/3 of each segment, so the frame is (up to float32 rounding of
-//           the handle frames) linear in the curve parameter, and fit the handle values by weighted
+//           key's right handle and the right key's left handle as inner control points. Handle
+//           frames sit at 1/3 and 2/3 of each segment, where the frame is (up to float32 rounding of
+//           the handle frames) linear in the curve parameter; a quaternion segment that cannot meet
+//           the tolerance so, at tolerances from 0.01°, is tried with handle frames at 0.2 or 0.5 of
+//           the segment from either key (the two never crossing: Blender plays them as stored), which
+//           lets the curve speed up or slow down near a key. The handle values are fitted by weighted
 //           least squares in the rotation metric, then by iterative reweighting toward the minimax
 //           fit. Each segment has its own handles: tangents are broken at keys, so the F-curves need
 //           handle_left_type = handle_right_type = 'FREE' (set the types BEFORE the coordinates, or
