@@ -33,7 +33,8 @@ using namespace reduce_impl;
 
 namespace reduce_impl {
 
-ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized) {
+ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
+                   bool free_handle_frames) {
     check_tolerance(tolerance);
     check_float32_storage(p, tolerance);
     const int C = p.C;
@@ -56,7 +57,7 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         // Nothing to build when the forced keys alone cannot beat the other result.
         if (forced * static_cast<std::size_t>(C) >= beat) return false;
         State s = empty_state(p, !sync);
-        Fitter fitter(p, ipo, s, tolerance >= kHandleFreeMinTolerance);
+        Fitter fitter(p, ipo, s, free_handle_frames && tolerance >= kHandleFreeMinTolerance);
         std::vector<std::vector<int>> groups;
         if (tolerance == 0.0 || p.n <= 2) {
             // Every sample is a key (tolerance 0, or nothing to remove).

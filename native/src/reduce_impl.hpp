@@ -388,6 +388,9 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
 // The keys of Problem p (its forced and candidate samples as set) within `tolerance`: the stages
 // above, synchronized and (unless `synchronized`) per channel, the fewer keys kept. fit_keys* call it;
 // so does reduce_proved.cpp, whose samples added by the proof are candidates of no key.
-ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized);
+// free_handle_frames: quaternion BEZIER segments may take the handle frames of kHandleFractions (from
+// kHandleFreeMinTolerance); false keeps every segment's at the thirds.
+ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
+                   bool free_handle_frames = true);
 
 }  // namespace quatcurve::reduce_impl

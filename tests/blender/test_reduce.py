@@ -481,6 +481,58 @@ def test_stepped_keys_no_reduction_thins_stay_as_they_are(reducer, new_action):
     assert (target.action != "DenseAction") == new_action, target.action
 
 
+def uneven_turn(seed):
+    """(frames, quats, tolerance°, times) of a random eased turn with jitter keyed at uneven spacing (gaps
+    of 0.05 to 3 frames, float32 frames), as a random campaign drew it; `times`: 64 points per frame
+    and 300 random times."""
+    rng = np.random.default_rng(1000 + seed)
+    rng.integers(0, 3)
+    n = int(rng.integers(20, 160))
+    t = np.arange(n, dtype=float) / (n - 1)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    angle = t * t * (3 - 2 * t) * rng.uniform(0.2, 6.0)
+    q = np.c_[np.cos(angle / 2), np.outer(np.sin(angle / 2), axis)]
+    q += rng.normal(scale=rng.choice([0, 1e-4, 1e-3]), size=q.shape)
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    gaps = rng.choice([1.0, 1.0, 0.5, 0.25, 2.0, 3.0, 0.05, 1.3], size=n - 1)
+    frames = np.float32(np.r_[1.0, 1.0 + np.cumsum(gaps)]).astype(float)
+    for k in range(1, n):
+        if np.dot(q[k], q[k - 1]) < 0:
+            q[k] = -q[k]
+    if rng.random() < 0.2:
+        q[n // 2:] *= -1
+    tol = float(rng.choice([0.01, 0.02, 0.05, 0.1, 0.3, 1.0, 3.0]))
+    rng.random()
+    times = np.unique(np.r_[np.arange(frames[0] * 64, frames[-1] * 64 + 1) / 64.0,
+                            rng.uniform(frames[0], frames[-1], 300)])
+    return frames, q, tol, times
+
+
+@pytest.mark.parametrize("seed", [29, 33])
+def test_uneven_keys_are_proved_with_handle_frames_at_the_thirds_where_free_ones_are_not(reducer, seed, tmp_path):
+    """Quaternion keys at uneven spacing whose reduction with the handle frames free (0.2 or 0.5 of a
+    segment where the thirds fall short) left an interval unproved after all its rounds: the rounds
+    run again with the thirds, and the result is proved at every instant and plays within its bound
+    in a fresh Blender without the add-on."""
+    from test_fit import fresh_blender_quats
+
+    frames, q, tol, times = uneven_turn(seed)
+    original = keyed_object("uneven%d" % seed, frames, q, "QUATERNION")
+    reduced = keyed_object("uneven%d_reduced" % seed, frames, q, "QUATERNION")
+    result = reduce.reduce([targets.Target(reduced)], reduce.ReduceSettings(tolerance=tol, interpolation="BEZIER"))
+    line = result.lines()[0]
+    print("\n" + line)
+    target = result.targets[0]
+    assert "at every instant" in line and "not proved" not in line and "ABOVE" not in line, line
+    assert target.proven and target.bound_deg <= tol, line
+    blend = tmp_path / "uneven.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    played = fresh_blender_quats(blend, [[original.name, None], [reduced.name, None]], times, tmp_path)
+    err = np.degrees(native.require().angle_between(played[reduced.name], played[original.name]))
+    assert err.max() <= target.bound_deg + 3e-5, "%s: %.6f° at frame %s" % (line, err.max(), times[err.argmax()])
+
+
 @pytest.mark.parametrize("interpolation", ["BEZIER", "LINEAR"])
 def test_tight_tolerance_is_proved_and_plays_within_it_in_a_fresh_blender(reducer, interpolation, tmp_path):
     """Three joints of a real clip (LINEAR quaternion keys at every frame, as imported), reduced to
