@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstddef>
 #include <cstring>
+#include <initializer_list>
 #include <utility>
 #include <string>
 
@@ -16,10 +17,42 @@
 #include "quatcurve/errors.hpp"
 #include "quatcurve/quat.hpp"
 
+#if QUATCURVE_MULTIVERSION
+#include <cpuid.h>
+#endif
+
 namespace quatcurve {
 
 using detail::kPi;
 using detail::kTwoPi;
+
+// x86-64-v3 needs AVX, AVX2, BMI1, BMI2, F16C, FMA, LZCNT, MOVBE and the SSE3–4.2 and POPCNT of v2,
+// and the system's saving of the YMM registers (XCR0 bits 1–2); v4 adds AVX-512 F, BW, CD, DQ and VL
+// and the saving of the mask and ZMM registers (XCR0 bits 5–7). Intel's and AMD's CPUID bits.
+int cpu_level() {
+    int level = 0;
+#if QUATCURVE_MULTIVERSION
+    unsigned a, b, c, d;
+    auto has = [](unsigned reg, std::initializer_list<int> bits) {
+        for (int bit : bits)
+            if (!(reg >> bit & 1u)) return false;
+        return true;
+    };
+    if (__get_cpuid(1, &a, &b, &c, &d) && has(c, {0, 9, 12, 19, 20, 22, 23, 27, 28, 29})) {
+        unsigned xcr0_lo, xcr0_hi;
+        __asm__("xgetbv" : "=a"(xcr0_lo), "=d"(xcr0_hi) : "c"(0));
+        unsigned b7 = 0, c7 = 0, d7 = 0, ce = 0;
+        const bool leaf7 = __get_cpuid_count(7, 0, &a, &b7, &c7, &d7);
+        const bool ext = __get_cpuid(0x80000001, &a, &b, &ce, &d);
+        if (has(xcr0_lo, {1, 2}) && leaf7 && ext && has(b7, {3, 5, 8}) && has(ce, {5})) {
+            level = 3;
+            if (has(b7, {16, 17, 28, 30, 31}) && has(xcr0_lo, {5, 6, 7})) level = 4;
+        }
+    }
+#endif
+    if (const char* cap = std::getenv("QUATCURVE_CPU_LEVEL")) level = std::min(level, std::atoi(cap));
+    return level;
+}
 
 namespace {
 

@@ -168,7 +168,8 @@ void velocity_lerp(const Curve::Impl& m, const double* times, std::size_t n, dou
 // (C, K) = exp_coeffs(s²θ²) (K·s); six series terms for a segment of θ ≤ 0.5, eight for θ ≤ 1.6,
 // else ten (θ ≤ π: the segments are split at π; exp_terms). Every sample is evaluated on its own (no recurrence, no
 // drift).
-QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+namespace {
+QUATCURVE_INLINE void sample_slerp_body(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SlerpSeg* seg = m.slerp.data();
     drive_runs(
         m.kt, times, n,
@@ -191,6 +192,10 @@ QUATCURVE_HOT void sample_slerp(const Curve::Impl& m, const double* times, std::
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
+}  // namespace
+
+QUATCURVE_VERSIONS(sample_slerp, (const Curve::Impl& m, const double* times, std::size_t n, double* out),
+                   (m, times, n, out))
 
 void velocity_slerp(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     drive(

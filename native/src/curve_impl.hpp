@@ -121,23 +121,49 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
 
 }  // namespace detail
 
-// Hot samplers get x86-64-v4 (AVX-512: 32 vector registers, so far fewer spills of their 256-bit
-// vectors) and x86-64-v3 (AVX2, FMA) clones next to the baseline x86-64 one, chosen at load time
-// (GCC function multi-versioning), so the module still runs on any x86-64. Define
-// QUATCURVE_NO_MULTIVERSION to build the baseline only.
-// QUATCURVE_HOT_UNFUSED: the same clones without contracting a·b + c into an FMA, for kernels
-// whose every bit must match baseline scalar code (which has no FMA to contract into).
-// QUATCURVE_MULTIVERSION is 1 where they exist, for a sampler whose versions differ (curve_squad.cpp).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
-    !defined(QUATCURVE_NO_MULTIVERSION)
+// Hot samplers come in three versions — x86-64-v4 (AVX-512: 32 vector registers, so far fewer spills
+// of their 256-bit vectors), x86-64-v3 (AVX2, FMA) and the baseline x86-64 — and run the one the CPU
+// has, found once at the first call (cpu_level). Written out rather than left to GCC's target_clones,
+// so that clang builds them too: zig's clang builds the packaged modules, and its compiler-rt lacks
+// the CPU detection target_clones calls (__cpu_indicator_init). Define QUATCURVE_NO_MULTIVERSION to
+// build the baseline only. QUATCURVE_MULTIVERSION is 1 where the versions exist.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(QUATCURVE_NO_MULTIVERSION)
 #define QUATCURVE_MULTIVERSION 1
-#define QUATCURVE_HOT __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#define QUATCURVE_HOT_UNFUSED __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"), optimize("fp-contract=off")))
+#define QUATCURVE_X86_64_V3 "avx,avx2,bmi,bmi2,f16c,fma,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2"
+#define QUATCURVE_TARGET_V3 __attribute__((target(QUATCURVE_X86_64_V3)))
+#define QUATCURVE_TARGET_V4 \
+    __attribute__((target(QUATCURVE_X86_64_V3 ",avx512f,avx512bw,avx512cd,avx512dq,avx512vl")))
 #else
 #define QUATCURVE_MULTIVERSION 0
-#define QUATCURVE_HOT
-#define QUATCURVE_HOT_UNFUSED
 #endif
+
+// 4 where the CPU and the system run x86-64-v4 code, 3 for x86-64-v3, else 0 (curve.cpp: cpuid and
+// xgetbv; 0 without the versions). QUATCURVE_CPU_LEVEL=0 or 3 in the environment caps it (the tests
+// run every version on one machine that way).
+int cpu_level();
+
+// `void name params`, running name##_body(args) — a QUATCURVE_INLINE function — compiled for each
+// level. `attrs`: more attributes of every version.
+#if QUATCURVE_MULTIVERSION
+#define QUATCURVE_VERSIONS_WITH(attrs, name, params, args)                    \
+    attrs QUATCURVE_TARGET_V4 static void name##_v4 params { name##_body args; } \
+    attrs QUATCURVE_TARGET_V3 static void name##_v3 params { name##_body args; } \
+    attrs static void name##_v0 params { name##_body args; }                  \
+    void name params {                                                        \
+        static const int level = cpu_level();                                 \
+        if (level >= 4) {                                                     \
+            name##_v4 args;                                                   \
+        } else if (level >= 3) {                                              \
+            name##_v3 args;                                                   \
+        } else {                                                              \
+            name##_v0 args;                                                   \
+        }                                                                     \
+    }
+#else
+#define QUATCURVE_VERSIONS_WITH(attrs, name, params, args) \
+    void name params { name##_body args; }
+#endif
+#define QUATCURVE_VERSIONS(name, params, args) QUATCURVE_VERSIONS_WITH(, name, params, args)
 
 struct Curve::Impl {
     // Knots after splitting the segments that turn more than π (keys plus sub-keys).

@@ -32,7 +32,8 @@ namespace quatcurve::detail {
 #endif
 
 // Always inlined, also where the optimizer would not: a hot sampler's helpers and lambdas must be
-// compiled inside each of its QUATCURVE_HOT clones (an out-of-line copy is baseline x86-64 code).
+// compiled inside each of its versions (QUATCURVE_VERSIONS; an out-of-line copy is baseline x86-64
+// code).
 // On a lambda: [&](…) QUATCURVE_LAMBDA_INLINE {…}.
 #define QUATCURVE_INLINE inline __attribute__((always_inline))
 #define QUATCURVE_LAMBDA_INLINE __attribute__((always_inline))

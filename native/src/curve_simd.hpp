@@ -2,10 +2,10 @@
 // curve_squad.cpp, curve_spline.cpp). V4 holds one double per sample (lane k = sample i + k), so
 // the formulas read as their scalar versions in curve_math.hpp; a quaternion of four samples is four
 // V4s (QV, one per component) and is stored as four (w, x, y, z) rows by a 4×4 transpose. GCC and
-// Clang vector extensions: one 256-bit register per V4 in the x86-64-v4 and x86-64-v3 clones of a
-// QUATCURVE_HOT sampler, two SSE2 registers in the baseline one. Every helper is always inlined into
-// its sampler, so no V4 crosses a call (whose ABI would differ between the clones; hence -Wpsabi is
-// silenced here).
+// Clang vector extensions: one 256-bit register per V4 in the x86-64-v4 and x86-64-v3 versions of a
+// hot sampler (QUATCURVE_VERSIONS, curve_impl.hpp), two SSE2 registers in the baseline one. Every
+// helper is always inlined into its sampler, so no V4 crosses a call (whose ABI would differ between
+// the versions; hence -Wpsabi is silenced here).
 //
 // The formulas are templates over V4 and V4x2 (eight samples as two V4s, for SQUAD's long chain of
 // dependent operations). The polynomial kernels take the term count as a parameter, chosen once per

@@ -278,7 +278,8 @@ void build_spline(Curve::Impl& m) {
 // the bound of |ρ| on [0, 1] (exp_terms: 6, 8, 10 or 12 terms). A segment whose bound passes 2π (a cubic
 // that may overshoot far beyond its end rotation; rare) takes 12 terms, and a lane whose |ρ| does
 // pass 2π takes libm's cos and sin, as exp_coeffs does.
-QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+namespace {
+QUATCURVE_INLINE void sample_spline_body(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     const SplineSeg* seg = m.spline.data();
     drive_runs(
         m.kt, times, n,
@@ -323,6 +324,10 @@ QUATCURVE_HOT void sample_spline(const Curve::Impl& m, const double* times, std:
         },
         [&](std::size_t i, bool before) { store(before ? m.first_q : m.last_q, out + 4 * i); });
 }
+}  // namespace
+
+QUATCURVE_VERSIONS(sample_spline, (const Curve::Impl& m, const double* times, std::size_t n, double* out),
+                   (m, times, n, out))
 
 // ω = R(q_i)·J_l(ρ)·ρ'(s)/h.
 void velocity_spline(const Curve::Impl& m, const double* times, std::size_t n, double* out) {

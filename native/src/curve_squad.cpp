@@ -179,42 +179,37 @@ QUATCURVE_INLINE void sample_squad_runs(const Curve::Impl& m, const double* time
 
 }  // namespace
 
-// Two groups at a time where the code has AVX2's sixteen 256-bit registers or AVX-512's 32 (two
-// chains side by side: 1.4–1.5× on this kernel); the baseline's SSE2 code, which splits every V4
-// in two already, would spill them (1.5× slower), so it takes one group at a time. These are GCC's
-// function versions, chosen at load time like the target clones; GCC makes their dispatcher where
-// they are called, so they are called here (sample_squad below).
+// Two groups at a time in the x86-64-v3 and v4 versions, whose AVX2 has sixteen 256-bit registers and
+// AVX-512 32 (two chains side by side: 1.4–1.5× on this kernel); the baseline's SSE2 code, which
+// splits every V4 in two already, would spill them (1.5× slower), so it takes one group at a time.
+namespace {
 #if QUATCURVE_MULTIVERSION
-namespace {
-__attribute__((target("default"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
-                                                   double* out) {
-    sample_squad_runs<false>(m, times, n, out);
-}
-__attribute__((target("arch=x86-64-v3"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
-                                                          double* out) {
+QUATCURVE_TARGET_V4 void squad_runs_v4(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     sample_squad_runs<true>(m, times, n, out);
 }
-__attribute__((target("arch=x86-64-v4"))) void squad_runs(const Curve::Impl& m, const double* times, std::size_t n,
-                                                          double* out) {
+QUATCURVE_TARGET_V3 void squad_runs_v3(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     sample_squad_runs<true>(m, times, n, out);
 }
-}  // namespace
-#else
-namespace {
-void squad_runs(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
-    sample_squad_runs<false>(m, times, n, out);
-}
-}  // namespace
 #endif
+void squad_runs_v0(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
+    sample_squad_runs<false>(m, times, n, out);
+}
+}  // namespace
 
 void sample_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
-    squad_runs(m, times, n, out);
+#if QUATCURVE_MULTIVERSION
+    static const int level = cpu_level();
+    if (level >= 4) return squad_runs_v4(m, times, n, out);
+    if (level >= 3) return squad_runs_v3(m, times, n, out);
+#endif
+    squad_runs_v0(m, times, n, out);
 }
 
 // The first sample is g.A itself: at s = 0 the formula gives A = Q exactly (c1 = 1, k1·s = 0 and
 // g = 0, so the outer exp is (1, ±0·X)), only a zero component's sign may differ, which no chord
 // angle sees. The others, s = 1/samples … 1, fill whole groups of four for 16 or 64 samples.
-QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, double* out) {
+namespace {
+QUATCURVE_INLINE void sample_squad_segment_body(const SquadSeg& g, std::size_t samples, double* out) {
     QUATCURVE_EXPECTS(samples >= 4 && samples <= kMaxSegmentSamples, "sample_squad_segment: 4 … 64 samples");
     double times[kMaxSegmentSamples];
     const double h = 1.0 / g.inv_h;
@@ -228,6 +223,9 @@ QUATCURVE_HOT void sample_squad_segment(const SquadSeg& g, std::size_t samples, 
         for_groups_columns(times, samples, kSegmentColumn, out + 1, f);
     });
 }
+}  // namespace
+
+QUATCURVE_VERSIONS(sample_squad_segment, (const SquadSeg& g, std::size_t samples, double* out), (g, samples, out))
 
 void velocity_squad(const Curve::Impl& m, const double* times, std::size_t n, double* out) {
     drive(

@@ -126,6 +126,9 @@ inline double chord_angle(const double* a, const double* b) {
 // so the same bits as four calls (with no FMA contraction in either, see squad_chord_angles).
 // a, b: four w, then x, y, z at a + stride, … (columns of sample_squad_segment).
 QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_t stride, double* out) {
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#endif
     const QV p{load4(a), load4(a + stride), load4(a + 2 * stride), load4(a + 3 * stride)};
     const QV q{load4(b), load4(b + stride), load4(b + 2 * stride), load4(b + 3 * stride)};
     const V4 dot = p.w * q.w + p.x * q.x + p.y * q.y + p.z * q.z;
@@ -149,11 +152,21 @@ QUATCURVE_INLINE void chord_angles4(const double* a, const double* b, std::size_
 }
 
 // chords[k] = chord_angle of samples k and k + 1 of sample_squad_segment's columns q, k < samples
-// (a multiple of 4). Four at a time, in the x86-64-v3 clone too, unfused: each lane's bits are
-// those of the scalar chord_angle in baseline code.
-QUATCURVE_HOT_UNFUSED void squad_chord_angles(const double* q, int samples, double* chords) {
+// (a multiple of 4). Four at a time, in the x86-64-v3 and v4 versions too, unfused (GCC's
+// fp-contract=off here, clang's fp contract(off) in chord_angles4): each lane's bits are those of the
+// scalar chord_angle in baseline code.
+namespace {
+QUATCURVE_INLINE void squad_chord_angles_body(const double* q, int samples, double* chords) {
     for (int k = 0; k < samples; k += 4) chord_angles4(q + k, q + k + 1, kSegmentColumn, chords + k);
 }
+}  // namespace
+
+#if defined(__clang__)
+QUATCURVE_VERSIONS(squad_chord_angles, (const double* q, int samples, double* chords), (q, samples, chords))
+#else
+QUATCURVE_VERSIONS_WITH(__attribute__((optimize("fp-contract=off"))), squad_chord_angles,
+                        (const double* q, int samples, double* chords), (q, samples, chords))
+#endif
 
 // Path length of segment g by `samples` chords: kSearchSamples first and while the bisection
 // searches, kSamples where that leaves the verdict close (a chord sum converges as 1/n²: 16 chords
