@@ -140,6 +140,9 @@ void bind_curve(py::module_& m) {
         method_options[py::str(name)] = t;
     }
     m.attr("METHOD_OPTIONS") = method_options;
+    m.def("cpu_level", &cpu_level,
+          "The version of the hot samplers this process runs: 4 (x86-64-v4, AVX-512), 3 (x86-64-v3, AVX2 "
+          "and FMA) or 0 (baseline; arm64). QUATCURVE_CPU_LEVEL=0 or 3 in the environment caps it.");
     m.attr("PATH_RULE_FACTOR") = kPathRuleFactor;
     m.attr("PATH_RULE_SLACK") = kPathRuleSlack;
 

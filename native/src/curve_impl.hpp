@@ -137,10 +137,8 @@ inline void drive(const std::vector<double>& knots, const double* times, std::si
 #define QUATCURVE_MULTIVERSION 0
 #endif
 
-// 4 where the CPU and the system run x86-64-v4 code, 3 for x86-64-v3, else 0 (curve.cpp: cpuid and
-// xgetbv; 0 without the versions). QUATCURVE_CPU_LEVEL=0 or 3 in the environment caps it (the tests
-// run every version on one machine that way).
-int cpu_level();
+// Which version runs: cpu_level() (curve.hpp; curve.cpp). QUATCURVE_CPU_LEVEL=0 or 3 in the
+// environment caps it, so the tests run every version on one machine.
 
 // `void name params`, running name##_body(args) — a QUATCURVE_INLINE function — compiled for each
 // level. `attrs`: more attributes of every version.

@@ -739,7 +739,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
     }
     // The given samples checked as a whole, before any piece is (errors name their index in `times`).
     reduce_impl::check_float32_storage(
-        make_problem(Samples{times, rows, {}, {}}, mode, interpolation), tolerance);
+        make_problem(Samples{times, rows, {}, {}, {}}, mode, interpolation), tolerance);
     stored_signs(playback, times, rows);
     const std::vector<std::pair<std::size_t, std::size_t>> spans = flip_spans(original, times, rows);
     if (spans.empty()) {

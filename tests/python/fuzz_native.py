@@ -2729,6 +2729,16 @@ def build_play_slerp_keys(fn, d):
     return Case(lambda: fn(kt, keys, at, cyclic=cyclic), len(at), check, must_fail, 0, (kt, keys, cyclic))
 
 
+def build_cpu_level(fn, d):
+    """cpu_level(): 0, 3 or 4; any argument refused."""
+    args = d.pick(((), (), (1,), ("x",)), "args")
+
+    def check(out):
+        assert out in (0, 3, 4), out
+
+    return Case(lambda: fn(*args), 1, check, "cpu_level takes no arguments" if args else "")
+
+
 def _not_constructible(fn, d):
     """Result classes (ReducedKeys, ReducedChannel) are not built from Python: any call is refused."""
     args = d.pick(((), (1,), (None,), ("x", 2), (np.zeros(4),)), "args")
@@ -2770,6 +2780,7 @@ REGISTRY.update({
     "BakeQueue": build_bake_queue,
     "reduce_slerp": build_reduce_slerp,
     "gltf_slerp": build_gltf_slerp,
+    "cpu_level": build_cpu_level,
     "SlerpKeys": _not_constructible,
     "KeyFit": _not_constructible,
     "PlaybackBound": _not_constructible,

@@ -104,6 +104,12 @@ const char* method_name(Method method);
 // All identifiers, in the order of the enum.
 const std::vector<std::string>& method_names();
 
+// The version of the hot samplers this process runs: 4 (x86-64-v4, AVX-512), 3 (x86-64-v3, AVX2 and
+// FMA) or 0 (the baseline: any x86-64, or a build without the versions, such as arm64). Found from
+// the CPU and the system (cpuid, xgetbv) at the first sampling; QUATCURVE_CPU_LEVEL=0 or 3 in the
+// environment caps it. The versions give the same results to ~1e-15 rad (FMA contraction).
+int cpu_level();
+
 // Options of the methods. A per-key option holds one value (global) or one value per key.
 struct CurveOptions {
     bool shortest_path = true;                 // SLERP
