@@ -49,11 +49,13 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     // cannot come out fewer than `beat` — verification only ever adds keys, and every channel keeps
     // at least the forced samples (the first and last included) — so the result is the one a full
     // run would lose with. (A per-channel run always runs to the end: its removal pass below may
-    // still drop keys of the channels chosen first.)
+    // still drop keys of the channels chosen first.) `pace` (synchronized runs): select_keys' pace,
+    // from the per-channel keys to beat.
     std::size_t forced = 0;
     for (std::size_t k = 0; k < p.n; ++k) forced += p.is_forced(k) ? 1 : 0;
     // `forced_only` (synchronized runs): one segment from each forced key to the next, or none.
-    auto run = [&](bool sync, std::size_t beat, ReducedKeys& out, bool forced_only = false) {
+    auto run = [&](bool sync, std::size_t beat, ReducedKeys& out, bool forced_only = false,
+                   const std::vector<std::size_t>* pace = nullptr) {
         // Nothing to build when the forced keys alone cannot beat the other result.
         if (forced * static_cast<std::size_t>(C) >= beat) return false;
         State s = empty_state(p, !sync);
@@ -84,7 +86,7 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
                     keys.push_back(k);
                 }
             } else {
-                keys = select_keys(p, fitter, all.data(), C, tan2_half(fit_angle), budget);
+                keys = select_keys(p, fitter, all.data(), C, tan2_half(fit_angle), budget, pace);
                 if (keys.empty()) return false;
             }
             for (int c = 0; c < C; ++c) s.keys[c] = keys;
@@ -127,7 +129,8 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     // with as few keys in total (it wins ties: glTF export and hand editing want shared keys). A
     // per-channel result that misses the tolerance (a segment that no candidate sample can split:
     // forced keys closer than min_gap to the failing sample) is kept only with fewer keys than a
-    // synchronized one that misses no more.
+    // synchronized one that misses no more. After a per-channel result that meets it, the
+    // synchronized run also gives up once it falls behind that result's pace (select_keys).
     ReducedKeys best;
     if (synchronized || p.n <= 2 || tolerance == 0.0) {
         run(true, kNone, best);
@@ -139,7 +142,16 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     ReducedKeys per_channel;
     run(false, kNone, per_channel);
     const bool meets = per_channel.max_error <= tolerance;
-    if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best)) return per_channel;
+    std::vector<std::size_t> pace;  // the per-channel keys at samples 0..k, all channels together
+    if (meets) {
+        pace.assign(p.n, 0);
+        for (const ReducedChannel& ch : per_channel.channels)
+            for (std::size_t k : ch.indices) ++pace[k];
+        for (std::size_t k = 1; k < p.n; ++k) pace[k] += pace[k - 1];
+    }
+    if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best, false,
+                             meets ? &pace : nullptr))
+        return per_channel;
     if (per_channel.key_count() < best.key_count() &&
         per_channel.max_error <= std::max(tolerance, best.max_error))
         best = std::move(per_channel);

@@ -208,7 +208,7 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             double q1[kMaxChannels], q2[kMaxChannels], w;
             for (int alt = 0; alt < kHandleAlternatives && !ok; ++alt) {
                 set_parameters(i, j, kHandleFractions[alt][0], kHandleFractions[alt][1], false);
-                if (fit_handles(i, j, chans, nc, limit, false, q1, q2, w)) {
+                if (fit_handles(i, j, chans, nc, limit, false, q1, q2, w, kHopelessOtherFrames)) {
                     ok = true;
                     std::copy(q1, q1 + nc, p1);
                     std::copy(q2, q2 + nc, p2);
@@ -248,7 +248,7 @@ void Fitter::set_parameters(std::size_t i, std::size_t j, double a1, double a2, 
 }
 
 bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit,
-                         bool force, double* p1, double* p2, double& worst0) {
+                         bool force, double* p1, double* p2, double& worst0, const double* hopeless) {
     bool ok = false;
     worst0 = std::numeric_limits<double>::infinity();
     double kappa = 4.0;  // quaternion and axis-angle metric: radial direction free
@@ -267,8 +267,8 @@ bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc,
             // The last round keeps the first round's bound: over the limit it fails anyway,
             // but a norm dip further on is still found (and refitted with radial weights).
             const double give_up = force ? std::numeric_limits<double>::infinity()
-                                   : it < iterations ? kHopeless[it] * limit
-                                                     : kHopeless[0] * limit;
+                                   : it < iterations ? hopeless[it] * limit
+                                                     : hopeless[0] * limit;
             const double worst = evaluate(i, j, chans, nc, p1, p2, limit, give_up);
             if (attempt == 0 && it == 0) worst0 = between_failed_ ? 0.0 : worst;
             if (worst <= limit) {

@@ -60,6 +60,15 @@ constexpr int kReweightIterationsQuatChannel = 3;
 // the key counts of that benchmark and of the motion-capture clips stayed the same).
 constexpr double kHopeless[kReweightIterations] = {4.0, 2.5, 1.75, 1.4};
 using numbers::kPi;
+// A synchronized key choice racing a per-channel result (reduce, select_keys' pace) gives up once its
+// keys up to a sample outnumber kPaceSlack × the per-channel keys there per channel, plus
+// kPaceExtra. On the motion-capture clips at 0.1° (reduce_keys_proved) no synchronized run beat the
+// per-channel keys, and the synchronized runs took 17 % of the reduction's time; with the pace, the
+// same keys in 10 % less time. On the 100-bone benchmark (bench_speed.py,
+// proved) 1,921,997 → 1,908,926 keys in 16 % less time; a slack of 1.25 + 2 keys gave the keys
+// of no pace.
+constexpr double kPaceSlack = 1.1;
+constexpr double kPaceExtra = 1.0;
 // The rotation ignores a quaternion's scale (and an axis-angle axis's length), so the fit may let the
 // 4-vector's (the axis's) norm drift — a cubic
 // with varying norm bends the normalized path more freely, which saves many keys. It is kept free
@@ -90,6 +99,12 @@ constexpr double kBetweenStep = 0.25;
 // is proved).
 constexpr int kHandleFreeSamples = 3;
 constexpr double kHandleFreeHopeless = 4.0;
+// kHopeless for the fits at a pair of kHandleFractions: of those on the motion-capture clips at 0.1°
+// (reduce_keys_proved), 1.7 % of the ones that passed had a plain fit above 1.5 × the limit, and six
+// in seven failed; these bounds keep the same keys there for 9 % less time than kHopeless' (1.5 in
+// every round: 6 keys more). On the 100-bone benchmark (bench_speed.py) 0.14 % more keys for 11 %
+// less time.
+constexpr double kHopelessOtherFrames[kReweightIterations] = {2.0, 1.75, 1.5, 1.3};
 constexpr double kHandleFreeMinTolerance = 0.01 * kPi / 180.0;
 constexpr double kHandleFractions[][2] = {{0.5, 0.5}, {0.2, 0.5}, {0.5, 0.2}, {1.0 / 3.0, 0.5},
                                           {0.5, 1.0 / 3.0}};
@@ -313,8 +328,9 @@ private:
     // u_ (and the Bezier basis) of the samples inside [i, j] for the handle fractions a1, a2.
     void set_parameters(std::size_t i, std::size_t j, double a1, double a2, bool exact_param);
     // The fit of one parameterization (fit's reweighting rounds); worst0: the plain fit's worst.
+    // hopeless: kHopeless, or kHopelessOtherFrames.
     bool fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
-                     double* p1, double* p2, double& worst0);
+                     double* p1, double* p2, double& worst0, const double* hopeless = kHopeless);
 
     // Quaternion fits of one channel among fixed others (per-channel key choice): per sample, what
     // the other channels contribute to the error terms, so that a fit computes only its channel's
@@ -363,9 +379,11 @@ private:
 // Keys for the channels `chans` (shared), every sample within tan²(θ/2) ≤ limit where it can be:
 // every forced sample, plus inserted keys at candidate samples; the chosen segments' fits are
 // committed in the Fitter's State. Empty (given up) as soon as the keys cannot come out fewer than
-// `budget`.
+// `budget`, or (with `pace`: n counts of another result's keys at samples 0..k, all its channels
+// together) once the keys kept up to a sample k outnumber kPaceSlack × pace[k] / nc + kPaceExtra.
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit, std::size_t budget = kNone);
+                                     double limit, std::size_t budget = kNone,
+                                     const std::vector<std::size_t>* pace = nullptr);
 
 // Drops the inserted keys of `keys` (the channels' current keys, their fits committed) whose
 // neighbours one segment within `limit` joins; returns the keys kept, their fits committed.

@@ -17,13 +17,17 @@ namespace quatcurve::reduce_impl {
 // ahead they bound the result from below: as soon as that bound reaches `budget`, the choice gives
 // up (a per-channel or synchronized run that cannot beat the other stops early).
 std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int* chans, int nc,
-                                     double limit, std::size_t budget) {
+                                     double limit, std::size_t budget,
+                                     const std::vector<std::size_t>* pace) {
     const std::size_t n = p.n;
     std::vector<std::size_t> keys{0};
     if (n == 1) return keys;
     std::size_t forced_ahead = 0;  // forced samples after the current range's start
     for (std::size_t k = 1; k < n; ++k) forced_ahead += p.is_forced(k) ? 1 : 0;
     std::vector<std::size_t> kept{keys[0]};
+    auto behind = [&] {
+        return pace && double(kept.size()) > kPaceSlack * double((*pace)[kept.back()]) / nc + kPaceExtra;
+    };
     std::size_t next = 1;  // the first key of `keys` the removal pass has not decided on
     auto probe = [&](std::size_t i, std::size_t j) {
         return fitter.fit(i, j, chans, nc, limit, false);
@@ -129,11 +133,11 @@ std::vector<std::size_t> select_keys(const Problem& p, Fitter& fitter, const int
         }
         if (good != end) {
             // The keys between kept.back() and the range's end may all go; the forced ones stay.
-            if (kept.size() + forced_ahead >= budget) return {};
+            if (kept.size() + forced_ahead >= budget || behind()) return {};
             continue;
         }
         --forced_ahead;  // `end`, the next range's start, is the last key and counts as kept below
-        if (kept.size() + 1 + forced_ahead >= budget) return {};
+        if (kept.size() + 1 + forced_ahead >= budget || behind()) return {};
     }
     kept.push_back(keys.back());
     return kept;

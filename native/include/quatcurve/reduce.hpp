@@ -49,7 +49,10 @@
 // each against the others' fitted curves under a growing share of the tolerance, then once more
 // removes the keys of the channels chosen first whose neighbours join under the whole tolerance
 // against the others' final curves, and returns that or the synchronized result, whichever has
-// fewer keys in total (the synchronized one on a tie).
+// fewer keys in total (the synchronized one on a tie). The synchronized choice is given up once its
+// keys up to a sample outnumber the per-channel ones there (per channel) by a tenth and one key
+// (reduce_impl.hpp, kPaceSlack): it then returns the per-channel result, even where the synchronized
+// one would have caught up.
 #pragma once
 
 #include <cstddef>
