@@ -164,6 +164,7 @@ Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handl
     buf_.reset(new double[p.n * p.C]);
     bern_.reset(new double[p.n * 4]);
     u_.reset(new double[p.n]);
+    if (p.kind == Kind::QUAT) terms_.reset(new double[p.n * 5]);
     w_.reset(new double[p.n]);
     err_.reset(new double[p.n]);
 }
@@ -263,7 +264,7 @@ bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc,
                                : p_.kind == Kind::QUAT ? kReweightIterationsQuatChannel
                                                        : kReweightIterationsSingle;
         for (int it = 0; it <= iterations; ++it) {
-            solve_handles(i, j, chans, nc, kappa, p1, p2);
+            solve_handles(i, j, chans, nc, kappa, p1, p2, it > 0);
             // The last round keeps the first round's bound: over the limit it fails anyway,
             // but a norm dip further on is still found (and refitted with radial weights).
             const double give_up = force ? std::numeric_limits<double>::infinity()
@@ -345,8 +346,9 @@ void Fitter::handle_frames(std::size_t i, std::size_t j, double a1, double a2, f
 // over p = (p1, p2) of the fitted channels (others fixed at F). λ is tiny: it only settles the
 // directions the data leave free (few samples; the radial direction of quaternions).
 void Fitter::solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
-                           double* p1, double* p2) {
-    if (p_.kind == Kind::QUAT && nc == 1) return solve_quat_channel(i, j, chans[0], kappa, p1, p2);
+                           double* p1, double* p2, bool reweighted) {
+    if (p_.kind == Kind::QUAT && nc == 1)
+        return solve_quat_channel(i, j, chans[0], kappa, p1, p2, reweighted);
     if (p_.C == 4 && nc == 4) return solve_handles_t<4, 4>(i, j, chans, kappa, p1, p2);
     if (p_.C == 4 && nc == 1) return solve_handles_t<4, 1>(i, j, chans, kappa, p1, p2);
     if (p_.C == 3 && nc == 3) return solve_handles_t<3, 3>(i, j, chans, kappa, p1, p2);
@@ -485,25 +487,43 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
 // solve_handles for one quaternion channel, the others fixed (their terms from other_): the same
 // normal equations as solve_handles_t<4, 1>, a 2×2 system.
 void Fitter::solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
-                                double* p2) {
+                                double* p2, bool reweighted) {
     constexpr int C = 4;
     const double yi = p_.y[i * C + chan], yj = p_.y[j * C + chan];
     double A0 = 0.0, A1 = 0.0, A2 = 0.0, g0 = 0.0, g1 = 0.0;
-    for (std::size_t k = i + 1; k < j; ++k) {
-        const double* b = &bern_[k * 4];
-        const double e0 = b[0] * yi + b[3] * yj - p_.y[k * C + chan];
-        const double uc = p_.unit[k * C + chan];
-        const double ue = other_.terms[k * OtherChannels::kStride + 9] + uc * e0;
-        const double inv = 1.0 / p_.norm2[k];
-        const double ku = kappa * uc;
-        const double Me = inv * (4.0 * e0 - ku * ue);
-        const double m = inv * (4.0 - ku * uc);
-        const double w1 = w_[k] * b[1], w2 = w_[k] * b[2];
-        g0 -= w1 * Me;
-        g1 -= w2 * Me;
-        A0 += w1 * b[1] * m;
-        A1 += w1 * b[2] * m;
-        A2 += w2 * b[2] * m;
+    if (!reweighted) {
+        // The first round (every weight 1): each sample's terms, kept for the rounds after it.
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const double* b = &bern_[k * 4];
+            const double e0 = b[0] * yi + b[3] * yj - p_.y[k * C + chan];
+            const double uc = p_.unit[k * C + chan];
+            const double ue = other_.terms[k * OtherChannels::kStride + 9] + uc * e0;
+            const double inv = 1.0 / p_.norm2[k];
+            const double ku = kappa * uc;
+            const double Me = inv * (4.0 * e0 - ku * ue);
+            const double m = inv * (4.0 - ku * uc);
+            double* t = &terms_[k * 5];
+            t[0] = b[1] * b[1] * m;
+            t[1] = b[1] * b[2] * m;
+            t[2] = b[2] * b[2] * m;
+            t[3] = b[1] * Me;
+            t[4] = b[2] * Me;
+            A0 += t[0];
+            A1 += t[1];
+            A2 += t[2];
+            g0 -= t[3];
+            g1 -= t[4];
+        }
+    } else {
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const double* t = &terms_[k * 5];
+            const double w = w_[k];
+            A0 += w * t[0];
+            A1 += w * t[1];
+            A2 += w * t[2];
+            g0 -= w * t[3];
+            g1 -= w * t[4];
+        }
     }
     const double d = p_.t[j] - p_.t[i];
     const double lambda = 1e-7;

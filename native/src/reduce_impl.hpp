@@ -309,8 +309,10 @@ public:
     void handle_frames(std::size_t i, std::size_t j, double a1, double a2, float hx[2]) const;
 
 private:
+    // reweighted: a round after the first of the same segment, parameters and κ (solve_quat_channel
+    // then reuses the first round's terms).
     void solve_handles(std::size_t i, std::size_t j, const int* chans, int nc, double kappa,
-                       double* p1, double* p2);
+                       double* p1, double* p2, bool reweighted = false);
     template <int C, int NC>
     void solve_handles_t(std::size_t i, std::size_t j, const int* chans, double kappa, double* p1,
                          double* p2);
@@ -351,7 +353,7 @@ private:
     };
     void other_channels(std::size_t i, std::size_t j, int chan);
     void solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
-                            double* p2);
+                            double* p2, bool reweighted);
 
     const Problem& p_;
     KeyInterpolation ipo_;
@@ -365,6 +367,9 @@ private:
     // BEZIER: the cubic's basis at each interior sample of the segment being fitted (n·4), computed
     // once per fit for all its solves and evaluations.
     std::unique_ptr<double[]> bern_;
+    // Quaternion channel fits (solve_quat_channel): each interior sample's five terms of the normal
+    // equations without its weight (n·5), from a segment's first round for the rounds after it.
+    std::unique_ptr<double[]> terms_;
     // between_tan's last limit and result (the limit is the same for many fits in a row).
     double between_limit_ = -1.0, between_tan_ = 0.0;
     bool between_failed_ = false;  // the last evaluate() failed a between-samples guard
