@@ -61,6 +61,12 @@ void bernstein(double u, double b[4]) {
     b[3] = u * u * u;
 }
 
+// dX/ds of bezier_time_parameter's frame X(s) (below), with b = 1 − a2.
+double time_slope(double s, double a1, double b) {
+    const double v = 1.0 - s;
+    return 3.0 * v * v * a1 + 6.0 * v * s * (b - a1) + 3.0 * s * s * (1.0 - b);
+}
+
 // Newton's solve of bezier_time_parameter (below), kept inside a shrinking bracket.
 double solve_time_parameter(double tau, double a1, double a2) {
     double lo = 0.0, hi = 1.0, s = tau;
@@ -70,7 +76,7 @@ double solve_time_parameter(double tau, double a1, double a2) {
         const double x = 3.0 * v * v * s * a1 + 3.0 * v * s * s * b + s * s * s - tau;
         if (x < 0.0) lo = s;
         else hi = s;
-        const double dx = 3.0 * v * v * a1 + 6.0 * v * s * (b - a1) + 3.0 * s * s * (1.0 - b);
+        const double dx = time_slope(s, a1, b);
         double next = dx > 0.0 ? s - x / dx : 0.5 * (lo + hi);
         if (!(next >= lo && next <= hi)) next = 0.5 * (lo + hi);
         // Newton converges quadratically: a step this small leaves an error far below it.
@@ -103,9 +109,9 @@ const ParameterTable* parameter_table(double a1, double a2) {
             t.a2 = kHandleFractions[alt][1];
             const double b = 1.0 - t.a2;
             for (int k = 0; k <= kTableSize; ++k) {
-                const double s = solve_time_parameter(double(k) / kTableSize, t.a1, t.a2), v = 1.0 - s;
+                const double s = solve_time_parameter(double(k) / kTableSize, t.a1, t.a2);
                 t.s[k] = s;
-                t.ds[k] = 1.0 / (3.0 * v * v * t.a1 + 6.0 * v * s * (b - t.a1) + 3.0 * s * s * (1.0 - b));
+                t.ds[k] = 1.0 / time_slope(s, t.a1, b);
             }
         }
         return out;
