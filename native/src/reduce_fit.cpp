@@ -243,7 +243,7 @@ void Fitter::set_parameters(std::size_t i, std::size_t j, double a1, double a2, 
     }
     if (exact_param && ipo_ == KeyInterpolation::BEZIER) {
         float hx[2];
-        handle_frames(i, j, a1, a2, hx);
+        segment_handle_frames(ti, tj, a1, a2, hx);
         for (std::size_t k = i + 1; k < j; ++k) {
             const float r = blender_bezier_parameter(float(p_.t[k]), float(ti), hx[0], hx[1],
                                                      float(tj));
@@ -339,12 +339,6 @@ void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
         for (int c = 0; c < C; ++c) o[10 + c] -= q[chan] * o[14 + c];
         o[18] = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - q[chan] * q[chan];
     }
-}
-
-void Fitter::handle_frames(std::size_t i, std::size_t j, double a1, double a2, float hx[2]) const {
-    const double ti = p_.t[i], tj = p_.t[j], d = tj - ti;
-    hx[0] = float(ti + handle_offset(d, a1));
-    hx[1] = float(tj - handle_offset(d, a2));
 }
 
 // Weighted least squares for the inner control values: minimize

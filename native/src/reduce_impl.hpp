@@ -90,9 +90,11 @@ constexpr double kBetweenStep = 0.25;
 // keeps the segment's frame monotone in its parameter, so Blender plays the handles as stored (no
 // correction). A pair is tried only while the thirds' first fit is within kHandleFreeHopeless × the
 // limit (tan²): on the motion-capture clips at 0.1° (reduce_keys_proved) 4 gave 13 % fewer keys, 16
-// no more for 1.7× the time, 2 and 1.5 only 9 % and 5 %. Pairs in order of how often they passed
-// there; three more — (0.2, 0.2), (0.2, 1/3), (1/3, 0.2) — passed in 6 % of the cases and are not
-// tried. Not for Euler and axis-angle channels (a live refit of Euler keys, SPLINE_C2 in
+// no more for 1.7× the time, 2 and 1.5 only 9 % and 5 %. (0.6, 0.4) and (0.4, 0.6) put both handles
+// at one frame, the frame advancing 1.8 and 1.2 times its mean rate at the keys: with them there
+// 4,073 → 3,991 keys for 6 % more time; (0.7, 0.3) and (0.3, 0.7) as well gave 3,960 for 15 % more
+// again; (0.2, 0.2), (0.2, 1/3), (1/3, 0.2) (passing in 6 % of the cases) gave 1 % fewer for 11 %
+// more, beside the five others alone. Those are not tried. Not for Euler and axis-angle channels (a live refit of Euler keys, SPLINE_C2 in
 // tests/blender/test_everywhere.py, then ended at 0.065° on a 0.05° tolerance), nor below
 // kHandleFreeMinTolerance (a mocap hip reduced at 0.001°, tests/blender/test_reduce.py, then stayed
 // at 0.0011° after all the proof's rounds; with the thirds, whose frame→parameter map is linear, it
@@ -106,13 +108,23 @@ constexpr double kHandleFreeHopeless = 4.0;
 // less time.
 constexpr double kHopelessOtherFrames[kReweightIterations] = {2.0, 1.75, 1.5, 1.3};
 constexpr double kHandleFreeMinTolerance = 0.01 * kPi / 180.0;
-constexpr double kHandleFractions[][2] = {{0.5, 0.5}, {0.2, 0.5}, {0.5, 0.2}, {1.0 / 3.0, 0.5},
-                                          {0.5, 1.0 / 3.0}};
+constexpr double kHandleFractions[][2] = {{0.5, 0.5}, {0.6, 0.4}, {0.4, 0.6}, {0.2, 0.5},
+                                          {0.5, 0.2}, {1.0 / 3.0, 0.5}, {0.5, 1.0 / 3.0}};
 constexpr int kHandleAlternatives = sizeof(kHandleFractions) / sizeof(kHandleFractions[0]);
 
 // A handle's frame offset from its key in a segment of d frames, for the fraction a (the thirds
 // divided, as Blender's own thirds are).
 inline double handle_offset(double d, double a) { return a == 1.0 / 3.0 ? d / 3.0 : d * a; }
+
+// The inner handle frames of a segment from frame ti to tj for the fractions a1, a2, as Blender stores
+// them (float32). Where a1 + a2 = 1 both sit at one frame, and rounding must not cross them (Blender
+// would then shorten both handles).
+inline void segment_handle_frames(double ti, double tj, double a1, double a2, float hx[2]) {
+    const double d = tj - ti;
+    hx[0] = static_cast<float>(ti + handle_offset(d, a1));
+    hx[1] = static_cast<float>(tj - handle_offset(d, a2));
+    if (hx[0] > hx[1]) hx[1] = hx[0];
+}
 
 // x rounded to float32, as Blender stores it.
 inline double f32(double x) { return static_cast<double>(static_cast<float>(x)); }
@@ -304,9 +316,6 @@ public:
     // float32 handle frames instead of the ideal linear one. Returns whether the test passed.
     bool fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
              bool exact_param = false);
-
-    // Handle frames of segment [i, j] as Blender stores them (float32) for the fractions a1, a2.
-    void handle_frames(std::size_t i, std::size_t j, double a1, double a2, float hx[2]) const;
 
 private:
     // reweighted: a round after the first of the same segment, parameters and κ (solve_quat_channel

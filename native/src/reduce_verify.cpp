@@ -30,10 +30,11 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
         ch.handle_right.assign(2 * K, 0.0);
         for (std::size_t a = 0; a + 1 < K; ++a) {
             const std::size_t i = keys[a], j = keys[a + 1];
-            const double d = p.t[j] - p.t[i];
-            ch.handle_right[2 * a] = f32(p.t[i] + handle_offset(d, s.a1[i * p.C + c]));
+            float hx[2];
+            segment_handle_frames(p.t[i], p.t[j], s.a1[i * p.C + c], s.a2[i * p.C + c], hx);
+            ch.handle_right[2 * a] = hx[0];
             ch.handle_right[2 * a + 1] = f32(s.h1[i * p.C + c]);
-            ch.handle_left[2 * (a + 1)] = f32(p.t[j] - handle_offset(d, s.a2[i * p.C + c]));
+            ch.handle_left[2 * (a + 1)] = hx[1];
             ch.handle_left[2 * (a + 1) + 1] = f32(s.h2[i * p.C + c]);
         }
         // Outer handles mirror the inner ones (they only shape extrapolation, which is constant).

@@ -244,14 +244,15 @@ TEST(Reduce, KeysAreFloat32InputValuesAndHandlesSitInsideTheirSegment) {
             EXPECT_EQ(ch.values[a], double(float(v[c])));
             EXPECT_EQ(ch.frames[a], double(float(t[k])));
             if (a + 1 < ch.indices.size()) {
-                // The handle frames at the fractions the reducer tries (1/3 first, then 0.2 or 0.5),
-                // together at most the segment: Blender plays them uncorrected.
+                // The handle frames at the fractions the reducer tries (1/3 first, then 0.2, 0.4, 0.5
+                // or 0.6), together at most the segment: Blender plays them uncorrected.
                 const double d = ch.frames[a + 1] - ch.frames[a];
                 const double a1 = (ch.handle_right[2 * a] - ch.frames[a]) / d;
                 const double a2 = (ch.frames[a + 1] - ch.handle_left[2 * (a + 1)]) / d;
                 for (double f : {a1, a2}) {
                     EXPECT_TRUE(std::fabs(f - 1.0 / 3.0) < 1e-5 || std::fabs(f - 0.2) < 1e-5 ||
-                                std::fabs(f - 0.5) < 1e-5)
+                                std::fabs(f - 0.4) < 1e-5 || std::fabs(f - 0.5) < 1e-5 ||
+                                std::fabs(f - 0.6) < 1e-5)
                         << "channel " << c << " key " << a << ": fraction " << f;
                 }
                 EXPECT_LE(ch.handle_right[2 * a], ch.handle_left[2 * (a + 1)]);

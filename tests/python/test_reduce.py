@@ -77,12 +77,12 @@ def check_structure(result, interpolation, synchronized, times, samples):
                 np.testing.assert_array_equal(arr, np.float32(arr))
             np.testing.assert_array_equal(ch.frames, np.float32(times[ch.indices]))
             np.testing.assert_array_equal(ch.values, np.float32(samples[ch.indices, c]))
-            # Inner handle frames at 1/3 of each segment from its keys, or at 0.2 or 0.5 of it (the
-            # reducer's other handle frames), up to float32 rounding; never crossing each other.
+            # Inner handle frames at 1/3 of each segment from its keys, or at 0.2, 0.4, 0.5 or 0.6 of
+            # it (the reducer's other handle frames), up to float32 rounding; never crossing each other.
             d = np.diff(ch.frames)
             ulp = float(np.spacing(np.float32(np.abs(ch.frames).max())))
             for offsets in (hr[:-1, 0] - ch.frames[:-1], ch.frames[1:] - hl[1:, 0]):
-                near = [np.abs(offsets - d * f) <= ulp for f in (1.0 / 3.0, 0.2, 0.5)]
+                near = [np.abs(offsets - d * f) <= ulp for f in (1.0 / 3.0, 0.2, 0.4, 0.5, 0.6)]
                 assert np.all(np.any(near, axis=0)), offsets / d
             assert np.all(hr[:-1, 0] <= hl[1:, 0])
         assert result.key_count == sum(len(ch.indices) for ch in result.channels)
