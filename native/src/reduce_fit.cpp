@@ -94,6 +94,7 @@ constexpr int kTableSize = 1024;
 }  // namespace
 
 struct ParameterTable {
+    int index;  // in kHandleFractions
     double a1, a2;
     double s[kTableSize + 1], ds[kTableSize + 1];
 };
@@ -105,6 +106,7 @@ const ParameterTable* parameter_table(double a1, double a2) {
         std::vector<ParameterTable> out(kHandleAlternatives);
         for (int alt = 0; alt < kHandleAlternatives; ++alt) {
             ParameterTable& t = out[alt];
+            t.index = alt;
             t.a1 = kHandleFractions[alt][0];
             t.a2 = kHandleFractions[alt][1];
             const double b = 1.0 - t.a2;
@@ -168,6 +170,11 @@ Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handl
     : p_(p), ipo_(ipo), s_(s),
       free_handle_frames_(free_handle_frames && p.kind == Kind::QUAT && ipo == KeyInterpolation::BEZIER) {
     buf_.reset(new double[p.n * p.C]);
+    even_from_.resize(p.n);
+    for (std::size_t k = 0; k < p.n; ++k)
+        even_from_[k] = k >= 2 && p.t[k] - p.t[k - 1] == p.t[k - 1] - p.t[k - 2] ? even_from_[k - 1]
+                        : k >= 1                                                  ? k - 1
+                                                                                  : 0;
     bern_.reset(new double[p.n * 4]);
     u_.reset(new double[p.n]);
     if (p.kind == Kind::QUAT) terms_.reset(new double[p.n * 5]);
@@ -237,6 +244,33 @@ void Fitter::set_parameters(std::size_t i, std::size_t j, double a1, double a2, 
     frac2_ = a2;
     const bool thirds = a1 == 1.0 / 3.0 && a2 == 1.0 / 3.0;
     table_ = thirds ? nullptr : parameter_table(a1, a2);
+    u_at_ = u_.get();
+    bern_at_ = bern_.get();
+    first_ = 0;
+    // Evenly spaced samples: each one's frame fraction (t_k − t_i)/(t_j − t_i) is (k − i)/(j − i)
+    // (float32 frames: the differences are exact), so its parameter and basis are those of every
+    // segment of j − i steps at these handle fractions: computed once per thread, and read there.
+    const std::size_t m = j - i;
+    if (!exact_param && ipo_ == KeyInterpolation::BEZIER && m < kEvenSegmentsKept && even_from_[j] <= i &&
+        (thirds || table_)) {
+        // Per handle fractions (the thirds last) and step count: the m − 1 parameters, then the bases.
+        thread_local std::vector<std::vector<double>> even_segments[kHandleAlternatives + 1];
+        std::vector<std::vector<double>>& of_pair = even_segments[thirds ? kHandleAlternatives : table_->index];
+        if (of_pair.size() <= m) of_pair.resize(m + 1);
+        std::vector<double>& kept = of_pair[m];
+        if (kept.empty()) {
+            kept.resize(5 * (m - 1));
+            for (std::size_t k = 1; k < m; ++k) {
+                const double tau = static_cast<double>(k) / static_cast<double>(m);
+                kept[k - 1] = thirds ? tau : bezier_time_parameter(tau, a1, a2, table_);
+                bernstein(kept[k - 1], &kept[(m - 1) + 4 * (k - 1)]);
+            }
+        }
+        u_at_ = kept.data();
+        bern_at_ = kept.data() + (m - 1);
+        first_ = i + 1;
+        return;
+    }
     for (std::size_t k = i + 1; k < j; ++k) {
         const double tau = (p_.t[k] - ti) / d;
         u_[k] = thirds ? tau : bezier_time_parameter(tau, a1, a2, table_);
@@ -384,7 +418,7 @@ void Fitter::solve_handles_t(std::size_t i, std::size_t j, const int* chans, dou
     double A[3][NC][NC] = {};
     double g[2][NC] = {};
     for (std::size_t k = i + 1; k < j; ++k) {
-        const double* b = &bern_[k * 4];
+        const double* b = basis(k);
         const double* yk = &p_.y[k * C];
         double e0[C];
         if (NC == C) {
@@ -494,7 +528,7 @@ void Fitter::solve_quat_channel(std::size_t i, std::size_t j, int chan, double k
     if (!reweighted) {
         // The first round (every weight 1): each sample's terms, kept for the rounds after it.
         for (std::size_t k = i + 1; k < j; ++k) {
-            const double* b = &bern_[k * 4];
+            const double* b = basis(k);
             const double e0 = b[0] * yi + b[3] * yj - p_.y[k * C + chan];
             const double uc = p_.unit[k * C + chan];
             const double ue = other_.terms[k * OtherChannels::kStride + 9] + uc * e0;
@@ -600,7 +634,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
         double f[kMaxChannels] = {};
         if (NC < C && !other)
             for (int c = 0; c < C; ++c) f[c] = s_.F[k * C + c];
-        fitted(u_[k], &bern_[k * 4], f);
+        fitted(param(k), basis(k), f);
         if (NC < C)  // kept for commit (F); fits of all channels keep no F (State)
             for (int a = 0; a < NC; ++a) buf_[k * C + ch[a]] = f[ch[a]];
         double e;
@@ -630,7 +664,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
         const bool thirds = linear || (frac1_ == 1.0 / 3.0 && frac2_ == 1.0 / 3.0);
         double prev_u = 0.0;
         for (std::size_t k = i; k < j; ++k) {
-            const double next_u = k + 1 == j ? 1.0 : u_[k + 1];
+            const double next_u = k + 1 == j ? 1.0 : param(k + 1);
             // Midway in frames: halfway in the parameter where it is linear in the frame.
             const double u = thirds ? 0.5 * (prev_u + next_u)
                                     : bezier_time_parameter(

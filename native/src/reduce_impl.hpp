@@ -385,6 +385,18 @@ private:
     // The handle fractions of the parameterization in u_ (1/3, 1/3: u is linear in the frame).
     double frac1_ = 1.0 / 3.0, frac2_ = 1.0 / 3.0;
     const ParameterTable* table_ = nullptr;  // their parameter table (reduce_fit.cpp), if any
+    // The parameter and Bezier basis of interior sample k of the segment being fitted: param(k),
+    // basis(k) (4 values), from u_ and bern_ or, for evenly spaced samples, from a table per step
+    // count and handle fractions (set_parameters; computed per fit, they took 8 % of a reduction's
+    // instructions). even_from_[k]: the first sample of the evenly spaced run ending at sample k.
+    static constexpr std::size_t kEvenSegmentsKept = 256;
+    const double* u_at_ = nullptr;
+    const double* bern_at_ = nullptr;
+    std::size_t first_ = 0;
+    double param(std::size_t k) const { return u_at_[k - first_]; }
+    const double* basis(std::size_t k) const { return bern_at_ + (k - first_) * 4; }
+    std::vector<std::size_t> even_from_;
+
     bool free_handle_frames_;
 };
 
