@@ -180,6 +180,7 @@ Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handl
     if (p.kind == Kind::QUAT) terms_.reset(new double[p.n * 5]);
     w_.reset(new double[p.n]);
     err_.reset(new double[p.n]);
+    between_limits_.reset(new double[p.n]);
 }
 
 bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
@@ -590,14 +591,21 @@ double Fitter::evaluate(std::size_t i, std::size_t j, const int* chans, int nc, 
     return evaluate_t<3, 1>(i, j, chans, p1, p2, limit, give_up);
 }
 
-// tan of half the angle kBetweenFactor × the fit's (limit: tan²(θ/2)). Every fit of a key choice
-// shares its limit, so the last one is kept rather than calling tan and atan per fit.
-double Fitter::between_tan(double limit) {
+// The between-samples guard's limits (tan²(θ/2)) midway between samples k and k + 1 for the fit's
+// limit: kBetweenFactor × its angle plus kBetweenStep × the step between the samples (step_tan), by
+// tan(a + b) = (tan a + tan b)/(1 − tan a·tan b); +∞ from 180° on. Every fit of a key choice shares
+// its limit, so they are computed once per limit (n − 1 of them), not per fit and midpoint.
+const double* Fitter::between_limits(double limit) {
     if (limit != between_limit_) {
         between_limit_ = limit;
-        between_tan_ = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+        const double tan_fit = std::tan(kBetweenFactor * std::atan(std::sqrt(limit)));
+        for (std::size_t k = 0; k + 1 < p_.n; ++k) {
+            const double denom = 1.0 - tan_fit * p_.step_tan[k];
+            const double t = (tan_fit + p_.step_tan[k]) / denom;
+            between_limits_[k] = denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
+        }
     }
-    return between_tan_;
+    return between_limits_.get();
 }
 
 // evaluate for C channels of which NC are fitted (NC == C: all, in order; the others keep F).
@@ -660,7 +668,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
     }
     if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
         // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
-        const double tan_fit = between_tan(limit);
+        const double* between_limits = this->between_limits(limit);
         const bool thirds = linear || (frac1_ == 1.0 / 3.0 && frac2_ == 1.0 / 3.0);
         double prev_u = 0.0;
         for (std::size_t k = i; k < j; ++k) {
@@ -704,11 +712,7 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
                 }
                 e = error_tan2(p_, ref, f);
             }
-            const double denom = 1.0 - tan_fit * p_.step_tan[k];
-            const double t = (tan_fit + p_.step_tan[k]) / denom;
-            const double between_limit =
-                denom > 0.0 ? t * t : std::numeric_limits<double>::infinity();
-            if (!(e <= between_limit)) {
+            if (!(e <= between_limits[k])) {
                 between_failed_ = true;
                 return std::numeric_limits<double>::infinity();
             }

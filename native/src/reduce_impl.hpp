@@ -333,7 +333,7 @@ private:
     template <int C, int NC>
     double evaluate_t(std::size_t i, std::size_t j, const int* chans, const double* p1,
                       const double* p2, double limit, double give_up);
-    double between_tan(double limit);
+    const double* between_limits(double limit);
     void commit(std::size_t i, std::size_t j, const int* chans, int nc, const double* p1,
                 const double* p2, bool exact_param);
     // u_ (and the Bezier basis) of the samples inside [i, j] for the handle fractions a1, a2.
@@ -379,8 +379,9 @@ private:
     // Quaternion channel fits (solve_quat_channel): each interior sample's five terms of the normal
     // equations without its weight (n·5), from a segment's first round for the rounds after it.
     std::unique_ptr<double[]> terms_;
-    // between_tan's last limit and result (the limit is the same for many fits in a row).
-    double between_limit_ = -1.0, between_tan_ = 0.0;
+    // between_limits' last limit and its limits (n − 1 entries; many fits in a row share a limit).
+    double between_limit_ = -1.0;
+    std::unique_ptr<double[]> between_limits_;
     bool between_failed_ = false;  // the last evaluate() failed a between-samples guard
     // The handle fractions of the parameterization in u_ (1/3, 1/3: u is linear in the frame).
     double frac1_ = 1.0 / 3.0, frac2_ = 1.0 / 3.0;
