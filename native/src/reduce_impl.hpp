@@ -389,7 +389,8 @@ private:
     // The parameter and Bezier basis of interior sample k of the segment being fitted: param(k),
     // basis(k) (4 values), from u_ and bern_ or, for evenly spaced samples, from a table per step
     // count and handle fractions (set_parameters; computed per fit, they took 8 % of a reduction's
-    // instructions). even_from_[k]: the first sample of the evenly spaced run ending at sample k.
+    // instructions; the tables of the step counts met, below kEvenSegmentsKept, stay with the thread:
+    // 10 MB at most). even_from_[k]: the first sample of the evenly spaced run ending at sample k.
     static constexpr std::size_t kEvenSegmentsKept = 256;
     const double* u_at_ = nullptr;
     const double* bern_at_ = nullptr;
