@@ -451,6 +451,10 @@ def write_plan(plan):
     if record is not None:
         record.prop = plan.prop
         record.signature = _signature(plan, new_path)
+        # The new playback is within the conversion's bound of the old, which was within the fit's of
+        # the method: the sum bounds it (the angle between rotations is a metric).
+        known = record.bound >= 0.0 and plan.bound is not None
+        record.bound = record.bound + plan.bound if known else -1.0
 
 
 def loop_modes(plan):

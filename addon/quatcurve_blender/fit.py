@@ -866,7 +866,7 @@ def write_plan(plan, target):
             fcurves.write_key_selection(curve, chosen)
     if _written is not None:
         _written.add(where)
-    store_record(keys, plan.settings, target, action)
+    store_record(keys, plan.settings, target, action, plan.max_error)
     if plan.fit is not None:
         _remember_fit((action.name,) + target_key(target), plan.fit, plan.samples)
     set_key_eases(action, target, keys.frames, plan.ease_in, plan.ease_out)
@@ -927,9 +927,9 @@ def _rewrite_kept(plan, curves, where):
     return True
 
 
-def store_record(keys, settings, target, action=None):
-    """The target's fit record in `action` (default: its active action): method, settings, and the
-    signature and frames of its animator keys."""
+def store_record(keys, settings, target, action=None, bound=None):
+    """The target's fit record in `action` (default: its active action): method, settings, the
+    signature and frames of its animator keys, and the fit's proved bound (radians; None: not known)."""
     if action is None:
         action = fcurves.active_action(target.id_data)
     record = find_record(action, target)
@@ -954,6 +954,9 @@ def store_record(keys, settings, target, action=None):
     frames = np.asarray(keys.frames, dtype=np.float64)
     if not np.array_equal(record_frames(record), frames):
         record.key_frames = " ".join(map(repr, frames.tolist()))
+    bound = -1.0 if bound is None else float(bound)
+    if record.bound != np.float32(bound):
+        record.bound = bound
 
 
 def settings_of(record):

@@ -64,6 +64,10 @@ class QuatCurveFitRecord(bpy.types.PropertyGroup):
             name="Signature", description="A digest of the animator's keys when fitted (Live refits when it changes)"),
         key_frames=bpy.props.StringProperty(name="Key Frames",
                                             description="The animator's key frames when fitted, in frames"),
+        bound=bpy.props.FloatProperty(
+            name="Bound", subtype="ANGLE", unit="ROTATION", default=-1.0, precision=4,
+            description="The bound proved at every instant between Blender's playback and the method's curve "
+                        "by the last fit or live refit, in radians; -1: not known (a record from an earlier version)"),
     )
 
 

@@ -340,6 +340,7 @@ def test_fitted_target_stays_fitted_and_live(scene):
     select_objects(obj)
     assert bpy.ops.quatcurve.fit(method="SQUAD", tolerance=TOL) == {"FINISHED"}
     before = played({"Quat": obj})["Quat"]
+    fit_bound = fit.find_record(fcurves.active_action(obj), Target(obj)).bound
     bpy.context.scene.quatcurve_fit.live = True
     try:
         result = convert.convert([Target(obj)], convert.ConvertSettings("YXZ", tolerance=TOL))
@@ -348,6 +349,10 @@ def test_fitted_target_stays_fitted_and_live(scene):
         target = Target(obj)
         record = fit.find_record(fcurves.active_action(obj), target)
         assert record is not None and record.prop == "rotation_euler" and record.method == "SQUAD"
+        # The record's bound: the fit's plus the conversion's (proved at every instant), both above 0.
+        convert_bound = result.targets[0].actions[0][5]
+        assert 0.0 < fit_bound and convert_bound is not None and convert_bound > 0.0
+        assert record.bound == pytest.approx(fit_bound + math.radians(convert_bound), rel=1e-5)
         keys = fit.read_animator_keys(target)
         assert record.signature == keys.signature()  # fitted as it is: live sees nothing to do
         assert live.STATS.refits == 0
@@ -363,6 +368,7 @@ def test_fitted_target_stays_fitted_and_live(scene):
         assert live.STATS.refits == 1, live.STATS
         record = fit.find_record(fcurves.active_action(obj), target)
         assert record.signature == fit.read_animator_keys(target).signature()
+        assert 0.0 < record.bound <= math.radians(TOL)  # the refit's own proof
     finally:
         bpy.context.scene.quatcurve_fit.live = False
         live.on_load()

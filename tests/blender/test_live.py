@@ -123,6 +123,36 @@ def test_insert_refits_once_and_keeps_the_animators_keys(fitted):
     assert_plays_method(fitted, frames.astype(float), want)
 
 
+def test_refit_records_its_proved_bound_which_blender_keeps_between_frames(fitted):
+    """The fit record's bound is the last fit's or refit's proof (fit.last_fit), for scripts; Blender's
+    own F-curve evaluation at 64 points a frame and 200 random times stays within it."""
+    qc = native.require()
+    action = fcurves.active_action(fitted)
+    target = fit.targets.Target(fitted)
+    assert 0.0 < fit.find_record(action, target).bound <= math.radians(TOL)  # the Fit operator's
+    fit.find_record(action, target).bound = 3.0  # no proof's: the refit must write its own
+    frame = free_frame(fitted, 15)
+    new = np.array([0.6, 0.2, 0.7, 0.3]) / np.linalg.norm([0.6, 0.2, 0.7, 0.3])
+    fitted.rotation_quaternion = new
+    fitted.keyframe_insert("rotation_quaternion", frame=frame)
+    update()
+    assert live.STATS.refits == 1, live.STATS
+    bound = fit.find_record(action, target).bound
+    assert bound == pytest.approx(fit.last_fit(action, target).proof.bound, rel=1e-6)
+    assert 0.0 < bound <= math.radians(TOL)
+    frames, _ = animator_keys(fitted)
+    want = np.array([v for _, v in QUAT_KEYS[:3]] + [tuple(new)] + [v for _, v in QUAT_KEYS[3:]], float)
+    curve = qc.Curve(frames.astype(float), want, "SQUAD")
+    rng = np.random.default_rng(5)
+    times = np.r_[np.arange(frames[0], frames[-1], 1.0 / 64), frames[-1], rng.uniform(frames[0], frames[-1], 200)]
+    prop, count = fcurves.rotation_property(fitted.rotation_mode)
+    curves = fcurves.Channels.of(fitted).find_all(fitted.path_from_id(prop), count)
+    got = np.array([[c.evaluate(t) for c in curves] for t in times])
+    err = angles_between(got, curve.sample(times))
+    assert err.max() <= bound + 1e-6, "%.6f° at frame %.4f, bound %.6f°" % (
+        math.degrees(err.max()), times[err.argmax()], math.degrees(bound))
+
+
 def move_key(owner, old, new):
     """Moves the key at frame `old` to `new` on every rotation channel (handles along), as a drag does."""
     prop, count = fcurves.rotation_property(owner.rotation_mode)
