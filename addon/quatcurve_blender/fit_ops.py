@@ -66,8 +66,9 @@ class QuatCurveFitRecord(bpy.types.PropertyGroup):
                                             description="The animator's key frames when fitted, in frames"),
         bound=bpy.props.FloatProperty(
             name="Bound", subtype="ANGLE", unit="ROTATION", default=-1.0, precision=4,
-            description="The bound proved at every instant between Blender's playback and the method's curve "
-                        "by the last fit or live refit, in radians; -1: not known (a record from an earlier version)"),
+            description="The bound the last fit or live refit proved at every instant between Blender's playback "
+                        "and the method's curve, in degrees here (radians to scripts); negative: not known "
+                        "(a record from an earlier version)"),
     )
 
 
