@@ -159,7 +159,9 @@ struct FrameBounds {
     double u0, u1, xmin, xmax, xx;
 };
 
-FrameBounds frame_bounds(const double x[4], double a, double b) {
+// parameter(frame): Blender's curve parameter at a float32 frame (blender_bezier_parameter of x).
+template <class Parameter>
+FrameBounds frame_bounds(const double x[4], double a, double b, Parameter parameter) {
     double u0, u1;
     const double len = x[3] - x[0];
     if (std::fabs(x[1] - (x[0] + len / 3.0)) <= 1e-5 * len && std::fabs(x[2] - (x[0] + 2.0 * len / 3.0)) <= 1e-5 * len) {
@@ -168,8 +170,8 @@ FrameBounds frame_bounds(const double x[4], double a, double b) {
         u0 = (a - x[0]) / len - 1e-4;
         u1 = (b - x[0]) / len + 1e-4;
     } else {
-        u0 = blender_bezier_parameter(float(a), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-        u1 = blender_bezier_parameter(float(b), float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+        u0 = parameter(float(a));
+        u1 = parameter(float(b));
     }
     if (u0 < -1e-3 || u1 < -1e-3 || u0 > u1) {
         u0 = 0.0;
@@ -204,8 +206,26 @@ void value_bounds(const FrameBounds& f, const double y[4], double& rate, double&
     curvature = (yy * f.xmax + ymax * f.xx) / (f.xmin * f.xmin * f.xmin);
 }
 
+FrameBounds frame_bounds(const double x[4], double a, double b) {
+    return frame_bounds(x, a, b, [x](float frame) {
+        return blender_bezier_parameter(frame, float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+    });
+}
+
 void bezier_bounds(const double x[4], const double y[4], double a, double b, double& rate, double& curvature) {
     value_bounds(frame_bounds(x, a, b), y, rate, curvature);
+}
+
+// std::upper_bound (Upper) or std::lower_bound of x in f, trying `hint` (the last result) and the
+// index after it first: the proof asks for the intervals of a sweep in time order.
+template <bool Upper>
+std::size_t hinted_bound(const std::vector<double>& f, double x, std::size_t& hint) {
+    const std::size_t n = f.size();
+    auto before = [x](double v) { return Upper ? v <= x : v < x; };  // v lies before the bound
+    for (std::size_t h = std::min(hint, n), last = std::min(hint + 1, n); h <= last; ++h)
+        if ((h == 0 || before(f[h - 1])) && (h == n || !before(f[h]))) return hint = h;
+    const auto it = Upper ? std::upper_bound(f.begin(), f.end(), x) : std::lower_bound(f.begin(), f.end(), x);
+    return hint = static_cast<std::size_t>(it - f.begin());
 }
 
 // The segment of `ch` holding [lo, hi] whole (no key strictly inside), or −1.
@@ -226,7 +246,7 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
     if (n < 2) return;
     const double lo = std::fmax(t0, ch.frames.front()), hi = std::fmin(t1, ch.frames.back());
     if (lo > hi) return;  // constant extrapolation
-    std::size_t j = static_cast<std::size_t>(std::upper_bound(ch.frames.begin(), ch.frames.end(), lo) - ch.frames.begin());
+    std::size_t j = hinted_bound<true>(ch.frames, lo, channel_cache_[c].segment);
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
     for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
         const double f0 = ch.frames[j], f1 = ch.frames[j + 1];
@@ -234,12 +254,43 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
             rate = std::fmax(rate, std::fabs(float(ch.values[j + 1]) - float(ch.values[j])) / (f1 - f0));
             continue;
         }
-        double x[4], y[4], r, k;
-        if (!segment_controls(ch, j, x, y)) continue;
-        bezier_bounds(x, y, std::fmax(lo, f0), std::fmin(hi, f1), r, k);
+        const ChannelCache& s = segment(c, j);
+        if (!s.controls.bezier) continue;
+        const double* x = s.controls.x;
+        // Blender's parameter at the interval's ends, which the next interval (or the value there)
+        // asks for again: the last two kept per channel and segment.
+        auto parameter = [this, c, x](float frame) {
+            ChannelCache& cc = channel_cache_[c];
+            for (int m = 0; m < cc.known; ++m)
+                if (cc.frame[m] == frame) return cc.u[m];
+            const float u = blender_bezier_parameter(frame, float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+            cc.frame[cc.next] = frame;
+            cc.u[cc.next] = u;
+            cc.next ^= 1;
+            cc.known = std::min(cc.known + 1, 2);
+            return u;
+        };
+        double r, k;
+        value_bounds(frame_bounds(x, std::fmax(lo, f0), std::fmin(hi, f1), parameter), s.controls.y, r, k);
         rate = std::fmax(rate, r);
         curvature = std::fmax(curvature, k);
     }
+}
+
+const PlaybackMotion::ChannelCache& PlaybackMotion::segment(std::size_t c, std::size_t j) const {
+    ChannelCache& cc = channel_cache_[c];
+    if (cc.j != j) {
+        const FCurveKeys& ch = channels_[c];
+        cc.j = j;
+        cc.known = cc.next = 0;
+        cc.controls.bezier = segment_controls(ch, j, cc.controls.x, cc.controls.y);
+        // may_be_flat's spread: the four control values as stored (before correct_bezpart).
+        const double y[4] = {float(ch.values[j]), float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]),
+                             float(ch.values[j + 1])};
+        cc.spread = std::fmax(std::fmax(y[0], y[1]), std::fmax(y[2], y[3])) -
+                    std::fmin(std::fmin(y[0], y[1]), std::fmin(y[2], y[3]));
+    }
+    return cc;
 }
 
 // channel_bounds of every channel, for channels with the same key frames: the segments found once,
@@ -389,28 +440,20 @@ int snap_overlap(double key, double t0, double t1) {
 
 }  // namespace
 
-namespace {
-
-// Whether a BEZIER segment of `ch` meeting [lo, hi] has its four control values (as Blender reads
+// Whether a BEZIER segment of channel c meeting [lo, hi] has its four control values (as Blender reads
 // them, float32) within 4 ulps of `magnitude` of each other: the only segments Blender's flat-segment
 // shortcut (or segment_controls') may take, each test being three differences below FLT_EPSILON.
-bool may_be_flat(const FCurveKeys& ch, double lo, double hi, double magnitude) {
+bool PlaybackMotion::may_be_flat(std::size_t c, double lo, double hi, double magnitude) const {
+    const FCurveKeys& ch = channels_[c];
     const std::size_t n = ch.frames.size();
     if (n < 2 || ch.handle_left.size() != 2 * n || ch.handle_right.size() != 2 * n) return n >= 2;
-    std::size_t j = static_cast<std::size_t>(std::upper_bound(ch.frames.begin(), ch.frames.end(), lo) - ch.frames.begin());
+    std::size_t j = hinted_bound<true>(ch.frames, lo, channel_cache_[c].segment);
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
     const double spread = 4.0 * FLT_EPSILON * magnitude;
-    for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
-        const double y[4] = {float(ch.values[j]), float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]),
-                             float(ch.values[j + 1])};
-        const double top = std::fmax(std::fmax(y[0], y[1]), std::fmax(y[2], y[3]));
-        const double bottom = std::fmin(std::fmin(y[0], y[1]), std::fmin(y[2], y[3]));
-        if (top - bottom < spread) return true;
-    }
+    for (; j + 1 < n && ch.frames[j] <= hi; ++j)
+        if (segment(c, j).spread < spread) return true;
     return false;
 }
-
-}  // namespace
 
 bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curvature, double* step) const {
     if (mode_.kind != RotationMode::Kind::quaternion) return false;
@@ -426,12 +469,12 @@ bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curv
         const std::vector<double>& f = channels_[c].frames;
         double lo = t0, hi = t1;
         bool partly = false;
-        const auto first = std::lower_bound(f.begin(), f.end(), t0 - reach);
-        for (auto k = first; k != f.end() && *k <= t1 + reach; ++k) {
-            if (snap_overlap(*k, t0, t1) != 2) continue;
+        for (std::size_t k = hinted_bound<false>(f, t0 - reach, channel_cache_[c].snap); k < f.size() && f[k] <= t1 + reach;
+             ++k) {
+            if (snap_overlap(f[k], t0, t1) != 2) continue;
             partly = true;
-            lo = std::fmin(lo, *k);
-            hi = std::fmax(hi, *k);
+            lo = std::fmin(lo, f[k]);
+            hi = std::fmax(hi, f[k]);
         }
         channel_bounds(c, lo, hi, rate[c], curvature[c]);
         // A flat segment plays its first value up to the next key, whose value may differ by the
@@ -439,7 +482,7 @@ bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curv
         // largest magnitude around cover it. Only a BEZIER segment whose four control values lie that
         // close may be flat (for Blender or for segment_controls): elsewhere the piece is the cubic.
         const double magnitude = std::fmax(1.0, std::fmax(std::fabs(v0[c]), std::fabs(v1[c])));
-        const bool flat = interpolation_ == KeyInterpolation::BEZIER && may_be_flat(channels_[c], lo, hi, magnitude);
+        const bool flat = interpolation_ == KeyInterpolation::BEZIER && may_be_flat(c, lo, hi, magnitude);
         step[c] = (partly ? reach * rate[c] : 0.0) + (flat ? 4.0 * FLT_EPSILON * magnitude : 0.0);
     }
     return true;

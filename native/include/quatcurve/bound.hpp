@@ -213,6 +213,20 @@ private:
     };
     mutable std::size_t controls_segment_ = static_cast<std::size_t>(-1);
     mutable SegmentControls controls_[4];
+    // Per channel, what the proof's channel bounds looked up last (its intervals come in time order,
+    // mostly within one segment): where the searches of the key frames ended, the segment's controls,
+    // and Blender's curve parameter at the last two frames asked for on that segment.
+    struct ChannelCache {
+        std::size_t snap = 0, segment = 0;      // std::lower_bound / std::upper_bound results
+        std::size_t j = static_cast<std::size_t>(-1);
+        SegmentControls controls;               // segment j's (segment_controls)
+        double spread = 0.0;                    // its four stored control values' max − min (float32)
+        float frame[2] = {0.0f, 0.0f}, u[2] = {0.0f, 0.0f};
+        int known = 0, next = 0;                // parameters held, the slot written next
+    };
+    mutable ChannelCache channel_cache_[4];
+    const ChannelCache& segment(std::size_t c, std::size_t j) const;
+    bool may_be_flat(std::size_t c, double lo, double hi, double magnitude) const;
 };
 
 struct PlaybackBound {
