@@ -491,13 +491,18 @@ bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curv
 void PlaybackMotion::raw_snap_edges(double t0, double t1, std::vector<double>& out) const {
     if (mode_.kind != RotationMode::Kind::quaternion) return;
     const double reach = 1.01 * kKeySnap;
-    for (const FCurveKeys& ch : channels_) {
-        const auto first = std::lower_bound(ch.frames.begin(), ch.frames.end(), t0 - reach);
-        for (auto k = first; k != ch.frames.end() && *k <= t1 + reach; ++k) {
-            if (snap_overlap(*k, t0, t1) != 2) continue;
-            std::vector<double> edges;
-            snap_edges(static_cast<float>(*k), edges);
-            for (double e : edges)
+    for (std::size_t c = 0; c < channels_.size(); ++c) {
+        const std::vector<double>& f = channels_[c].frames;
+        for (std::size_t k = hinted_bound<false>(f, t0 - reach, channel_cache_[c].snap); k < f.size() && f[k] <= t1 + reach;
+             ++k) {
+            if (snap_overlap(f[k], t0, t1) != 2) continue;
+            ChannelCache& cc = channel_cache_[c];
+            if (cc.snap_key != k) {  // the edges of the key asked for last are kept
+                cc.snap_edges.clear();
+                snap_edges(static_cast<float>(f[k]), cc.snap_edges);
+                cc.snap_key = k;
+            }
+            for (double e : cc.snap_edges)
                 if (e > t0 && e < t1) out.push_back(e);
         }
     }
@@ -762,6 +767,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         return p;
     };
     std::vector<std::pair<Point, Point>> stack;
+    std::vector<double> edges;  // raw_snap_edges' (kept: most intervals split have none)
     Point prev = evaluate_listed(0);
     reach(prev.d, prev.t);
     if (prev.d > tolerance) r.violations.push_back(prev.t);
@@ -784,7 +790,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             if (raw && r.evaluations < max_evaluations) {
                 // Two playbacks: an interval partly in a key's snap zone is split at the zone's edges
                 // (the step it takes there does not shrink with the interval).
-                std::vector<double> edges;
+                edges.clear();
                 a.raw_snap_edges(p0.t, p1.t, edges);
                 b.raw_snap_edges(p0.t, p1.t, edges);
                 if (!edges.empty()) {

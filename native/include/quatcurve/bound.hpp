@@ -223,6 +223,8 @@ private:
         double spread = 0.0;                    // its four stored control values' max − min (float32)
         float frame[2] = {0.0f, 0.0f}, u[2] = {0.0f, 0.0f};
         int known = 0, next = 0;                // parameters held, the slot written next
+        std::size_t snap_key = static_cast<std::size_t>(-1);
+        std::vector<double> snap_edges;         // raw_snap_edges' frames around key snap_key
     };
     mutable ChannelCache channel_cache_[4];
     const ChannelCache& segment(std::size_t c, std::size_t j) const;
