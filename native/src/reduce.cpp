@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <utility>
 
+#include "quatcurve/blender_eval.hpp"
 #include "reduce_impl.hpp"
 
 namespace quatcurve {
@@ -33,17 +34,28 @@ using namespace reduce_impl;
 
 namespace reduce_impl {
 
+namespace {
+
+// The verification threshold (a margin below the tolerance for Blender's own float32 rotation
+// building) and the fits' target angle below it.
+struct Thresholds {
+    double verify_angle, fit_angle;
+};
+
+Thresholds thresholds(double tolerance) {
+    const double verify_angle = tolerance > 2.0 * kVerifyMargin ? tolerance - kVerifyMargin : 0.5 * tolerance;
+    return {verify_angle, verify_angle - std::min(kFitMarginAbs, kFitMarginRel * verify_angle)};
+}
+
+}  // namespace
+
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
                    bool free_handle_frames) {
     check_tolerance(tolerance);
     check_float32_storage(p, tolerance);
     const int C = p.C;
-    // Verification threshold (margin for Blender's own float32 rotation building) and fit target.
-    const double verify_angle =
-        tolerance > 2.0 * kVerifyMargin ? tolerance - kVerifyMargin : 0.5 * tolerance;
-    const double fit_angle =
-        verify_angle - std::min(kFitMarginAbs, kFitMarginRel * verify_angle);
-    const double verify_tan2 = tan2_half(verify_angle);
+    const double fit_angle = thresholds(tolerance).fit_angle;
+    const double verify_tan2 = tan2_half(thresholds(tolerance).verify_angle);
 
     // `beat` (synchronized runs): the run gives up (returns false) as soon as its keys in total
     // cannot come out fewer than `beat` — verification only ever adds keys, and every channel keeps
@@ -156,6 +168,77 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         per_channel.max_error <= std::max(tolerance, best.max_error))
         best = std::move(per_channel);
     return best;
+}
+
+ReducedKeys repair(const Problem& p, double tolerance, KeyInterpolation ipo, const ReducedKeys& previous,
+                   const std::vector<std::size_t>& index, bool free_handle_frames) {
+    check_tolerance(tolerance);
+    const int C = p.C;
+    ReducedKeys out;
+    out.interpolation = ipo;
+    if (previous.channels.size() != static_cast<std::size_t>(C) || previous.interpolation != ipo) return out;
+    State s = empty_state(p, !previous.synchronized);
+    for (int c = 0; c < C; ++c) {
+        const ReducedChannel& ch = previous.channels[c];
+        std::vector<std::size_t>& keys = s.keys[c];
+        for (std::size_t k : ch.indices) keys.push_back(index.at(k));
+        if (keys.empty() || keys.front() != 0 || keys.back() != p.n - 1) return out;
+        if (ipo != KeyInterpolation::BEZIER) continue;
+        for (std::size_t a = 0; a + 1 < keys.size(); ++a) {
+            const std::size_t i = keys[a], j = keys[a + 1], at = i * C + c;
+            // The handle frames' fractions: the pair whose frames, placed as reduce() places them,
+            // are those stored.
+            const float stored[2] = {static_cast<float>(ch.handle_right[2 * a]),
+                                     static_cast<float>(ch.handle_left[2 * (a + 1)])};
+            bool found = false;
+            for (int m = -1; m < kHandleAlternatives && !found; ++m) {
+                const double a1 = m < 0 ? 1.0 / 3.0 : kHandleFractions[m][0];
+                const double a2 = m < 0 ? 1.0 / 3.0 : kHandleFractions[m][1];
+                float hx[2];
+                segment_handle_frames(p.t[i], p.t[j], a1, a2, hx);
+                if (hx[0] != stored[0] || hx[1] != stored[1]) continue;
+                s.a1[at] = a1;
+                s.a2[at] = a2;
+                found = true;
+            }
+            if (!found) return out;
+            s.h1[at] = ch.handle_right[2 * a + 1];
+            s.h2[at] = ch.handle_left[2 * (a + 1) + 1];
+        }
+    }
+    if (!previous.synchronized) {
+        // The channels' values at every sample, as the fits of the others read them: Blender's
+        // playback of each channel (at keys, the samples themselves).
+        for (int c = 0; c < C; ++c) {
+            const FCurveKeys* ch = &previous.channels[c];
+            blender_evaluate_sorted_shared(&ch, 1, ipo, p.t, &s.F[c], C);
+            for (std::size_t k : s.keys[c]) s.F[k * C + c] = p.y[k * C + c];
+        }
+    }
+    std::vector<std::vector<int>> groups;
+    if (previous.synchronized) {
+        groups.emplace_back();
+        for (int c = 0; c < C; ++c) groups.back().push_back(c);
+    } else {
+        for (int c = 0; c < C; ++c) groups.push_back({c});
+    }
+    const Thresholds at = thresholds(tolerance);
+    Fitter fitter(p, ipo, s, free_handle_frames && tolerance >= kHandleFreeMinTolerance);
+    out.channels = verify_and_repair(p, s, fitter, ipo, tan2_half(at.verify_angle), tan2_half(at.fit_angle), groups,
+                                     out.max_error);
+    // Splits may leave keys a segment now joins (a split's two fits see the added samples where the
+    // earlier segments did not): one removal pass, as reduce() makes, and verification again.
+    if (out.key_count() > previous.key_count()) {
+        for (const std::vector<int>& g : groups)
+            s.keys[g[0]] = remove_keys(p, fitter, g.data(), static_cast<int>(g.size()), tan2_half(at.fit_angle), s.keys[g[0]]);
+        for (const std::vector<int>& g : groups)
+            for (int c : g) s.keys[c] = s.keys[g[0]];
+        out.channels = verify_and_repair(p, s, fitter, ipo, tan2_half(at.verify_angle), tan2_half(at.fit_angle), groups,
+                                         out.max_error);
+    }
+    out.synchronized = true;
+    for (int c = 1; c < C; ++c) out.synchronized = out.synchronized && s.keys[c] == s.keys[0];
+    return out;
 }
 
 }  // namespace reduce_impl

@@ -439,4 +439,15 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
                    bool free_handle_frames = true);
 
+// The keys of an earlier reduction (`previous`, its indices mapped to p's samples by `index`: the
+// samples it was made on, each found again among p's) made to meet `tolerance` on p, which holds
+// more samples: every segment keeps its keys, handles and handle frames, and only the segments where
+// a sample fails are refitted or split (verify_and_repair; where that adds keys, one removal pass
+// and verification again). Far cheaper than reduce() when few
+// samples were added (reduce_proved.cpp's rounds after the first). Empty channels when the earlier
+// keys are not its own kind of result (handle frames off the pairs reduce() places, another channel
+// count or interpolation): the caller then reduces afresh.
+ReducedKeys repair(const Problem& p, double tolerance, KeyInterpolation ipo, const ReducedKeys& previous,
+                   const std::vector<std::size_t>& index, bool free_handle_frames = true);
+
 }  // namespace quatcurve::reduce_impl

@@ -148,8 +148,12 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 //   2. prove the reduced playback against the reference between the samples;
 //   3. where that fails — the times where the angle is above the tolerance, and the middle of every
 //      interval left unproven — add samples (there and at the quarters of the sample intervals
-//      around: the reference's channel values, continuous with the sample before) and reduce again;
-//      at most 8 reductions.
+//      around: the reference's channel values, continuous with the sample before) and repair the
+//      keys on them: every segment keeps its keys and handles, and those where a sample fails are
+//      refitted or split as verification does (reduce_impl::repair); the samples are reduced afresh
+//      instead where that misses the share or keeps more than a tenth more keys (and one per
+//      channel), in the round after a repair, and where Euler rows were chained again; at most 8
+//      rounds.
 // Keys sit on given samples: the samples added (midpoints, the proof's) are checked like the others
 // and become candidates for keys only between two given samples where keys on given samples cannot
 // meet them (a Euler path sweeping through gimbal lock within a frame). The proof of the last
@@ -188,7 +192,7 @@ struct ProvedKeys {
     std::vector<std::pair<double, double>> copied;  // frame spans whose keys are the original's (sign flips)
     KeyInterpolation copied_interpolation = KeyInterpolation::LINEAR;
     std::vector<double> times;  // the samples of the last reduction: the given ones, those added, copied key frames
-    int rounds = 0;             // reductions made (1: the first was proved); with copied spans, the most of a piece
+    int rounds = 0;             // rounds made (1: the first was proved); with copied spans, the most of a piece
 };
 
 // Reduce the samples (times, values: n rows of channel_count(mode) channel values, Blender's
