@@ -402,7 +402,7 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
         .def_property_readonly("times", [](const ProvedKeys& r) { return vector_array(r.times); },
                                "the samples of the last reduction: the given ones and those added (midpoints and the "
                                "proof's failing times)")
-        .def_readonly("rounds", &ProvedKeys::rounds, "reductions made (1: the first was proved)")
+        .def_readonly("rounds", &ProvedKeys::rounds, "rounds made (1: the first reduction was proved)")
         .def("__repr__", [](const ProvedKeys& r) {
             return std::string("<ProvedKeys ") + std::to_string(r.keys.key_count()) + " keys, " +
                    (r.proof.proven() ? "proven" : "NOT proven") + ", bound " + std::to_string(r.proof.bound) +
@@ -439,9 +439,9 @@ radians, >= 0.
 
 The samples are reduced as reduce_keys* does at 90% of `tolerance`; Blender's playback of the result
 is proved against the original's playback (blender_evaluate) at every time from times[0] to
-times[-1] (prove_playback's method); the times that fail become samples of another reduction (the
-original's values there; keys between the given frames only where keys on them cannot meet those), up
-to 8 reductions. Where the original's stored quaternions flip sign between two samples (Blender swings
+times[-1] (prove_playback's method); the times that fail become samples of another round (the
+original's values there; keys between the given frames only where keys on them cannot meet those), in
+which the keys are repaired where those samples fail or the samples reduced afresh, up to 8 rounds. Where the original's stored quaternions flip sign between two samples (Blender swings
 through the flip), the original's keys around it are copied bit for bit (ProvedKeys.copied, with the
 original's interpolation and handles) and the pieces between are reduced on their own: the bound holds
 from times[0] to times[-1], the flips included. Tolerance 0 keeps every sample and proves nothing
@@ -494,7 +494,7 @@ continuous); forced: (F,) increasing indices into times that stay keys (the anim
 inserted key within min_gap frames of them; tolerance: radians, > 0.
 
 Reduced at 90% of `tolerance` at the samples and proved between them as reduce_keys_proved does
-(the failing times become samples, up to 8 reductions); ProvedKeys.proof.bound holds at every time
+(the failing times become samples, up to 8 rounds); ProvedKeys.proof.bound holds at every time
 from times[0] to times[-1].)doc");
 
     py::class_<SlerpKeys>(m, "SlerpKeys", "Result of reduce_slerp: the kept samples as glTF LINEAR (slerp) keys.")
