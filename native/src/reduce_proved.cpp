@@ -78,7 +78,6 @@ reduce_impl::Problem make_problem(const Samples& s, const RotationMode& mode, Ke
     return make_axis_angle_problem(s.times, a);
 }
 
-// The forced samples are keys; no other key comes within min_gap frames of one (set_forced_keys).
 // The reducer's Problem of the samples: their forced keys (no other key within min_gap of one) and
 // candidates set.
 reduce_impl::Problem sample_problem(const Samples& s, const RotationMode& mode, KeyInterpolation ipo,
@@ -472,9 +471,9 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
             out.rounds = round;
             out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
             if (out.proof.proven() || round - first_round + 1 >= kProofRounds) break;
-            // The rounds after repair the keys where the added samples fail: every sample of this
-            // round stays one (add_samples only adds), at the same values unless relifted.
-            // The round after a repair reduces afresh: where repaired keys still fail, they fail in
+            // The next round repairs these keys where the added samples fail: every sample of this
+            // round stays one (add_samples only adds), at the same values unless relifted. The round
+            // after a repair reduces afresh: where repaired keys still fail, they fail in
             // new places, and repairing them again splits ever more segments (random keys at uneven
             // spacing: more left unproved after 8 rounds than with every round reduced afresh).
             if (!relift && before.empty()) {
