@@ -150,10 +150,10 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 //      interval left unproven — add samples (there and at the quarters of the sample intervals
 //      around: the reference's channel values, continuous with the sample before) and repair the
 //      keys on them: every segment keeps its keys and handles, and those where a sample fails are
-//      refitted or split as verification does (reduce_impl::repair); the samples are reduced afresh
-//      instead where that misses the share or keeps more than a tenth more keys (and one per
-//      channel), in the round after a repair, and where Euler rows were chained again; at most 8
-//      rounds.
+//      refitted or split as verification does (reduce_impl::repair) in the second round, where the
+//      proof added at most half as many samples as there were, the repair meets the share and keeps
+//      at most a tenth more keys (and one per channel); the samples are reduced afresh otherwise, in
+//      later rounds and where Euler rows were chained again; at most 8 rounds.
 // Keys sit on given samples: the samples added (midpoints, the proof's) are checked like the others
 // and become candidates for keys only between two given samples where keys on given samples cannot
 // meet them (a Euler path sweeping through gimbal lock within a frame). The proof of the last
