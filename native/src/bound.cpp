@@ -257,24 +257,28 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
         const ChannelCache& s = segment(c, j);
         if (!s.controls.bezier) continue;
         const double* x = s.controls.x;
-        // Blender's parameter at the interval's ends, which the next interval (or the value there)
-        // asks for again: the last two kept per channel and segment.
-        auto parameter = [this, c, x](float frame) {
-            ChannelCache& cc = channel_cache_[c];
-            for (int m = 0; m < cc.known; ++m)
-                if (cc.frame[m] == frame) return cc.u[m];
-            const float u = blender_bezier_parameter(frame, float(x[0]), float(x[1]), float(x[2]), float(x[3]));
-            cc.frame[cc.next] = frame;
-            cc.u[cc.next] = u;
-            cc.next ^= 1;
-            cc.known = std::min(cc.known + 1, 2);
-            return u;
-        };
         double r, k;
-        value_bounds(frame_bounds(x, std::fmax(lo, f0), std::fmin(hi, f1), parameter), s.controls.y, r, k);
+        value_bounds(frame_bounds(x, std::fmax(lo, f0), std::fmin(hi, f1),
+                                  [this, c](float frame) { return parameter(c, frame); }),
+                     s.controls.y, r, k);
         rate = std::fmax(rate, r);
         curvature = std::fmax(curvature, k);
     }
+}
+
+float PlaybackMotion::parameter(std::size_t c, float frame) const {
+    // The interval's ends, which the next interval (or the value there) asks for again: the last two
+    // kept per channel and segment.
+    ChannelCache& cc = channel_cache_[c];
+    for (int m = 0; m < cc.known; ++m)
+        if (cc.frame[m] == frame) return cc.u[m];
+    const double* x = cc.controls.x;
+    const float u = blender_bezier_parameter(frame, float(x[0]), float(x[1]), float(x[2]), float(x[3]));
+    cc.frame[cc.next] = frame;
+    cc.u[cc.next] = u;
+    cc.next ^= 1;
+    cc.known = std::min(cc.known + 1, 2);
+    return u;
 }
 
 const PlaybackMotion::ChannelCache& PlaybackMotion::segment(std::size_t c, std::size_t j) const {
@@ -305,7 +309,7 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
     if (n < 2) return;
     const double lo = std::fmax(t0, frames.front()), hi = std::fmin(t1, frames.back());
     if (lo > hi) return;  // constant extrapolation
-    std::size_t j = static_cast<std::size_t>(std::upper_bound(frames.begin(), frames.end(), lo) - frames.begin());
+    std::size_t j = hinted_bound<true>(frames, lo, channel_cache_[0].segment);
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
     for (; j + 1 < n && frames[j] <= hi; ++j) {
         const double f0 = frames[j], f1 = frames[j + 1];
@@ -314,19 +318,15 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
                 rate[c] = std::fmax(rate[c], std::fabs(float(channels_[c].values[j + 1]) - float(channels_[c].values[j])) / (f1 - f0));
             continue;
         }
-        if (controls_segment_ != j) {
-            for (std::size_t c = 0; c < C; ++c)
-                controls_[c].bezier = segment_controls(channels_[c], j, controls_[c].x, controls_[c].y);
-            controls_segment_ = j;
-        }
         const double* known = nullptr;  // the frames `f` was computed for
         FrameBounds f{};
         for (std::size_t c = 0; c < C; ++c) {
-            const SegmentControls& s = controls_[c];
+            const SegmentControls& s = segment(c, j).controls;
             double r, k;
             if (!s.bezier) continue;
             if (known == nullptr || !std::equal(s.x, s.x + 4, known)) {
-                f = frame_bounds(s.x, std::fmax(lo, f0), std::fmin(hi, f1));
+                f = frame_bounds(s.x, std::fmax(lo, f0), std::fmin(hi, f1),
+                                 [this, c](float frame) { return parameter(c, frame); });
                 known = s.x;
             }
             value_bounds(f, s.y, r, k);
@@ -498,8 +498,9 @@ void PlaybackMotion::raw_snap_edges(double t0, double t1, std::vector<double>& o
             if (snap_overlap(f[k], t0, t1) != 2) continue;
             ChannelCache& cc = channel_cache_[c];
             if (cc.snap_key != k) {  // the edges of the key asked for last are kept
-                cc.snap_edges.clear();
-                snap_edges(static_cast<float>(f[k]), cc.snap_edges);
+                std::vector<double> edges;
+                snap_edges(static_cast<float>(f[k]), edges);
+                std::copy(edges.begin(), edges.end(), cc.snap_edges);  // the five of snap_edges
                 cc.snap_key = k;
             }
             for (double e : cc.snap_edges)

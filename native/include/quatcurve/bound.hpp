@@ -205,14 +205,11 @@ private:
     // and bounds their frame parameter once per handle frames (all_channel_bounds).
     bool shared_frames_ = false;
     void all_channel_bounds(double t0, double t1, double* rate, double* curvature) const;
-    // The control points of every channel on the segment all_channel_bounds asked for last (the proof
-    // bounds many intervals of one segment in a row).
+    // A Bezier segment's control points as Blender evaluates them (segment_controls).
     struct SegmentControls {
         bool bezier = false;  // false: Blender's flat-segment shortcut
         double x[4], y[4];
     };
-    mutable std::size_t controls_segment_ = static_cast<std::size_t>(-1);
-    mutable SegmentControls controls_[4];
     // Per channel, what the proof's channel bounds looked up last (its intervals come in time order,
     // mostly within one segment): where the searches of the key frames ended, the segment's controls,
     // and Blender's curve parameter at the last two frames asked for on that segment.
@@ -224,10 +221,12 @@ private:
         float frame[2] = {0.0f, 0.0f}, u[2] = {0.0f, 0.0f};
         int known = 0, next = 0;                // parameters held, the slot written next
         std::size_t snap_key = static_cast<std::size_t>(-1);
-        std::vector<double> snap_edges;         // raw_snap_edges' frames around key snap_key
+        double snap_edges[5] = {};              // raw_snap_edges' frames around key snap_key (snap_edges)
     };
     mutable ChannelCache channel_cache_[4];
     const ChannelCache& segment(std::size_t c, std::size_t j) const;
+    // Blender's curve parameter at `frame` on channel c's segment last found by segment().
+    float parameter(std::size_t c, float frame) const;
     bool may_be_flat(std::size_t c, double lo, double hi, double magnitude) const;
 };
 
