@@ -509,28 +509,35 @@ def uneven_turn(seed):
     return frames, q, tol, times
 
 
-@pytest.mark.parametrize("seed", [29, 33])
-def test_uneven_keys_are_proved_with_handle_frames_at_the_thirds_where_free_ones_are_not(reducer, seed, tmp_path):
-    """Quaternion keys at uneven spacing whose reduction with the handle frames free (0.2 or 0.5 of a
-    segment where the thirds fall short) left an interval unproved after all its rounds: the rounds
-    run again with the thirds, and the result is proved at every instant and plays within its bound
-    in a fresh Blender without the add-on."""
+def reduce_proved_and_play(original, reduced, tol, times, tmp_path):
+    """Reduces `reduced` (a copy of `original`'s keys) to BEZIER at `tol`°: the line says proved at every
+    instant within it, and a fresh Blender without the add-on plays it within its bound of the original
+    at `times`."""
     from test_fit import fresh_blender_quats
 
-    frames, q, tol, times = uneven_turn(seed)
-    original = keyed_object("uneven%d" % seed, frames, q, "QUATERNION")
-    reduced = keyed_object("uneven%d_reduced" % seed, frames, q, "QUATERNION")
     result = reduce.reduce([targets.Target(reduced)], reduce.ReduceSettings(tolerance=tol, interpolation="BEZIER"))
     line = result.lines()[0]
     print("\n" + line)
     target = result.targets[0]
     assert "at every instant" in line and "not proved" not in line and "ABOVE" not in line, line
     assert target.proven and target.bound_deg <= tol, line
-    blend = tmp_path / "uneven.blend"
+    blend = tmp_path / (reduced.name + ".blend")
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
     played = fresh_blender_quats(blend, [[original.name, None], [reduced.name, None]], times, tmp_path)
     err = np.degrees(native.require().angle_between(played[reduced.name], played[original.name]))
     assert err.max() <= target.bound_deg + 3e-5, "%s: %.6f° at frame %s" % (line, err.max(), times[err.argmax()])
+
+
+@pytest.mark.parametrize("seed", [29, 33])
+def test_uneven_keys_are_proved_with_handle_frames_at_the_thirds_where_free_ones_are_not(reducer, seed, tmp_path):
+    """Quaternion keys at uneven spacing whose reduction with the handle frames free (0.2 or 0.5 of a
+    segment where the thirds fall short) left an interval unproved after all its rounds: the rounds
+    run again with the thirds, and the result is proved at every instant and plays within its bound
+    in a fresh Blender without the add-on."""
+    frames, q, tol, times = uneven_turn(seed)
+    original = keyed_object("uneven%d" % seed, frames, q, "QUATERNION")
+    reduced = keyed_object("uneven%d_reduced" % seed, frames, q, "QUATERNION")
+    reduce_proved_and_play(original, reduced, tol, times, tmp_path)
 
 
 @pytest.mark.parametrize("seed", [21, 48, 41, 59])
@@ -540,8 +547,6 @@ def test_a_second_round_repairs_the_keys_and_plays_within_its_bound(reducer, see
     refitted or split, the others kept; reduce_keys_proved's rounds is 2), and the result is proved at
     every instant and plays within its bound in a fresh Blender without the add-on at 64 points per
     frame and 300 random times."""
-    from test_fit import fresh_blender_quats
-
     frames, q, tol, times = uneven_turn(seed)
     original = keyed_object("second%d" % seed, frames, q, "QUATERNION")
     reduced = keyed_object("second%d_reduced" % seed, frames, q, "QUATERNION")
@@ -550,17 +555,7 @@ def test_a_second_round_repairs_the_keys_and_plays_within_its_bound(reducer, see
                                                  item.values, math.radians(tol), "BEZIER", False).rounds
     print("\nseed %d: %d rounds" % (seed, rounds))
     assert rounds == 2, rounds
-    result = reduce.reduce([targets.Target(reduced)], reduce.ReduceSettings(tolerance=tol, interpolation="BEZIER"))
-    line = result.lines()[0]
-    print(line)
-    target = result.targets[0]
-    assert "at every instant" in line and "not proved" not in line and "ABOVE" not in line, line
-    assert target.proven and target.bound_deg <= tol, line
-    blend = tmp_path / "second.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
-    played = fresh_blender_quats(blend, [[original.name, None], [reduced.name, None]], times, tmp_path)
-    err = np.degrees(native.require().angle_between(played[reduced.name], played[original.name]))
-    assert err.max() <= target.bound_deg + 3e-5, "%s: %.6f° at frame %s" % (line, err.max(), times[err.argmax()])
+    reduce_proved_and_play(original, reduced, tol, times, tmp_path)
 
 
 @pytest.mark.parametrize("interpolation", ["BEZIER", "LINEAR"])
