@@ -177,7 +177,11 @@ Fitter::Fitter(const Problem& p, KeyInterpolation ipo, State& s, bool free_handl
                                                                                   : 0;
     bern_.reset(new double[p.n * 4]);
     u_.reset(new double[p.n]);
-    if (p.kind == Kind::QUAT) terms_.reset(new double[p.n * 5]);
+    if (p.kind == Kind::QUAT) {
+        terms_.reset(new double[p.n * 5]);
+        interval_mid_.reset(new double[p.n]);
+        interval_weight_.reset(new double[p.n]);
+    }
     w_.reset(new double[p.n]);
     err_.reset(new double[p.n]);
     between_limits_.reset(new double[p.n]);
@@ -214,8 +218,17 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
         ok = evaluate(i, j, chans, nc, p1, p2, limit,
                       force ? std::numeric_limits<double>::infinity() : limit) <= limit;
     } else {
+        // One quaternion channel among fixed others: a sample that no value of the channel brings
+        // within the limit fails the segment at any handle frames, and handle frames at which the
+        // samples' intervals cannot all be met fail too (intervals_may_pass): there the thirds keep
+        // only their plain fit (its worst decides on the other handle frames below), and other
+        // handle frames are not fitted. On the motion-capture clips at 0.1° (reduce_keys_proved)
+        // the same keys, bit for bit, and reduce_keys_proved 1,491 M → 1,287 M instructions.
+        const bool intervals = p_.kind == Kind::QUAT && nc == 1 && !force && !exact_param;
+        if (intervals && !channel_intervals(i, j, limit)) return false;
         double worst0;
-        ok = fit_handles(i, j, chans, nc, limit, force, p1, p2, worst0);
+        ok = fit_handles(i, j, chans, nc, limit, force, p1, p2, worst0, kHopeless,
+                         intervals && !intervals_may_pass(i, j, chans[0]) ? 0 : -1);
         // Other handle frames, while the thirds came near (kHandleFractions). A forced fit that none
         // of them passes keeps the thirds' fit, refitted (the trials overwrote the samples' values).
         if (!ok && free_handle_frames_ && !exact_param && j - i > kHandleFreeSamples &&
@@ -223,6 +236,7 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
             double q1[kMaxChannels], q2[kMaxChannels], w;
             for (int alt = 0; alt < kHandleAlternatives && !ok; ++alt) {
                 set_parameters(i, j, kHandleFractions[alt][0], kHandleFractions[alt][1], false);
+                if (intervals && !intervals_may_pass(i, j, chans[0])) continue;
                 if (fit_handles(i, j, chans, nc, limit, false, q1, q2, w, kHopelessOtherFrames)) {
                     ok = true;
                     std::copy(q1, q1 + nc, p1);
@@ -290,7 +304,8 @@ void Fitter::set_parameters(std::size_t i, std::size_t j, double a1, double a2, 
 }
 
 bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit,
-                         bool force, double* p1, double* p2, double& worst0, const double* hopeless) {
+                         bool force, double* p1, double* p2, double& worst0, const double* hopeless,
+                         int rounds) {
     bool ok = false;
     worst0 = std::numeric_limits<double>::infinity();
     double kappa = 4.0;  // quaternion and axis-angle metric: radial direction free
@@ -301,7 +316,8 @@ bool Fitter::fit_handles(std::size_t i, std::size_t j, const int* chans, int nc,
             kappa = 4.0 - kRadialWeight;
         }
         for (std::size_t k = i + 1; k < j; ++k) w_[k] = 1.0;
-        const int iterations = nc != 1                  ? kReweightIterations
+        const int iterations = rounds >= 0              ? rounds
+                               : nc != 1                  ? kReweightIterations
                                : p_.kind == Kind::QUAT ? kReweightIterationsQuatChannel
                                                        : kReweightIterationsSingle;
         for (int it = 0; it <= iterations; ++it) {
@@ -374,6 +390,60 @@ void Fitter::other_channels(std::size_t i, std::size_t j, int chan) {
         for (int c = 0; c < C; ++c) o[10 + c] -= q[chan] * o[14 + c];
         o[18] = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - q[chan] * q[chan];
     }
+}
+
+// The samples strictly inside [i, j] as intervals of the value x of other_'s channel (the others at
+// their other_ terms, filled): the rotation error d = d_o + x·d_c is within tan²(θ/2) ≤ limit where
+// |vec d|² ≤ limit·(w d)², a quadratic a·x² + b·x + c ≤ 0 — with a > 0 an interval, kept as its
+// middle and the inverse of its half-width (interval_mid_, interval_weight_); with a ≤ 0 (the
+// channel hardly turns the rotation there) the sample is left to the fit's evaluation (weight 0).
+// False where an interval is empty: no value of the channel meets that sample.
+bool Fitter::channel_intervals(std::size_t i, std::size_t j, double limit) {
+    for (std::size_t k = i + 1; k < j; ++k) {
+        const double* o = &other_.terms[k * OtherChannels::kStride];
+        const double a = o[5] * o[5] + o[6] * o[6] + o[7] * o[7] - limit * o[4] * o[4];
+        const double b = 2.0 * (o[1] * o[5] + o[2] * o[6] + o[3] * o[7] - limit * o[0] * o[4]);
+        const double c = o[1] * o[1] + o[2] * o[2] + o[3] * o[3] - limit * o[0] * o[0];
+        if (!(a > 0.0)) {
+            interval_mid_[k] = 0.0;
+            interval_weight_[k] = 0.0;
+            continue;
+        }
+        const double disc = b * b - 4.0 * a * c;
+        if (!(disc > 0.0)) return false;
+        interval_mid_[k] = -b / (2.0 * a);
+        interval_weight_[k] = 2.0 * a / std::sqrt(disc);
+    }
+    return true;
+}
+
+// Whether some inner control values (p1, p2) at the current handle fractions may put channel
+// `chan` inside every sample's interval (channel_intervals): its value at sample k is b0·y_i + b1·p1
+// + b2·p2 + b3·y_j (b: the Bezier basis there), a weighted Chebyshev problem (chebyshev_may_meet)
+// whose rows are the samples. The exchange starts from the last reference of the same segment and
+// channel (the handle fractions tried one after the other share most of it: 29 % fewer exchanges
+// on the clips).
+bool Fitter::intervals_may_pass(std::size_t i, std::size_t j, int chan) {
+    constexpr int C = 4;
+    const double yi = p_.y[i * C + chan], yj = p_.y[j * C + chan];
+    const double* m = interval_mid_.get();
+    const double* w = interval_weight_.get();
+    if (exchange_.i != i || exchange_.j != j || exchange_.chan != chan) {
+        exchange_.i = i;
+        exchange_.j = j;
+        exchange_.chan = chan;
+        exchange_.ref[0] = 0;
+        exchange_.ref[1] = (j - i - 2) / 2;
+        exchange_.ref[2] = j - i - 2;
+    }
+    return chebyshev_may_meet(
+        j - i - 1,
+        [&](std::size_t r, ChebyshevRow& row) {
+            const std::size_t k = i + 1 + r;
+            const double* b = basis(k);
+            row = {b[1], b[2], m[k] - b[0] * yi - b[3] * yj, w[k]};
+        },
+        exchange_.ref, 1.0 + kIntervalSlack);
 }
 
 // Weighted least squares for the inner control values: minimize

@@ -107,6 +107,10 @@ constexpr double kHandleFreeHopeless = 4.0;
 // every round: 6 keys more). On the 100-bone benchmark (bench_speed.py) 0.14 % more keys for 11 %
 // less time.
 constexpr double kHopelessOtherFrames[kReweightIterations] = {2.0, 1.75, 1.5, 1.3};
+// intervals_may_pass: a segment fails once the Remez exchange's lower bound of the samples' relative
+// distance outside their intervals exceeds 1 + kIntervalSlack (rounding of the intervals; the fit's
+// own evaluation decides every segment that passes).
+constexpr double kIntervalSlack = 1e-6;
 constexpr double kHandleFreeMinTolerance = 0.01 * kPi / 180.0;
 constexpr double kHandleFractions[][2] = {{0.5, 0.5}, {0.6, 0.4}, {0.4, 0.6}, {0.2, 0.5},
                                           {0.5, 0.2}, {1.0 / 3.0, 0.5}, {0.5, 1.0 / 3.0}};
@@ -260,6 +264,92 @@ inline double angle_of_tan2(double tan2) {
     return 2.0 * std::atan(std::sqrt(tan2));
 }
 
+// ---- minimax of two unknowns -----------------------------------------------------------------------
+
+// Row r of a weighted Chebyshev problem in two unknowns (p1, p2): its residual is w·(g1·p1 + g2·p2 − t).
+struct ChebyshevRow {
+    double g1, g2, t, w;
+};
+
+// Whether the weighted Chebyshev problem of rows 0..n−1 (row(r, out) fills row r, in increasing order
+// of a parameter u in (0, 1) with g1, g2 = 3u(1 − u)², 3u²(1 − u)) may have a solution whose largest
+// |residual| is within cap. The rows' functions span u(1 − u)·(a line), a Haar system on (0, 1), so
+// the discrete Remez exchange applies: the fit levelled on a reference of three rows (residuals
+// σ·h, σ = +1, −1, +1) has |h| at most the optimum (de la Vallée Poussin), so false as soon as one
+// reference's |h| exceeds cap; true once the levelled fit's largest residual is within cap, and
+// wherever the exchange cannot decide (a reference row of weight 0, a singular or non-finite
+// reference, a residual's largest at the reference already (rounding), kExchangeRounds reached).
+// `ref`: the starting reference (row indices, increasing; any other start: true), left at the last one.
+template <class Row>
+bool chebyshev_may_meet(std::size_t n, const Row& row, std::size_t ref[3], double cap) {
+    constexpr int kExchangeRounds = 16;
+    if (!(ref[0] < ref[1] && ref[1] < ref[2] && ref[2] < n)) return true;
+    for (int round = 0; round < kExchangeRounds; ++round) {
+        // The reference's levelled fit: g·p − σ·h/w = t at its three rows.
+        double M[3][4];
+        for (int a = 0; a < 3; ++a) {
+            ChebyshevRow r;
+            row(ref[a], r);
+            if (r.w == 0.0) return true;
+            M[a][0] = r.g1;
+            M[a][1] = r.g2;
+            M[a][2] = (a == 1 ? 1.0 : -1.0) / r.w;
+            M[a][3] = r.t;
+        }
+        // Cramer's rule: the determinant of columns (c0, c1, c2) of M.
+        auto det = [&M](int c0, int c1, int c2) {
+            return M[0][c0] * (M[1][c1] * M[2][c2] - M[2][c1] * M[1][c2]) -
+                   M[1][c0] * (M[0][c1] * M[2][c2] - M[2][c1] * M[0][c2]) +
+                   M[2][c0] * (M[0][c1] * M[1][c2] - M[1][c1] * M[0][c2]);
+        };
+        const double d = det(0, 1, 2);
+        if (!(std::fabs(d) > 0.0) || !std::isfinite(d)) return true;
+        const double p1 = det(3, 1, 2) / d, p2 = det(0, 3, 2) / d, h = det(0, 1, 3) / d;
+        if (!std::isfinite(h)) return true;
+        if (std::fabs(h) > cap) return false;
+        // The row of the largest weighted residual.
+        double worst = -1.0, signed_worst = 0.0;
+        std::size_t kw = 0;
+        for (std::size_t k = 0; k < n; ++k) {
+            ChebyshevRow r;
+            row(k, r);
+            const double e = (r.g1 * p1 + r.g2 * p2 - r.t) * r.w;
+            if (std::fabs(e) > worst) {
+                worst = std::fabs(e);
+                signed_worst = e;
+                kw = k;
+            }
+        }
+        if (worst <= cap) return true;
+        if (kw == ref[0] || kw == ref[1] || kw == ref[2]) return true;
+        // Exchange kw in, the signs still alternating (σ·h at the reference).
+        const bool up = signed_worst > 0.0;
+        auto up_at = [h](int a) { return (a == 1 ? -h : h) > 0.0; };
+        if (kw < ref[0]) {
+            if (up == up_at(0)) {
+                ref[0] = kw;
+            } else {
+                ref[2] = ref[1];
+                ref[1] = ref[0];
+                ref[0] = kw;
+            }
+        } else if (kw > ref[2]) {
+            if (up == up_at(2)) {
+                ref[2] = kw;
+            } else {
+                ref[0] = ref[1];
+                ref[1] = ref[2];
+                ref[2] = kw;
+            }
+        } else if (kw < ref[1]) {
+            (up == up_at(0) ? ref[0] : ref[1]) = kw;
+        } else {
+            (up == up_at(1) ? ref[1] : ref[2]) = kw;
+        }
+    }
+    return true;
+}
+
 // ---- stage 1: admission and setup (reduce_problem.cpp) ---------------------------------------------
 
 // "tolerance: must be finite and >= 0 radians" unless it is.
@@ -340,8 +430,10 @@ private:
     void set_parameters(std::size_t i, std::size_t j, double a1, double a2, bool exact_param);
     // The fit of one parameterization (fit's reweighting rounds); worst0: the plain fit's worst.
     // hopeless: kHopeless, or kHopelessOtherFrames.
+    // rounds: reweighting rounds (−1: the default for the channels; 0: the plain fit only).
     bool fit_handles(std::size_t i, std::size_t j, const int* chans, int nc, double limit, bool force,
-                     double* p1, double* p2, double& worst0, const double* hopeless = kHopeless);
+                     double* p1, double* p2, double& worst0, const double* hopeless = kHopeless,
+                     int rounds = -1);
 
     // Quaternion fits of one channel among fixed others (per-channel key choice): per sample, what
     // the other channels contribute to the error terms, so that a fit computes only its channel's
@@ -361,6 +453,17 @@ private:
         std::unique_ptr<double[]> terms;
     };
     void other_channels(std::size_t i, std::size_t j, int chan);
+    // Where a quaternion channel among fixed others meets the limit at each sample (an interval of its
+    // value), and whether a fit at the current handle fractions may meet them all (a Remez
+    // exchange, a lower bound): segments that cannot are rejected without reweighting.
+    bool channel_intervals(std::size_t i, std::size_t j, double limit);
+    bool intervals_may_pass(std::size_t i, std::size_t j, int chan);
+    std::unique_ptr<double[]> interval_mid_, interval_weight_;  // per sample (channel_intervals)
+    struct Exchange {  // intervals_may_pass' last reference, and its segment and channel
+        std::size_t ref[3] = {0, 0, 0};
+        std::size_t i = kNone, j = kNone;
+        int chan = -1;
+    } exchange_;
     void solve_quat_channel(std::size_t i, std::size_t j, int chan, double kappa, double* p1,
                             double* p2, bool reweighted);
 
