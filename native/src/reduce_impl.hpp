@@ -458,7 +458,12 @@ private:
     // exchange, a lower bound): segments that cannot are rejected without reweighting.
     bool channel_intervals(std::size_t i, std::size_t j, double limit);
     bool intervals_may_pass(std::size_t i, std::size_t j, int chan);
-    std::unique_ptr<double[]> interval_mid_, interval_weight_;  // per sample (channel_intervals)
+    // Per sample (channel_intervals; weight −1: empty), valid where interval_stamp_ is the generation
+    // of other_'s epoch and the limit they were computed for.
+    std::unique_ptr<double[]> interval_mid_, interval_weight_;
+    std::vector<std::size_t> interval_stamp_;
+    std::size_t interval_generation_ = 1, interval_epoch_ = 0;
+    double interval_limit_ = -1.0;
     struct Exchange {  // intervals_may_pass' last reference, and its segment and channel
         std::size_t ref[3] = {0, 0, 0};
         std::size_t i = kNone, j = kNone;
