@@ -437,7 +437,7 @@ in order, each (frames, values) or (frames, values, handle_left, handle_right) a
 evaluation of the channels there (quaternions are made hemisphere-continuous first); tolerance:
 radians, >= 0.
 
-The samples are reduced as reduce_keys* does at 90% of `tolerance`; Blender's playback of the result
+The samples are reduced as reduce_keys* does at 93% of `tolerance`; Blender's playback of the result
 is proved against the original's playback (blender_evaluate) at every time from times[0] to
 times[-1] (prove_playback's method); the times that fail become samples of another round (the
 original's values there; keys between the given frames only where keys on them cannot meet those), in
@@ -493,7 +493,7 @@ increasing frames; values: (N, C) Blender's playback there as `to_mode`'s channe
 continuous); forced: (F,) increasing indices into times that stay keys (the animator's frames), no
 inserted key within min_gap frames of them; tolerance: radians, > 0.
 
-Reduced at 90% of `tolerance` at the samples and proved between them as reduce_keys_proved does
+Reduced at 93% of `tolerance` at the samples and proved between them as reduce_keys_proved does
 (the failing times become samples, up to 8 rounds); ProvedKeys.proof.bound holds at every time
 from times[0] to times[-1].)doc");
 
