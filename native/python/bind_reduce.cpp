@@ -437,7 +437,7 @@ in order, each (frames, values) or (frames, values, handle_left, handle_right) a
 evaluation of the channels there (quaternions are made hemisphere-continuous first); tolerance:
 radians, >= 0.
 
-The samples are reduced as reduce_keys* does at 93% of `tolerance`; Blender's playback of the result
+The samples are reduced as reduce_keys* does at 93% of `tolerance` (90% below 0.01°); Blender's playback of the result
 is proved against the original's playback (blender_evaluate) at every time from times[0] to
 times[-1] (prove_playback's method); the times that fail become samples of another round (the
 original's values there; keys between the given frames only where keys on them cannot meet those), in

@@ -24,8 +24,15 @@ namespace {
 // key spacing (LINEAR originals) 27,173 → 26,948 keys in 4 % less time; on 12 bones of the 100-bone
 // benchmark (random SQUAD arcs baked at every frame) 225,054 → 220,335 keys in 9 % more time. 95 %
 // kept 3,889 keys on the clips (3 % more time) but took 27 % more time on the benchmark's bones (more
-// rounds); 97 %, 3,853 keys for 24 % more time on the clips.
+// rounds); 97 %, 3,853 keys for 24 % more time on the clips. Below kTightTolerance the share is
+// kReduceShareTight: there the proof's fixed allowances (kArithmeticSlack, 2e-6 rad, and the
+// flat-segment steps) need the tenth of the tolerance (at 0.001°, 1.7e-6 rad: with 93 % bones of
+// both clips stayed unproved after every round).
 constexpr double kReduceShare = 0.93;
+constexpr double kReduceShareTight = 0.9;
+constexpr double kTightTolerance = reduce_impl::kHandleFreeMinTolerance;  // 0.01°
+
+double reduce_share(double tolerance) { return tolerance >= kTightTolerance ? kReduceShare : kReduceShareTight; }
 // Rounds at most: the first reduction, then one round per set of added samples (its keys repaired or
 // reduced afresh, reduce_again).
 constexpr int kProofRounds = 8;
@@ -472,7 +479,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
         const int first_round = out.rounds + 1;
         std::vector<double> before;  // the samples of the last round, when its keys are to be repaired
         for (int round = first_round;; ++round) {
-            const double share = kReduceShare * tolerance;
+            const double share = reduce_share(tolerance) * tolerance;
             if (before.empty()) {
                 out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames);
             } else {
@@ -497,7 +504,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
             if (relift) relift(s.values);
         }
         const bool could_be_free = mode.kind == RotationMode::Kind::quaternion && ipo == KeyInterpolation::BEZIER &&
-                                   kReduceShare * tolerance >= reduce_impl::kHandleFreeMinTolerance;
+                                   reduce_share(tolerance) * tolerance >= reduce_impl::kHandleFreeMinTolerance;
         if (out.proof.proven() || !could_be_free) break;
     }
     if (!out.proof.proven()) out.proof = tighten_pieces(out.keys, mode, reference, s.times, pieces);
