@@ -322,30 +322,28 @@ bool chebyshev_may_meet(std::size_t n, const Row& row, std::size_t ref[3], doubl
         }
         if (worst <= cap) return true;
         if (kw == ref[0] || kw == ref[1] || kw == ref[2]) return true;
-        // Exchange kw in, the signs still alternating (σ·h at the reference).
-        const bool up = signed_worst > 0.0;
-        auto up_at = [h](int a) { return (a == 1 ? -h : h) > 0.0; };
-        if (kw < ref[0]) {
-            if (up == up_at(0)) {
-                ref[0] = kw;
+        // Exchange kw in, the signs still alternating (σ·h at the reference): among the four rows
+        // in order, kw replaces a neighbour of its own sign, or else the reference's far end goes.
+        std::size_t rows[4];
+        bool up[4];
+        int at = 0;
+        while (at < 3 && ref[at] < kw) ++at;
+        for (int a = 0, b = 0; a < 4; ++a) {
+            if (a == at) {
+                rows[a] = kw;
+                up[a] = signed_worst > 0.0;
             } else {
-                ref[2] = ref[1];
-                ref[1] = ref[0];
-                ref[0] = kw;
+                rows[a] = ref[b];
+                up[a] = (b == 1 ? -h : h) > 0.0;
+                ++b;
             }
-        } else if (kw > ref[2]) {
-            if (up == up_at(2)) {
-                ref[2] = kw;
-            } else {
-                ref[0] = ref[1];
-                ref[1] = ref[2];
-                ref[2] = kw;
-            }
-        } else if (kw < ref[1]) {
-            (up == up_at(0) ? ref[0] : ref[1]) = kw;
-        } else {
-            (up == up_at(1) ? ref[1] : ref[2]) = kw;
         }
+        const int drop = at > 0 && up[at - 1] == up[at]   ? at - 1
+                         : at < 3 && up[at + 1] == up[at] ? at + 1
+                         : at == 0                        ? 3
+                                                          : 0;
+        for (int a = 0, b = 0; a < 4; ++a)
+            if (a != drop) ref[b++] = rows[a];
     }
     return true;
 }
