@@ -27,8 +27,11 @@ for bit (from the last frame before the flip where every channel has a key to th
 frames, values with their stored signs, the handles of those segments, the original's
 interpolation; FREE handles, so Blender keeps them), which is why they are within the bound there.
 The pieces between are reduced as above, each in the hemisphere of its own stored signs, ending on
-the copied keys (`TargetResult.copied` lists the spans). Where the reduction would keep more keys
-than the original has, the original's keys stay, copied whole (the result line says so). Otherwise
+the copied keys (`TargetResult.copied` lists the spans). Where a reduction stays unproved after
+all its rounds (keys a few hundredths of a frame apart), the original's keys are copied there too,
+in spans that grow until the pieces between are proved. Where the reduction would keep more keys
+than the original has, or stays unproved, the original's keys stay, copied whole (the result line
+says so). Otherwise
 the reduction holds at frames and keys (`reduce_values`) and the result line says why between frames
 is not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
@@ -312,7 +315,7 @@ class TargetResult:
     error_text: str = ""        # ReducedChannels.error_text: the bound at every instant, or why not
     bound_deg: float = None     # at every instant; None: no proof ran
     proven: bool = False        # bound_deg is within the tolerance
-    copied: list = field(default_factory=list)  # (start, end) frames whose keys are the original's (sign flips)
+    copied: list = field(default_factory=list)  # (start, end) frames whose keys are the original's (sign flips, unproved)
 
 
 @dataclass
@@ -483,6 +486,9 @@ def reduce(found, settings):
         text = item.reduced.error_text(settings.tolerance)
         if item.reduced.kept_original(item.frames):
             text += " — the original's keys kept as they are: a reduction within the tolerance needs more keys"
+        elif item.reduced.copied is not None and len(item.reduced.copied):
+            text += " — the original's keys kept over frames %s (its sign flips, or where no reduction was proved)" % (
+                ", ".join("%s–%s" % (num(a), num(b)) for a, b in item.reduced.copied))
         if item.loop is not None:
             text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
                      "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))

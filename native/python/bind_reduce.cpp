@@ -444,7 +444,10 @@ original's values there; keys between the given frames only where keys on them c
 which the keys are repaired where those samples fail or the samples reduced afresh, up to 8 rounds. Where the original's stored quaternions flip sign between two samples (Blender swings
 through the flip), the original's keys around it are copied bit for bit (ProvedKeys.copied, with the
 original's interpolation and handles) and the pieces between are reduced on their own: the bound holds
-from times[0] to times[-1], the flips included. Tolerance 0 keeps every sample and proves nothing
+from times[0] to times[-1], the flips included. Where the proof still fails after every round, the
+original's keys are copied there too (spans growing until the pieces between are proved), and where
+it would keep more keys than the original or stay unproved, the result is the original's keys whole
+(bound 0). Tolerance 0 keeps every sample and proves nothing
 between them (bound inf).)doc");
 
     m.def(

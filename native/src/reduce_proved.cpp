@@ -758,9 +758,10 @@ ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation
     return out;
 }
 
-// The reduction, or the original's own keys when the reduction keeps more: a reduction proved at
-// every instant can need more keys than an original whose keys lie closer than its samples can
-// follow (keys a few float32 steps apart far from frame 0). The original's keys, copied whole as one
+// The reduction, or the original's own keys when the reduction keeps more or ends unproved: a
+// reduction proved at every instant can need more keys than an original whose keys lie closer than
+// its samples can follow (keys a few float32 steps apart far from frame 0), or not be proved there
+// at all (add_failing_spans). The original's keys, copied whole as one
 // span (join_pieces: each channel's keys bit for bit, a constant channel two keys), play as the
 // original does: bound 0.
 // Only where every channel's keys lie within the samples' range (the copy then changes nothing
@@ -775,9 +776,54 @@ ProvedKeys fewest_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& origin
         if (!ch.frames.empty() && (ch.frames.front() < f0 || ch.frames.back() > f1)) return reduced;
         count += constant_channel(ch) ? 2 : ch.frames.size();
     }
-    if (count >= reduced.keys.key_count()) return reduced;
+    if (count >= reduced.keys.key_count() && reduced.proof.proven()) return reduced;
     return join_pieces(original, original_interpolation, times, {{0, times.size() - 1}}, {}, {}, tolerance,
                        interpolation);
+}
+
+// ---- where the proof fails after every round, copied ---------------------------------------------
+// A reduction can end unproved where its samples cannot show the reducer what the playback does
+// (keys a few hundredths of a frame apart, a violation just outside a key's 1e-4 snap zone, closer to
+// a sample than a sample may be added): there the original's keys are copied too, as around its sign
+// flips, and the pieces between reduced again, each on its own; the copied spans grow (kFailReach)
+// until every piece is proved, and where they do not the original's keys are kept whole
+// (fewest_keys), whose playback is the original's.
+constexpr std::size_t kFailReach[] = {1, 4, 16};
+
+// Merges sample spans (overlapping or touching) in place, sorted.
+void merge_spans(std::vector<std::pair<std::size_t, std::size_t>>& spans) {
+    std::sort(spans.begin(), spans.end());
+    std::vector<std::pair<std::size_t, std::size_t>> out;
+    for (const auto& s : spans) {
+        if (!out.empty() && s.first <= out.back().second) {
+            out.back().second = std::max(out.back().second, s.second);
+        } else {
+            out.push_back(s);
+        }
+    }
+    spans = std::move(out);
+}
+
+// `spans` with the sample spans around every time the proof failed (its violations and unproven
+// intervals): the samples on either side of it, `reach` more on each side, widened to samples where
+// every channel has a key (keyed_at; the range's first or last sample where there is none).
+void add_failing_spans(const PlaybackBound& proof, const std::vector<FCurveKeys>& original,
+                       const std::vector<double>& times, std::size_t reach,
+                       std::vector<std::pair<std::size_t, std::size_t>>& spans) {
+    const std::size_t n = times.size();
+    std::vector<std::pair<double, double>> failed(proof.unproven.begin(), proof.unproven.end());
+    for (double t : proof.violations) failed.emplace_back(t, t);
+    for (const auto& [t0, t1] : failed) {
+        const std::size_t after = static_cast<std::size_t>(std::lower_bound(times.begin(), times.end(), t1) - times.begin());
+        const std::size_t at = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), t0) - times.begin());
+        std::size_t s0 = at == 0 ? 0 : at - 1, s1 = std::min(after, n - 1);
+        s0 = s0 >= reach ? s0 - reach : 0;
+        s1 = std::min(n - 1, s1 + reach);
+        while (s0 > 0 && !keyed_at(original, static_cast<float>(times[s0]), true)) --s0;
+        while (s1 + 1 < n && !keyed_at(original, static_cast<float>(times[s1]), true)) ++s1;
+        if (s1 > s0) spans.emplace_back(s0, s1);
+    }
+    merge_spans(spans);
 }
 
 }  // namespace
@@ -788,52 +834,62 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
                               bool synchronized) {
     check_rows(times, values, mode, tolerance);
     const PlaybackMotion playback(original, original_interpolation, mode);
+    const std::size_t C = channel_count(mode);
     std::vector<double> rows = values;
     const ValuesAt values_at = [&](double at, const double* before, double* out) {
         playback.values(at, out);
         continue_sign(mode, before, out);
     };
     const ReferenceOn reference_on = sliced_reference(original, original_interpolation, mode);
-    if (mode.kind != RotationMode::Kind::quaternion) {
-        ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
-                                       interpolation, synchronized);
-        out.copied_interpolation = original_interpolation;
-        return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
+    std::vector<std::pair<std::size_t, std::size_t>> spans;
+    if (mode.kind == RotationMode::Kind::quaternion) {
+        // The given samples checked as a whole, before any piece is (errors name their index in `times`).
+        reduce_impl::check_float32_storage(
+            make_problem(Samples{times, rows, {}, {}, {}}, mode, interpolation), tolerance);
+        stored_signs(playback, times, rows);
+        spans = flip_spans(original, times, rows);
+        if (spans.empty()) make_continuous(rows);  // (the stored signs are continuous then)
     }
-    // The given samples checked as a whole, before any piece is (errors name their index in `times`).
-    reduce_impl::check_float32_storage(
-        make_problem(Samples{times, rows, {}, {}, {}}, mode, interpolation), tolerance);
-    stored_signs(playback, times, rows);
-    const std::vector<std::pair<std::size_t, std::size_t>> spans = flip_spans(original, times, rows);
-    if (spans.empty()) {
-        make_continuous(rows);
-        ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, std::move(rows), tolerance,
-                                       interpolation, synchronized);
-        out.copied_interpolation = original_interpolation;
-        return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
-    }
-    for (const auto& span : spans)  // the copied keys' values exactly, where the pieces beside them end
-        for (std::size_t i : {span.first, span.second}) playback.values(times[i], &rows[4 * i]);
-    // The pieces between the spans, each reduced and proved on its own.
-    std::vector<ProvedKeys> pieces;
-    std::vector<std::pair<std::size_t, std::size_t>> piece_of;
-    std::size_t begin = 0;
-    for (std::size_t s = 0; s <= spans.size(); ++s) {
-        const std::size_t end = s < spans.size() ? spans[s].first : times.size() - 1;
-        if (end > begin) {
-            const std::vector<double> t(times.begin() + static_cast<std::ptrdiff_t>(begin),
-                                        times.begin() + static_cast<std::ptrdiff_t>(end) + 1);
-            std::vector<double> v(rows.begin() + static_cast<std::ptrdiff_t>(4 * begin),
-                                  rows.begin() + static_cast<std::ptrdiff_t>(4 * end + 4));
-            pieces.push_back(reduce_proved(playback, reference_on, values_at, mode, t, std::move(v), tolerance,
-                                           interpolation, synchronized));
-            piece_of.emplace_back(begin, end);
+    // The samples reduced and proved as a whole, or in pieces between copied spans.
+    const auto reduce_around = [&](const std::vector<std::pair<std::size_t, std::size_t>>& copied) {
+        if (copied.empty()) {
+            ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, rows, tolerance,
+                                           interpolation, synchronized);
+            out.copied_interpolation = original_interpolation;
+            return out;
         }
-        if (s < spans.size()) begin = spans[s].second;
+        std::vector<double> pinned = rows;
+        for (const auto& span : copied)  // the copied keys' values exactly, where the pieces beside them end
+            for (std::size_t i : {span.first, span.second}) {
+                std::vector<double> v(C);
+                playback.values(times[i], v.data());
+                std::copy(v.begin(), v.end(), pinned.begin() + static_cast<std::ptrdiff_t>(C * i));
+            }
+        std::vector<ProvedKeys> pieces;
+        std::vector<std::pair<std::size_t, std::size_t>> piece_of;
+        std::size_t begin = 0;
+        for (std::size_t s = 0; s <= copied.size(); ++s) {
+            const std::size_t end = s < copied.size() ? copied[s].first : times.size() - 1;
+            if (end > begin) {
+                const std::vector<double> t(times.begin() + static_cast<std::ptrdiff_t>(begin),
+                                            times.begin() + static_cast<std::ptrdiff_t>(end) + 1);
+                std::vector<double> v(pinned.begin() + static_cast<std::ptrdiff_t>(C * begin),
+                                      pinned.begin() + static_cast<std::ptrdiff_t>(C * end + C));
+                pieces.push_back(reduce_proved(playback, reference_on, values_at, mode, t, std::move(v), tolerance,
+                                               interpolation, synchronized));
+                piece_of.emplace_back(begin, end);
+            }
+            if (s < copied.size()) begin = copied[s].second;
+        }
+        return join_pieces(original, original_interpolation, times, copied, pieces, piece_of, tolerance, interpolation);
+    };
+    ProvedKeys out = reduce_around(spans);
+    for (std::size_t reach : kFailReach) {
+        if (out.proof.proven() || !(tolerance > 0.0)) break;
+        add_failing_spans(out.proof, original, times, reach, spans);
+        out = reduce_around(spans);
     }
-    return fewest_keys(join_pieces(original, original_interpolation, times, spans, pieces, piece_of, tolerance,
-                                   interpolation),
-                       original, original_interpolation, times, tolerance, interpolation);
+    return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
 }
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,

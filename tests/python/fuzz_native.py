@@ -1962,6 +1962,11 @@ def build_reduce_keys_proved(fn, d):
     def check(out):
         proved_keys_checks(out, tol, mode, interpolation, reference, times[0], times[-1], flips, rng)
         expect(out.copied_interpolation == channel_ipo, f"copied_interpolation {out.copied_interpolation}")
+        # Never unproved where the original's keys could be kept (all within the samples' range).
+        t0, t1 = np.float32(times[0]), np.float32(times[-1])
+        inside = all(len(c[0]) <= 1 or (c[0][0] >= t0 and c[0][-1] <= t1) for c in channels)
+        expect(tol == 0 or not inside or out.proof.proven,
+               lambda: f"unproved at tolerance {tol!r} (bound {out.proof.bound!r}): the original's keys were not kept")
 
     return Case(lambda: fn(*args), 4 * len(times), check, must_fail, 0, args)
 

@@ -175,10 +175,16 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 // at a span's end has the left handle of the part before it and the right handle of the part after.
 // The samples' values are taken with the sign of the original's playback at their time.
 //
-// Never more keys than the original (reduce_keys_proved): where the result would keep more keys than
-// the original's channels hold (a constant channel counting two), every channel's keys lie within
-// [times.front(), times.back()] and the tolerance is above 0, the result is the original's keys
-// copied whole as one span (as above; proof bound 0).
+// Where the proof fails after every round (reduce_keys_proved: keys a few hundredths of a frame
+// apart, a violation just outside a key's snap zone, nearer a sample than a sample may be added), the
+// original's keys are copied there too, as around a flip: the span from the samples on either side of
+// each failing time, 1 sample more on each side, widened to samples where every channel has a key;
+// the pieces between reduced again; then 4 and 16 samples more while a piece stays unproved.
+//
+// Never more keys than the original, never unproved (reduce_keys_proved): where the result would keep
+// more keys than the original's channels hold (a constant channel counting two) or is still unproved,
+// every channel's keys lie within [times.front(), times.back()] and the tolerance is above 0, the
+// result is the original's keys copied whole as one span (as above; proof bound 0).
 //
 // tolerance 0 keeps every sample (as reduce_keys does) and proves nothing between them: the proof
 // then has bound +∞ and the whole range unproven.
@@ -189,7 +195,7 @@ struct ProvedKeys {
     // BEZIER segment uses lie on the straight segment, segment_handles).
     ReducedKeys keys;
     PlaybackBound proof;  // the reduced playback against the reference over the reduced pieces, merged
-    std::vector<std::pair<double, double>> copied;  // frame spans whose keys are the original's (sign flips)
+    std::vector<std::pair<double, double>> copied;  // frame spans whose keys are the original's (flips, unproved)
     KeyInterpolation copied_interpolation = KeyInterpolation::LINEAR;
     std::vector<double> times;  // the samples of the last reduction: the given ones, those added, copied key frames
     int rounds = 0;             // rounds made (1: the first was proved); with copied spans, the most of a piece
