@@ -13,6 +13,11 @@ namespace quatcurve {
 
 namespace {
 
+// std::fmax and std::fmin (the argument that is not NaN, if either) inline: the library calls cost
+// a few percent of a proof, which takes millions of them.
+inline double max2(double a, double b) { return (b > a || a != a) ? b : a; }
+inline double min2(double a, double b) { return (b < a || a != a) ? b : a; }
+
 // Blender's float32 arithmetic beside the exact model the bound reasons about (reduce.hpp's margin).
 constexpr double kArithmeticSlack = 2e-6;
 constexpr double kPi = 3.141592653589793238462643383279502884;
@@ -149,7 +154,7 @@ bool segment_controls(const FCurveKeys& ch, std::size_t j, double x[4], double y
 // root finder finds none); y_t = y_u/x_u, y_tt = (y_uu·x_u − y_u·x_uu)/x_u³.
 // max |p0 + (p1 − p0)·u| on [u0, u1]
 double linear_max(double p0, double p1, double u0, double u1) {
-    return std::fmax(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
+    return max2(std::fabs(p0 + (p1 - p0) * u0), std::fabs(p0 + (p1 - p0) * u1));
 }
 
 // What bezier_bounds takes from the frames of a Bezier segment's controls over [a, b]: the curve
@@ -185,8 +190,8 @@ FrameBounds frame_bounds(const double x[4], double a, double b, Parameter parame
     FrameBounds f;
     f.u0 = u0;
     f.u1 = u1;
-    f.xmin = std::fmin(bx[0], std::fmin(bx[1], bx[2]));
-    f.xmax = std::fmax(bx[0], std::fmax(bx[1], bx[2]));
+    f.xmin = min2(bx[0], min2(bx[1], bx[2]));
+    f.xmax = max2(bx[0], max2(bx[1], bx[2]));
     f.xx = linear_max(6 * (x[2] - 2 * x[1] + x[0]), 6 * (x[3] - 2 * x[2] + x[1]), u0, u1);
     return f;
 }
@@ -196,7 +201,7 @@ void value_bounds(const FrameBounds& f, const double y[4], double& rate, double&
     const double dy[3] = {3 * (y[1] - y[0]), 3 * (y[2] - y[1]), 3 * (y[3] - y[2])};
     double by[3];
     blossom(dy, u0, u1, by);
-    const double ymax = std::fmax(std::fabs(by[0]), std::fmax(std::fabs(by[1]), std::fabs(by[2])));
+    const double ymax = max2(std::fabs(by[0]), max2(std::fabs(by[1]), std::fabs(by[2])));
     const double yy = linear_max(6 * (y[2] - 2 * y[1] + y[0]), 6 * (y[3] - 2 * y[2] + y[1]), u0, u1);
     if (!(f.xmin > 0.0)) {
         rate = curvature = ymax > 0.0 ? HUGE_VAL : 0.0;
@@ -244,25 +249,25 @@ void PlaybackMotion::channel_bounds(std::size_t c, double t0, double t1, double&
     const std::size_t n = ch.frames.size();
     rate = curvature = 0.0;
     if (n < 2) return;
-    const double lo = std::fmax(t0, ch.frames.front()), hi = std::fmin(t1, ch.frames.back());
+    const double lo = max2(t0, ch.frames.front()), hi = min2(t1, ch.frames.back());
     if (lo > hi) return;  // constant extrapolation
     std::size_t j = hinted_bound<true>(ch.frames, lo, channel_cache_[c].segment);
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
     for (; j + 1 < n && ch.frames[j] <= hi; ++j) {
         const double f0 = ch.frames[j], f1 = ch.frames[j + 1];
         if (interpolation_ == KeyInterpolation::LINEAR) {
-            rate = std::fmax(rate, std::fabs(float(ch.values[j + 1]) - float(ch.values[j])) / (f1 - f0));
+            rate = max2(rate, std::fabs(float(ch.values[j + 1]) - float(ch.values[j])) / (f1 - f0));
             continue;
         }
         const ChannelCache& s = segment(c, j);
         if (!s.controls.bezier) continue;
         const double* x = s.controls.x;
         double r, k;
-        value_bounds(frame_bounds(x, std::fmax(lo, f0), std::fmin(hi, f1),
+        value_bounds(frame_bounds(x, max2(lo, f0), min2(hi, f1),
                                   [this, c](float frame) { return parameter(c, frame); }),
                      s.controls.y, r, k);
-        rate = std::fmax(rate, r);
-        curvature = std::fmax(curvature, k);
+        rate = max2(rate, r);
+        curvature = max2(curvature, k);
     }
 }
 
@@ -291,8 +296,8 @@ const PlaybackMotion::ChannelCache& PlaybackMotion::segment(std::size_t c, std::
         // may_be_flat's spread: the four control values as stored (before correct_bezpart).
         const double y[4] = {float(ch.values[j]), float(ch.handle_right[2 * j + 1]), float(ch.handle_left[2 * j + 3]),
                              float(ch.values[j + 1])};
-        cc.spread = std::fmax(std::fmax(y[0], y[1]), std::fmax(y[2], y[3])) -
-                    std::fmin(std::fmin(y[0], y[1]), std::fmin(y[2], y[3]));
+        cc.spread = max2(max2(y[0], y[1]), max2(y[2], y[3])) -
+                    min2(min2(y[0], y[1]), min2(y[2], y[3]));
     }
     return cc;
 }
@@ -307,7 +312,7 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
     std::fill(rate, rate + C, 0.0);
     std::fill(curvature, curvature + C, 0.0);
     if (n < 2) return;
-    const double lo = std::fmax(t0, frames.front()), hi = std::fmin(t1, frames.back());
+    const double lo = max2(t0, frames.front()), hi = min2(t1, frames.back());
     if (lo > hi) return;  // constant extrapolation
     std::size_t j = hinted_bound<true>(frames, lo, channel_cache_[0].segment);
     j = j == 0 ? 0 : std::min(j - 1, n - 2);
@@ -315,7 +320,7 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
         const double f0 = frames[j], f1 = frames[j + 1];
         if (interpolation_ == KeyInterpolation::LINEAR) {
             for (std::size_t c = 0; c < C; ++c)
-                rate[c] = std::fmax(rate[c], std::fabs(float(channels_[c].values[j + 1]) - float(channels_[c].values[j])) / (f1 - f0));
+                rate[c] = max2(rate[c], std::fabs(float(channels_[c].values[j + 1]) - float(channels_[c].values[j])) / (f1 - f0));
             continue;
         }
         const double* known = nullptr;  // the frames `f` was computed for
@@ -325,13 +330,13 @@ void PlaybackMotion::all_channel_bounds(double t0, double t1, double* rate, doub
             double r, k;
             if (!s.bezier) continue;
             if (known == nullptr || !std::equal(s.x, s.x + 4, known)) {
-                f = frame_bounds(s.x, std::fmax(lo, f0), std::fmin(hi, f1),
+                f = frame_bounds(s.x, max2(lo, f0), min2(hi, f1),
                                  [this, c](float frame) { return parameter(c, frame); });
                 known = s.x;
             }
             value_bounds(f, s.y, r, k);
-            rate[c] = std::fmax(rate[c], r);
-            curvature[c] = std::fmax(curvature[c], k);
+            rate[c] = max2(rate[c], r);
+            curvature[c] = max2(curvature[c], k);
         }
     }
 }
@@ -369,7 +374,7 @@ double max_abs_half_sine(double lo, double hi) {
     if (!(hi - lo < kTwoPi)) return 1.0;
     const double peak = kPi + kTwoPi * std::ceil((lo - kPi) / kTwoPi);  // the first odd multiple ≥ lo
     if (peak <= hi) return 1.0;
-    return std::fmax(std::fabs(std::sin(0.5 * lo)), std::fabs(std::sin(0.5 * hi)));
+    return max2(std::fabs(std::sin(0.5 * lo)), std::fabs(std::sin(0.5 * hi)));
 }
 
 }  // namespace
@@ -473,15 +478,15 @@ bool PlaybackMotion::raw_bounds(double t0, double t1, double* rate, double* curv
              ++k) {
             if (snap_overlap(f[k], t0, t1) != 2) continue;
             partly = true;
-            lo = std::fmin(lo, f[k]);
-            hi = std::fmax(hi, f[k]);
+            lo = min2(lo, f[k]);
+            hi = max2(hi, f[k]);
         }
         channel_bounds(c, lo, hi, rate[c], curvature[c]);
         // A flat segment plays its first value up to the next key, whose value may differ by the
         // flatness threshold (3 × FLT_EPSILON, segment_controls); float32 values: 4 ulps of the
         // largest magnitude around cover it. Only a BEZIER segment whose four control values lie that
         // close may be flat (for Blender or for segment_controls): elsewhere the piece is the cubic.
-        const double magnitude = std::fmax(1.0, std::fmax(std::fabs(v0[c]), std::fabs(v1[c])));
+        const double magnitude = max2(1.0, max2(std::fabs(v0[c]), std::fabs(v1[c])));
         const bool flat = interpolation_ == KeyInterpolation::BEZIER && may_be_flat(c, lo, hi, magnitude);
         step[c] = (partly ? reach * rate[c] : 0.0) + (flat ? 4.0 * FLT_EPSILON * magnitude : 0.0);
     }
@@ -530,7 +535,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
             // Each axis' rotation turns at its own angle's rate, whatever frame it acts in; the axes
             // themselves turn at most at the sum.
             const double w = r[0] + r[1] + r[2];
-            speed = std::fmin(w, euler_speed(t0, t1, r));
+            speed = min2(w, euler_speed(t0, t1, r));
             accel = 0.5 * (k[0] + k[1] + k[2] + w * w) + 0.25 * w * w;
             return;
         }
@@ -546,7 +551,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
             values(t1, v1);
             const double n0 = std::sqrt(v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2] + v0[3] * v0[3]);
             const double n1 = std::sqrt(v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2] + v1[3] * v1[3]);
-            const double low = std::fmin(n0, n1) - d1 * 0.5 * (t1 - t0);
+            const double low = min2(n0, n1) - d1 * 0.5 * (t1 - t0);
             if (!(low > 0.0)) {
                 speed = accel = HUGE_VAL;
                 return;
@@ -562,7 +567,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
                 double v0[4], v1[4];
                 values(t0, v0);
                 values(t1, v1);
-                const double low = std::fmin(hypot3(v0[1], v0[2], v0[3]), hypot3(v1[1], v1[2], v1[3])) - dv * 0.5 * (t1 - t0);
+                const double low = min2(hypot3(v0[1], v0[2], v0[3]), hypot3(v1[1], v1[2], v1[3])) - dv * 0.5 * (t1 - t0);
                 if (!(low > 0.0)) {
                     speed = accel = HUGE_VAL;
                     return;
@@ -573,7 +578,7 @@ void PlaybackMotion::bounds(double t0, double t1, double& speed, double& accel) 
                 // every axis is the same rotation) a turning axis hardly moves it. |θ'| ≤ r[0] keeps
                 // θ within [min − r[0]·h/2, max + r[0]·h/2] of its ends' values.
                 const double spread = 0.5 * r[0] * (t1 - t0);
-                S = max_abs_half_sine(std::fmin(v0[0], v1[0]) - spread, std::fmax(v0[0], v1[0]) + spread);
+                S = max_abs_half_sine(min2(v0[0], v1[0]) - spread, max2(v0[0], v1[0]) + spread);
             }
             speed = r[0] + 2.0 * S * dn;  // |ω| = 2|q̇| ≤ |θ'| + 2|sin(θ/2)|·|n'|
             accel = 0.25 * r[0] * r[0] + 0.5 * k[0] + r[0] * dn + S * kn;
@@ -602,11 +607,11 @@ double PlaybackMotion::euler_speed(double t0, double t1, const double* r) const 
     values(t1, v1);
     // The middle angle's range on the interval, and so |κ|'s least value and κ's sign.
     const double spread = r[j] * 0.5 * (t1 - t0);
-    const double b_lo = std::fmin(v0[j], v1[j]) - spread, b_hi = std::fmax(v0[j], v1[j]) + spread;
+    const double b_lo = min2(v0[j], v1[j]) - spread, b_hi = max2(v0[j], v1[j]) + spread;
     const double s0 = std::sin(b_lo), s1 = std::sin(b_hi);
     if (b_hi - b_lo >= kPi || s0 * s1 <= 0.0) return HUGE_VAL;  // κ may change sign (or b winds round)
     // |sin| is smallest at an end of the range unless the range holds a multiple of π (excluded above).
-    const double kappa_min = std::fmin(std::fabs(s0), std::fabs(s1));
+    const double kappa_min = min2(std::fabs(s0), std::fabs(s1));
     double combined;
     if (!combined_rate(static_cast<std::size_t>(i), static_cast<std::size_t>(l), sigma * (s0 > 0 ? 1.0 : -1.0), t0, t1,
                        combined))
@@ -633,7 +638,7 @@ double PlaybackMotion::jump_bound(double t0, double t1, double speed) const {
     // Frames are float32: Blender evaluates at float(t), within half an ulp (≤ |t|·2⁻²⁴) of t. (The
     // snap to a key within 1e-4 of it is a step at frames that are breaks: prove_within evaluates
     // both sides of it.)
-    const double ulp = std::fmax(std::fabs(t0), std::fabs(t1)) * std::ldexp(1.0, -23) + 1e-30;
+    const double ulp = max2(std::fabs(t0), std::fabs(t1)) * std::ldexp(1.0, -23) + 1e-30;
     return speed * 2.0 * ulp;
 }
 
@@ -700,7 +705,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         // λ(t) linear from each end's projection: D at the ends is the perpendicular part alone.
         const double l0 = sigma * dot(a0, b0) / nb0, l1 = sigma * dot(a1, b1) / nb1;
         if (!(l0 > 0.0) || !(l1 > 0.0) || !std::isfinite(l0) || !std::isfinite(l1)) return HUGE_VAL;
-        const double h = p1.t - p0.t, lmax = std::fmax(l0, l1), lmin = std::fmin(l0, l1);
+        const double h = p1.t - p0.t, lmax = max2(l0, l1), lmin = min2(l0, l1);
         const double slope = std::fabs(l1 - l0) / h;
         double d0 = 0.0, d1 = 0.0, K = 0.0, sa = 0.0, sb = 0.0, ea = 0.0, eb = 0.0;
         for (int c = 0; c < 4; ++c) {
@@ -716,10 +721,10 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         }
         ea = std::sqrt(ea);
         eb = std::sqrt(eb);
-        const double D = std::sqrt(std::fmax(d0, d1)) + std::sqrt(K) * h * h / 8.0 + 2.0 * (ea + lmax * eb);
-        const double low_a = std::sqrt(std::fmin(dot(a0, a0), dot(a1, a1))) - std::sqrt(sa) * 0.5 * h - 2.0 * ea;
-        const double low_b = lmin * (std::sqrt(std::fmin(nb0, nb1)) - std::sqrt(sb) * 0.5 * h - 2.0 * eb);
-        const double low = std::fmax(low_a, low_b);
+        const double D = std::sqrt(max2(d0, d1)) + std::sqrt(K) * h * h / 8.0 + 2.0 * (ea + lmax * eb);
+        const double low_a = std::sqrt(min2(dot(a0, a0), dot(a1, a1))) - std::sqrt(sa) * 0.5 * h - 2.0 * ea;
+        const double low_b = lmin * (std::sqrt(min2(nb0, nb1)) - std::sqrt(sb) * 0.5 * h - 2.0 * eb);
+        const double low = max2(low_a, low_b);
         if (!(D < low)) return HUGE_VAL;  // (NaN bounds included)
         return 2.0 * std::asin(D / low);
     };
@@ -728,7 +733,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
         const bool neighbours = std::nextafter(static_cast<float>(p0.t), HUGE_VALF) >= static_cast<float>(p1.t);
         // Two float32 playbacks of quaternion channels: the channels bound, which usually suffices
         // alone (the motions' own bounds below then need not be computed).
-        if (raw) return neighbours ? std::fmax(p0.d, p1.d) + kArithmeticSlack : channels_bound(p0, p1) + kArithmeticSlack;
+        if (raw) return neighbours ? max2(p0.d, p1.d) + kArithmeticSlack : channels_bound(p0, p1) + kArithmeticSlack;
         double va, aa, vb, ab;
         a.bounds(p0.t, p1.t, va, aa);
         b.bounds(p0.t, p1.t, vb, ab);
@@ -737,24 +742,24 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             // step there, such as the snap to a key, included), the other moves by at most its speed
             // (from either end: d ≤ max(d0, d1) + its speed·h); two float32 motions show the same end
             // (Blender evaluates both at the same frame).
-            if (a.float32_frames() && b.float32_frames()) return std::fmax(p0.d, p1.d) + kArithmeticSlack;
+            if (a.float32_frames() && b.float32_frames()) return max2(p0.d, p1.d) + kArithmeticSlack;
             const double moving = (a.float32_frames() ? 0.0 : va) + (b.float32_frames() ? 0.0 : vb);
-            return std::fmax(p0.d, p1.d) + moving * h + kArithmeticSlack;
+            return max2(p0.d, p1.d) + moving * h + kArithmeticSlack;
         }
-        const double first = std::fmax(0.5 * (p0.d + p1.d + (va + vb) * h), std::fmax(p0.d, p1.d));
+        const double first = max2(0.5 * (p0.d + p1.d + (va + vb) * h), max2(p0.d, p1.d));
         const double sigma = glm::dot(p0.qa, p0.qb) < 0.0 ? -1.0 : 1.0;
         const double c0 = glm::length(glm::dvec4(p0.qa.w - sigma * p0.qb.w, p0.qa.x - sigma * p0.qb.x,
                                                   p0.qa.y - sigma * p0.qb.y, p0.qa.z - sigma * p0.qb.z));
         const double c1 = glm::length(glm::dvec4(p1.qa.w - sigma * p1.qb.w, p1.qa.x - sigma * p1.qb.x,
                                                   p1.qa.y - sigma * p1.qb.y, p1.qa.z - sigma * p1.qb.z));
-        const double chord = std::fmax(c0, c1) + (aa + ab) * h * h / 8.0;
+        const double chord = max2(c0, c1) + (aa + ab) * h * h / 8.0;
         const double second = chord < 2.0 ? 4.0 * std::asin(0.5 * chord) : HUGE_VAL;
         // Two float32 motions are both evaluated at float(t), a frame inside [t0, t1] (its ends are
         // float32 frames): the bounds of the interval cover it with no jump for the rounding.
         const double jumps = a.float32_frames() && b.float32_frames()
                                  ? 0.0
                                  : a.jump_bound(p0.t, p1.t, va) + b.jump_bound(p0.t, p1.t, vb);
-        return std::fmin(first, second) + jumps + kArithmeticSlack;
+        return min2(first, second) + jumps + kArithmeticSlack;
     };
     // b at every time of the list at once (a curve samples four at a time); a, whose last few values
     // bound the intervals (PlaybackMotion's cache), as the sweep reaches each time.
@@ -823,7 +828,7 @@ PlaybackBound prove_within(const Motion& a, const Motion& b, const std::vector<d
             stack.emplace_back(p0, pm);
         }
     }
-    r.bound = std::fmin(r.bound, kPi);  // no two rotations are farther apart
+    r.bound = min2(r.bound, kPi);  // no two rotations are farther apart
     std::sort(r.violations.begin(), r.violations.end());
     r.violations.erase(std::unique(r.violations.begin(), r.violations.end()), r.violations.end());
     std::sort(r.unproven.begin(), r.unproven.end());
@@ -837,13 +842,13 @@ void tighten_proof(const Motion& a, const Motion& b, const std::vector<double>& 
     for (int i = 0; i < 6 && level < proof.bound; ++i) {
         const PlaybackBound again = prove_within(a, b, times, level, min_step, max_evaluations);
         proof.evaluations += again.evaluations;
-        proof.max_evaluated = std::fmax(proof.max_evaluated, again.max_evaluated);
+        proof.max_evaluated = max2(proof.max_evaluated, again.max_evaluated);
         if (again.bound < proof.bound) {
             proof.bound = again.bound;
             proof.worst_time = again.worst_time;
         }
         if (again.proven()) break;
-        level = std::fmax(1.5 * level, 1.05 * again.max_evaluated);
+        level = max2(1.5 * level, 1.05 * again.max_evaluated);
     }
 }
 
