@@ -487,8 +487,10 @@ def reduce(found, settings):
         if item.reduced.kept_original(item.frames):
             text += " — the original's keys kept as they are: a reduction within the tolerance needs more keys"
         elif item.reduced.copied is not None and len(item.reduced.copied):
-            text += " — the original's keys kept over frames %s (its sign flips, or where no reduction was proved)" % (
-                ", ".join("%s–%s" % (num(a), num(b)) for a, b in item.reduced.copied))
+            text += " — the original's keys kept over frames %s (%s)" % (
+                ", ".join("%s–%s" % (num(a), num(b)) for a, b in item.reduced.copied),
+                "its sign flips, or where no reduction was proved" if item.mode == "QUATERNION"
+                else "where no reduction was proved")
         if item.loop is not None:
             text += (" over the loop's period (frames %s–%s, Cycles modifier kept: Blender repeats the reduced "
                      "keys as the original, so in every period)" % (num(item.loop.start), num(item.loop.end)))

@@ -526,6 +526,24 @@ def reduce_proved_and_play(original, reduced, tol, times, tmp_path):
     played = fresh_blender_quats(blend, [[original.name, None], [reduced.name, None]], times, tmp_path)
     err = np.degrees(native.require().angle_between(played[reduced.name], played[original.name]))
     assert err.max() <= target.bound_deg + 3e-5, "%s: %.6f° at frame %s" % (line, err.max(), times[err.argmax()])
+    return line, target
+
+
+@pytest.mark.parametrize("seed", [8, 16])
+def test_where_no_reduction_is_proved_the_original_keys_are_kept_there(reducer, seed, tmp_path):
+    """Quaternion keys 0.05 frame apart whose reduction stayed above the tolerance after all its rounds
+    (0.0148° at 0.01°, 0.0205° at 0.02°: just outside a key's 1e-4 snap zone, nearer a sample than the
+    proof may add one): the original's keys are kept over a span around it, which the line lists, and
+    the result is proved within the tolerance and plays within its bound in a fresh Blender without the
+    add-on at 64 points per frame, 300 random times and both sides of every key's snap zone."""
+    frames, q, tol, times = uneven_turn(seed)
+    edges = np.concatenate([frames + d for d in (-1.0002e-4, -0.9998e-4, 0.9998e-4, 1.0002e-4)])
+    times = np.unique(np.r_[times, edges[(edges > frames[0]) & (edges < frames[-1])]])
+    original = keyed_object("unproved%d" % seed, frames, q, "QUATERNION")
+    reduced = keyed_object("unproved%d_reduced" % seed, frames, q, "QUATERNION")
+    line, target = reduce_proved_and_play(original, reduced, tol, times, tmp_path)
+    assert target.copied and "the original's keys kept over frames" in line, line
+    assert target.keys_after < target.keys_before, line
 
 
 @pytest.mark.parametrize("seed", [29, 33])
