@@ -333,7 +333,8 @@ class BakePlan:
         try:
             # Proved against the curve at every instant, not only at the baked frames.
             item.reduced = reduce_keys(item.frames, item.values, item.output_mode,
-                                       math.radians(settings.tolerance), curve=curve)
+                                       math.radians(settings.tolerance), curve=curve,
+                                       one_key=item.loop is None)  # a loop's Cycles repeat each key range
         except ValueError as error:
             raise BakeError("%s: key reduction: %s" % (item.target.name, error)) from error
         item.notes.append("%s: reduced to %s keys within %s° (%s)" % (

@@ -192,7 +192,7 @@ def _proved(proved, interpolation):
 
 
 def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", synchronized=False, curve=None,
-                  original=None):
+                  original=None, one_key=True):
     """Reduces dense channel values (N, 4) of mode 'QUATERNION' or 'AXIS_ANGLE' (angle, x, y, z) or
     (N, 3) of an Euler order, sampled at `frames`, to ReducedChannels. Quaternions are made
     hemisphere-continuous first; Euler and axis-angle values are kept as given. Raises ReduceError
@@ -201,7 +201,8 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
     curve: the quatcurve.Curve the values sample (the bake): the reduction is proved against it at
     every instant (quatcurve.reduce_curve_proved). original: (channels, interpolation) of the keys the
     values are Blender's evaluation of (read_original): proved against their playback
-    (quatcurve.reduce_keys_proved). Neither: proved at the samples only."""
+    (quatcurve.reduce_keys_proved). Neither: proved at the samples only. one_key (with curve or
+    original): a channel one value meets keeps one key (False for a loop's period)."""
     qc = native.require()
     frames = np.asarray(frames, dtype=np.float64)
     values = np.asarray(values, dtype=np.float64)
@@ -212,10 +213,10 @@ def reduce_values(frames, values, mode, tolerance_rad, interpolation="BEZIER", s
         try:
             if curve is not None:
                 proved = qc.reduce_curve_proved(curve, mode, frames, values, tolerance_rad, interpolation,
-                                                synchronized)
+                                                synchronized, one_key_channels=one_key)
             else:
                 proved = qc.reduce_keys_proved(original[0], original[1], mode, frames, values, tolerance_rad,
-                                               interpolation, synchronized)
+                                               interpolation, synchronized, one_key_channels=one_key)
         except ValueError as error:
             raise ReduceError(str(error)) from error
         return _proved(proved, interpolation)
@@ -439,8 +440,9 @@ def reduce(found, settings):
 
     def reduce_item(item):
         try:
+            # A loop keeps each channel's first and last key: its Cycles modifiers repeat that range.
             item.reduced = reduce_values(item.frames, item.values, item.mode, tol, settings.interpolation,
-                                         settings.synchronized, original=item.original)
+                                         settings.synchronized, original=item.original, one_key=item.loop is None)
             if item.original is None:
                 item.reduced.between = item.between
         except ReduceError as error:

@@ -414,7 +414,7 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
         "reduce_keys_proved",
         [](py::sequence channels, const std::string& channel_interpolation, const std::string& mode_name,
            py::handle times, py::handle values, double tolerance, const std::string& interpolation,
-           bool synchronized) {
+           bool synchronized, bool one_key_channels) {
             const RotationMode mode = parse_rotation_mode(mode_name);
             const KeyInterpolation original_ipo = parse_key_interpolation(channel_interpolation);
             const KeyInterpolation ipo = parse_key_interpolation(interpolation);
@@ -423,10 +423,12 @@ intervals down to min_step frames (bound.hpp). Returns a PlaybackBound.)doc");
             const std::vector<double> t = read_times(times);
             const std::vector<double> v = read_channel_rows(values, mode, t.size());
             py::gil_scoped_release release;
-            return reduce_keys_proved(original, original_ipo, mode, t, v, tolerance, ipo, synchronized);
+            return reduce_keys_proved(original, original_ipo, mode, t, v, tolerance, ipo, synchronized,
+                                      one_key_channels);
         },
         py::arg("channels"), py::arg("channel_interpolation"), py::arg("mode"), py::arg("times"), py::arg("values"),
-        py::arg("tolerance"), py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+        py::arg("tolerance"), py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false, py::kw_only(),
+        py::arg("one_key_channels") = true,
         R"doc(Reduce a rotation's samples and prove the reduced keys against the original keys' own playback at
 every instant, in one call without the GIL: a ProvedKeys.
 
@@ -448,21 +450,27 @@ from times[0] to times[-1], the flips included. Where the proof still fails afte
 original's keys are copied there too (spans growing until the pieces between are proved), and where
 it would keep more keys than the original or stay unproved, the result is the original's keys whole
 (bound 0). Tolerance 0 keeps every sample and proves nothing
-between them (bound inf).)doc");
+between them (bound inf).
+
+one_key_channels: where the keys are the whole result (no copied span), not synchronized, a channel
+that one value meets at every sample keeps one key, at times[0], with flat handles (Blender plays it
+at every frame); False keeps at least the first and last key on every channel (a loop's period, whose
+Cycles modifier repeats each channel's own key range).)doc");
 
     m.def(
         "reduce_curve_proved",
         [](const Curve& curve, const std::string& mode_name, py::handle times, py::handle values, double tolerance,
-           const std::string& interpolation, bool synchronized) {
+           const std::string& interpolation, bool synchronized, bool one_key_channels) {
             const RotationMode mode = parse_rotation_mode(mode_name);
             const KeyInterpolation ipo = parse_key_interpolation(interpolation);
             const std::vector<double> t = read_times(times);
             const std::vector<double> v = read_channel_rows(values, mode, t.size());
             py::gil_scoped_release release;
-            return reduce_curve_proved(curve, mode, t, v, tolerance, ipo, synchronized);
+            return reduce_curve_proved(curve, mode, t, v, tolerance, ipo, synchronized, one_key_channels);
         },
         py::arg("curve"), py::arg("mode"), py::arg("times"), py::arg("values"), py::arg("tolerance"),
-        py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false,
+        py::arg("interpolation") = "BEZIER", py::arg("synchronized") = false, py::kw_only(),
+        py::arg("one_key_channels") = true,
         R"doc(Reduce samples of `curve` and prove the reduced keys against the curve at every instant: a
 ProvedKeys (as reduce_keys_proved, the reference being the curve; nothing is copied).
 

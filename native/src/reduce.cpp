@@ -150,7 +150,10 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     }
     const std::size_t least = forced * static_cast<std::size_t>(C);
     const bool forced_only = run(true, kNone, best, true);
-    if (forced_only && best.key_count() <= least) return best;
+    if (forced_only && best.key_count() <= least) {
+        flatten_channels(p, verify_tan2, best);
+        return best;
+    }
     ReducedKeys per_channel;
     run(false, kNone, per_channel);
     const bool meets = per_channel.max_error <= tolerance;
@@ -162,11 +165,14 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         for (std::size_t k = 1; k < p.n; ++k) pace[k] += pace[k - 1];
     }
     if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best, false,
-                             meets ? &pace : nullptr))
+                             meets ? &pace : nullptr)) {
+        flatten_channels(p, verify_tan2, per_channel);
         return per_channel;
+    }
     if (per_channel.key_count() < best.key_count() &&
         per_channel.max_error <= std::max(tolerance, best.max_error))
         best = std::move(per_channel);
+    flatten_channels(p, verify_tan2, best);
     return best;
 }
 
@@ -182,7 +188,8 @@ ReducedKeys repair(const Problem& p, double tolerance, KeyInterpolation ipo, con
         const ReducedChannel& ch = previous.channels[c];
         std::vector<std::size_t>& keys = s.keys[c];
         for (std::size_t k : ch.indices) keys.push_back(index.at(k));
-        if (keys.empty() || keys.front() != 0 || keys.back() != p.n - 1) return out;
+        // (A channel of one key — flatten_channels — has no segment to repair: reduced afresh.)
+        if (keys.empty() || keys.front() != 0 || keys.back() != p.n - 1 || keys.size() < 2) return out;
         if (ipo != KeyInterpolation::BEZIER) continue;
         for (std::size_t a = 0; a + 1 < keys.size(); ++a) {
             const std::size_t i = keys[a], j = keys[a + 1], at = i * C + c;
@@ -238,6 +245,7 @@ ReducedKeys repair(const Problem& p, double tolerance, KeyInterpolation ipo, con
     }
     out.synchronized = true;
     for (int c = 1; c < C; ++c) out.synchronized = out.synchronized && s.keys[c] == s.keys[0];
+    flatten_channels(p, tan2_half(at.verify_angle), out);
     return out;
 }
 

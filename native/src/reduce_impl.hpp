@@ -186,6 +186,10 @@ struct Problem {
     // frames of a forced key, where Blender would merge the two). Both empty: every sample is a
     // candidate and only the ends are forced.
     std::vector<unsigned char> forced, candidate;
+    // A per-channel result may keep one key on a channel that one value meets at every sample
+    // (flatten_channels): set where the keys are the whole result (not a piece joined to others)
+    // and no sample but the ends is forced.
+    bool single_key = false;
 
     const double* row(std::size_t k) const { return &y[k * C]; }
     bool is_forced(std::size_t k) const { return k == 0 || k + 1 == n || (!forced.empty() && forced[k]); }
@@ -542,6 +546,15 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
 // so does reduce_proved.cpp, whose samples added by the proof are candidates of no key.
 // free_handle_frames: quaternion BEZIER segments may take the handle frames of kHandleFractions (from
 // kHandleFreeMinTolerance); false keeps every segment's at the thirds.
+// A channel of chans (a per-channel result on p's samples) that a constant meets at every sample —
+// every sample's error within verify_tan2 with the other channels as they play — becomes one key at
+// the first sample holding that value (flat handles: Blender plays it at every frame, extrapolation
+// included), channel by channel in order, the value with the least largest error of a few
+// candidates (the channel's first and last key values, their mean, the middle of its samples'
+// range; float32). Only channels of two or three keys are tried, and only with p.single_key;
+// max_error and synchronized are updated.
+void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys);
+
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
                    bool free_handle_frames = true);
 

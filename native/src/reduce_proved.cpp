@@ -94,10 +94,11 @@ reduce_impl::Problem make_problem(const Samples& s, const RotationMode& mode, Ke
 }
 
 // The reducer's Problem of the samples: their forced keys (no other key within min_gap of one) and
-// candidates set.
+// candidates set; single_key: a channel may keep one key (reduce_impl::flatten_channels).
 reduce_impl::Problem sample_problem(const Samples& s, const RotationMode& mode, KeyInterpolation ipo,
-                                    double min_gap) {
+                                    double min_gap, bool single_key) {
     reduce_impl::Problem p = make_problem(s, mode, ipo);
+    p.single_key = single_key;
     std::vector<std::size_t> forced;
     for (std::size_t k = 0; k < s.forced.size(); ++k)
         if (s.forced[k]) forced.push_back(k);
@@ -107,8 +108,8 @@ reduce_impl::Problem sample_problem(const Samples& s, const RotationMode& mode, 
 }
 
 ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double tolerance, KeyInterpolation ipo,
-                           bool synchronized, double min_gap, bool free_handle_frames = true) {
-    return reduce_impl::reduce(sample_problem(s, mode, ipo, min_gap), tolerance, ipo, synchronized,
+                           bool synchronized, double min_gap, bool free_handle_frames = true, bool single_key = false) {
+    return reduce_impl::reduce(sample_problem(s, mode, ipo, min_gap, single_key), tolerance, ipo, synchronized,
                                free_handle_frames);
 }
 
@@ -121,18 +122,18 @@ ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double to
 // for each: +46 %).
 ReducedKeys reduce_again(const Samples& s, const std::vector<double>& before, const ReducedKeys& previous,
                          const RotationMode& mode, double tolerance, KeyInterpolation ipo, bool synchronized,
-                         double min_gap, bool free_handle_frames) {
+                         double min_gap, bool free_handle_frames, bool single_key) {
     if (double(s.times.size() - before.size()) > kRepairAdded * double(before.size()))
-        return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames);
+        return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames, single_key);
     std::vector<std::size_t> index(before.size());
     for (std::size_t k = 0; k < before.size(); ++k)
         index[k] = static_cast<std::size_t>(std::lower_bound(s.times.begin(), s.times.end(), before[k]) - s.times.begin());
-    ReducedKeys repaired = reduce_impl::repair(sample_problem(s, mode, ipo, min_gap), tolerance, ipo, previous, index,
-                                               free_handle_frames);
+    ReducedKeys repaired = reduce_impl::repair(sample_problem(s, mode, ipo, min_gap, single_key), tolerance, ipo,
+                                               previous, index, free_handle_frames);
     const double most = kRepairSlack * double(previous.key_count()) + double(previous.channels.size());
     if (!repaired.channels.empty() && repaired.max_error <= tolerance && double(repaired.key_count()) <= most)
         return repaired;
-    return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames);
+    return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames, single_key);
 }
 
 // Quaternion rows in place: each row negated where it disagrees in sign with the one before.
@@ -447,11 +448,13 @@ Relift euler_relift(const RotationMode& mode) {
 }
 
 // forced: flags of the given samples that are keys in every reduction (empty: none), no other key
-// within min_gap frames of them.
+// within min_gap frames of them. single_key: the keys are the whole result (not a piece joined to
+// copied keys), so a channel one value meets may keep one key (reduce_impl::flatten_channels).
 ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_on, const ValuesAt& values_at,
                          const RotationMode& mode, const std::vector<double>& times, std::vector<double> values,
                          double tolerance, KeyInterpolation ipo, bool synchronized,
-                         std::vector<unsigned char> forced = {}, double min_gap = 0.0, const Relift& relift = {}) {
+                         std::vector<unsigned char> forced = {}, double min_gap = 0.0, const Relift& relift = {},
+                         bool single_key = false) {
     ProvedKeys out;
     const std::size_t C = channel_count(mode);
     Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1),
@@ -481,12 +484,13 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
         for (int round = first_round;; ++round) {
             const double share = reduce_share(tolerance) * tolerance;
             if (before.empty()) {
-                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames);
+                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames, single_key);
             } else {
-                out.keys = reduce_again(s, before, out.keys, mode, share, ipo, synchronized, min_gap, free_frames);
+                out.keys = reduce_again(s, before, out.keys, mode, share, ipo, synchronized, min_gap, free_frames,
+                                        single_key);
             }
             if (out.keys.max_error > share && open_candidates(out.keys, mode, share, s))
-                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames);
+                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames, single_key);
             out.rounds = round;
             out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
             if (out.proof.proven() || round - first_round + 1 >= kProofRounds) break;
@@ -831,7 +835,7 @@ void add_failing_spans(const PlaybackBound& proof, const std::vector<FCurveKeys>
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
                               const RotationMode& mode, const std::vector<double>& times,
                               const std::vector<double>& values, double tolerance, KeyInterpolation interpolation,
-                              bool synchronized) {
+                              bool synchronized, bool one_key_channels) {
     check_rows(times, values, mode, tolerance);
     const PlaybackMotion playback(original, original_interpolation, mode);
     const std::size_t C = channel_count(mode);
@@ -854,7 +858,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
     const auto reduce_around = [&](const std::vector<std::pair<std::size_t, std::size_t>>& copied) {
         if (copied.empty()) {
             ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, rows, tolerance,
-                                           interpolation, synchronized);
+                                           interpolation, synchronized, {}, 0.0, {}, one_key_channels);
             out.copied_interpolation = original_interpolation;
             return out;
         }
@@ -894,7 +898,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
                                const std::vector<double>& values, double tolerance, KeyInterpolation interpolation,
-                               bool synchronized) {
+                               bool synchronized, bool one_key_channels) {
     check_rows(times, values, mode, tolerance);
     const CurveMotion motion(curve);
     std::vector<double> rows = values;
@@ -909,7 +913,7 @@ ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, con
     const KeptBreaks kept(motion);
     const ReferenceOn whole = [](double, double) { return std::unique_ptr<Motion>(); };
     return reduce_proved(kept, whole, values_at, mode, times, rows, tolerance, interpolation, synchronized, {}, 0.0,
-                         euler_relift(mode));
+                         euler_relift(mode), one_key_channels);
 }
 
 ProvedKeys convert_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,

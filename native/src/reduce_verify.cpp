@@ -208,4 +208,75 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
     return chans;
 }
 
+void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys) {
+    const int C = p.C;
+    const KeyInterpolation ipo = keys.interpolation;
+    std::vector<ReducedChannel>& chans = keys.channels;
+    if (!p.single_key || p.n < 2 || static_cast<int>(chans.size()) != C) return;
+    for (std::size_t k = 1; k + 1 < p.n; ++k)
+        if (p.is_forced(k)) return;
+    if (std::none_of(chans.begin(), chans.end(), [](const ReducedChannel& ch) {
+            return ch.frames.size() >= 2 && ch.frames.size() <= 3;
+        }))
+        return;
+    // Every channel's playback at every sample, then one column at a time replaced by a constant.
+    std::vector<double> vals(p.n * C);
+    for (int c = 0; c < C; ++c) {
+        const FCurveKeys* ch = &chans[c];
+        blender_evaluate_sorted_shared(&ch, 1, ipo, p.t, &vals[c], C);
+    }
+    auto worst_with = [&](int c, double value) {
+        double worst = 0.0;
+        for (std::size_t k = 0; k < p.n && worst <= verify_tan2; ++k) {
+            double f[kMaxChannels];
+            std::copy(&vals[k * C], &vals[k * C] + C, f);
+            f[c] = value;
+            if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0) f[1] = 1.0;
+            worst = std::max(worst, error_tan2(p, k, f));
+        }
+        return worst;
+    };
+    bool changed = false;
+    for (int c = 0; c < C; ++c) {
+        const ReducedChannel& ch = chans[c];
+        if (ch.frames.size() < 2 || ch.frames.size() > 3) continue;
+        double lo = p.y[c], hi = p.y[c];
+        for (std::size_t k = 1; k < p.n; ++k) {
+            lo = std::min(lo, p.y[k * C + c]);
+            hi = std::max(hi, p.y[k * C + c]);
+        }
+        const double candidates[] = {ch.values.front(), ch.values.back(), 0.5 * (ch.values.front() + ch.values.back()),
+                                     0.5 * (lo + hi)};
+        double best = kInf, value = 0.0;
+        for (double v : candidates) {
+            const double w = worst_with(c, f32(v));
+            if (w <= verify_tan2 && w < best) {
+                best = w;
+                value = f32(v);
+            }
+        }
+        if (!(best <= verify_tan2)) continue;
+        ReducedChannel one;
+        one.frames = {ch.frames.front()};
+        one.values = {value};
+        one.indices = {0};
+        if (ipo == KeyInterpolation::BEZIER) {
+            one.handle_left = {f32(one.frames[0] - 1.0), value};
+            one.handle_right = {f32(one.frames[0] + 1.0), value};
+        }
+        chans[c] = std::move(one);
+        for (std::size_t k = 0; k < p.n; ++k) vals[k * C + c] = value;
+        changed = true;
+    }
+    if (!changed) return;
+    keys.max_error = 0.0;
+    for (std::size_t k = 0; k < p.n; ++k) {
+        double* f = &vals[k * C];
+        if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0) f[1] = 1.0;
+        keys.max_error = std::max(keys.max_error, angle_of_tan2(error_tan2(p, k, f)));
+    }
+    keys.synchronized = true;
+    for (int c = 1; c < C; ++c) keys.synchronized = keys.synchronized && chans[c].indices == chans[0].indices;
+}
+
 }  // namespace quatcurve::reduce_impl

@@ -469,6 +469,66 @@ TEST(ReduceProved, AnOriginalNoReductionThinsIsKeptAsItIs) {
     }
 }
 
+// A turn about Z with a little noise on the other channels (quaternion and XYZ Euler, LINEAR keys at
+// every frame): the channels one value meets keep one key each, at the first frame with flat handles,
+// the result is proved within the tolerance and 64 points per frame and random times find nothing
+// above the bound; with one_key_channels off (a loop's period) every channel keeps its first and last
+// key (at least one more on each such channel).
+TEST(ReduceProved, AChannelOneValueMeetsKeepsOneKey) {
+    std::mt19937 rng(37);
+    std::normal_distribution<double> noise(0.0, 2e-5);
+    for (const char* name : {"QUATERNION", "XYZ"}) {
+        const RotationMode mode = parse_rotation_mode(name);
+        const std::size_t C = channel_count(mode), n = 60;
+        std::vector<Quat> q(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const double a = 1.5 * std::sin(0.05 * double(i));
+            q[i] = axis_angle_to_quat(Vec3(0.0, 0.0, 1.0), a);
+        }
+        std::vector<double> rows = quats_to_channels(q, mode);
+        std::vector<double> frames(n);
+        std::vector<FCurveKeys> channels(C);
+        for (std::size_t i = 0; i < n; ++i) {
+            frames[i] = double(i + 1);
+            for (std::size_t c = 0; c < C; ++c) {
+                const bool still = mode.kind == RotationMode::Kind::quaternion ? (c == 1 || c == 2) : c < 2;
+                double& v = rows[C * i + c];
+                if (still) v += noise(rng);
+                v = static_cast<float>(v);
+                channels[c].frames.push_back(frames[i]);
+                channels[c].values.push_back(v);
+            }
+        }
+        const double tol = 0.1 * kDeg;
+        const PlaybackMotion original(channels, KeyInterpolation::LINEAR, mode);
+        const std::vector<double> dense = dense_times(frames.front(), frames.back(), 64, rng);
+        const ProvedKeys r = reduce_keys_proved(channels, KeyInterpolation::LINEAR, mode, frames, rows, tol);
+        const ProvedKeys two = reduce_keys_proved(channels, KeyInterpolation::LINEAR, mode, frames, rows, tol,
+                                                  KeyInterpolation::BEZIER, false, false);
+        for (const ProvedKeys* k : {&r, &two}) {
+            const std::string what = std::string(name) + (k == &r ? "" : " (one_key_channels off)");
+            EXPECT_TRUE(k->proof.proven()) << what;
+            EXPECT_LE(k->proof.bound, tol) << what;
+            double where = 0.0;
+            const double d = dense_max(*k, mode, original, dense, &where);
+            EXPECT_LE(d, k->proof.bound) << what << ": " << d / kDeg << "° at frame " << where;
+        }
+        std::size_t single = 0;
+        for (std::size_t c = 0; c < C; ++c) {
+            const ReducedChannel& ch = r.keys.channels[c];
+            EXPECT_GE(two.keys.channels[c].frames.size(), 2u) << name << " channel " << c;
+            if (ch.frames.size() != 1) continue;
+            ++single;
+            EXPECT_EQ(ch.frames[0], frames.front());
+            ASSERT_EQ(ch.handle_left.size(), 2u);
+            EXPECT_EQ(ch.handle_left[1], ch.values[0]);  // flat: Blender plays the value everywhere
+            EXPECT_EQ(ch.handle_right[1], ch.values[0]);
+        }
+        EXPECT_EQ(single, 2u) << name;
+        EXPECT_LE(r.keys.key_count() + single, two.keys.key_count()) << name;
+    }
+}
+
 // Keys 0.05 frame apart on a fast turn at 0.02°: the playback just outside key 2.55's snap zone
 // (2.5499, 2.5501) is above the tolerance after every round, nearer the key than a sample may be
 // added (before: unproved, 0.028°). The original's keys are copied around it, bit for bit, and the

@@ -212,7 +212,8 @@ struct ProvedKeys {
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
                               const RotationMode& mode, const std::vector<double>& times,
                               const std::vector<double>& values, double tolerance,
-                              KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
+                              KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false,
+                              bool one_key_channels = true);
 
 // The same against a method's curve: values are the curve's rotations at `times` as channel values of
 // `mode` (quats_to_channels, with whatever reference the caller chose: they are kept as given, made
@@ -223,7 +224,8 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
 // frames. Nothing is copied (`copied` is empty).
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,
                                const std::vector<double>& values, double tolerance,
-                               KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false);
+                               KeyInterpolation interpolation = KeyInterpolation::BEZIER, bool synchronized = false,
+                               bool one_key_channels = true);
 
 // A change of rotation mode proved at every instant (the add-on's convert): the samples (times,
 // values: n rows of channel_count(to) values, Blender's playback of `original` there turned into
