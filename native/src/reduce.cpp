@@ -125,10 +125,12 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         out.synchronized = sync;
         out.channels = verify_and_repair(p, s, fitter, ipo, verify_tan2, tan2_half(fit_angle),
                                          groups, out.max_error);
-        // After a per-channel run the key sets may coincide; report what they are.
+        // A per-channel result's still channels keep one key before it is compared (flatten_channels);
+        // its key sets may coincide: report what they are.
         if (!sync) {
+            flatten_channels(p, verify_tan2, out);
             bool same = true;
-            for (int c = 1; c < C; ++c) same = same && s.keys[c] == s.keys[0];
+            for (int c = 1; c < C; ++c) same = same && out.channels[c].indices == out.channels[0].indices;
             out.synchronized = same;
         }
         return true;
@@ -165,10 +167,8 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         for (std::size_t k = 1; k < p.n; ++k) pace[k] += pace[k - 1];
     }
     if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best, false,
-                             meets ? &pace : nullptr)) {
-        flatten_channels(p, verify_tan2, per_channel);
+                             meets ? &pace : nullptr))
         return per_channel;
-    }
     if (per_channel.key_count() < best.key_count() &&
         per_channel.max_error <= std::max(tolerance, best.max_error))
         best = std::move(per_channel);
