@@ -529,6 +529,56 @@ def reduce_proved_and_play(original, reduced, tol, times, tmp_path):
     return line, target
 
 
+@pytest.mark.parametrize("interpolation", ["BEZIER", "LINEAR"])
+@pytest.mark.parametrize("mode", ["QUATERNION", "XYZ"])
+def test_a_still_channel_keeps_one_key_and_plays_still_in_a_fresh_blender(reducer, mode, interpolation, tmp_path):
+    """A turn about Z keyed at every frame (LINEAR), the other channels still up to float32 noise, its
+    F-curves extrapolating LINEAR (Blender plays a one-key curve by its handle's slope then): reduced
+    at 0.1°, each still channel keeps one key, at the first frame; the result, saved and played in a
+    fresh Blender without the add-on at 64 points per frame and 300 random times, stays within the
+    proved bound of the original, and 20 frames past either end each still channel plays its value
+    (Blender's evaluation). A loop's period keeps two keys on every channel (test_cycles.py)."""
+    from test_fit import fresh_blender_quats
+
+    tol = 0.1
+    qc = native.require()
+    frames = np.arange(1.0, 61.0)
+    angle = 1.5 * np.sin(0.05 * frames)
+    q = np.c_[np.cos(angle / 2), np.zeros((len(frames), 2)), np.sin(angle / 2)]
+    values = qc.quats_to_channels(q, mode)
+    still = [1, 2] if mode == "QUATERNION" else [0, 1]
+    original = keyed_object("still_o_" + mode, frames, values, mode)
+    reduced = keyed_object("still_r_" + mode, frames, values, mode)
+    prop, count = fcurves.rotation_property(mode)
+    for obj in (original, reduced):
+        for f in rotation_curves(obj, prop, count):
+            f.extrapolation = "LINEAR"
+    result = reduce.reduce([targets.Target(reduced)], reduce.ReduceSettings(tolerance=tol, interpolation=interpolation))
+    line, target = result.lines()[0], result.targets[0]
+    print("\n" + line)
+    assert target.proven and target.bound_deg <= tol and "ABOVE" not in line, line
+    curves = rotation_curves(reduced, prop, count)
+    for c in range(count):
+        keys = curves[c].keyframe_points
+        if c in still:
+            assert len(keys) == 1 and keys[0].co[0] == frames[0], (c, line)
+        else:
+            assert len(keys) >= 2, (c, line)
+    blend = tmp_path / ("still_%s.blend" % mode)
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    rng = np.random.default_rng(5)
+    inside = np.unique(np.r_[np.arange(frames[0] * 64, frames[-1] * 64 + 1) / 64.0,
+                             rng.uniform(frames[0], frames[-1], 300)])
+    outside = np.r_[np.arange(frames[0] - 20, frames[0]), np.arange(frames[-1] + 1, frames[-1] + 21)]
+    played = fresh_blender_quats(blend, [[original.name, None], [reduced.name, None]], inside, tmp_path)
+    err = np.degrees(qc.angle_between(played[reduced.name], played[original.name]))
+    assert err.max() <= target.bound_deg + 3e-5, "%s: %.6f° at frame %s" % (line, err.max(), inside[err.argmax()])
+    # Past either end, extrapolating LINEAR, Blender plays each still channel's one key value.
+    for c in still:
+        held = np.asarray(fcurves.evaluate(curves[c], outside))
+        assert (held == np.float32(curves[c].keyframe_points[0].co[1])).all(), (c, held, line)
+
+
 @pytest.mark.parametrize("seed", [8, 16])
 def test_where_no_reduction_is_proved_the_original_keys_are_kept_there(reducer, seed, tmp_path):
     """Quaternion keys 0.05 frame apart whose reduction stayed above the tolerance after all its rounds
