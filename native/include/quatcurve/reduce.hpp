@@ -206,7 +206,11 @@ struct ProvedKeys {
 // every segment of each `original_interpolation`; the channels of `mode` in order), proved against
 // the original's own playback at every time from the first sample to the last, the original's sign
 // flips included (copied, above). Quaternion values take the sign the original stores at their time,
-// and each reduced piece is hemisphere-continuous; Euler and axis-angle values are kept as given. Throws InvalidArgument as
+// and each reduced piece is hemisphere-continuous; Euler and axis-angle values are kept as given.
+// one_key_channels: where the keys are the whole result (no copied span) and not synchronized, a
+// channel that one value meets at every sample keeps one key, at times[0] with flat handles
+// (reduce_impl::flatten_channels); false keeps each channel's first and last key (a loop's period,
+// whose Cycles modifiers repeat each channel's own key range). Throws InvalidArgument as
 // PlaybackMotion (the original keys), as reduce_keys* (times, values, tolerance), and for a values
 // count that is not n rows.
 ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterpolation original_interpolation,
