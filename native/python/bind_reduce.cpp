@@ -504,7 +504,7 @@ increasing frames; values: (N, C) Blender's playback there as `to_mode`'s channe
 continuous); forced: (F,) increasing indices into times that stay keys (the animator's frames), no
 inserted key within min_gap frames of them; tolerance: radians, > 0.
 
-Reduced at 93% of `tolerance` at the samples and proved between them as reduce_keys_proved does
+Reduced at 93% of `tolerance` at the samples (90% below 0.01°) and proved between them as reduce_keys_proved does
 (the failing times become samples, up to 8 rounds); ProvedKeys.proof.bound holds at every time
 from times[0] to times[-1].)doc");
 

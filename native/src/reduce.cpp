@@ -125,14 +125,9 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
         out.synchronized = sync;
         out.channels = verify_and_repair(p, s, fitter, ipo, verify_tan2, tan2_half(fit_angle),
                                          groups, out.max_error);
-        // A per-channel result's still channels keep one key before it is compared (flatten_channels);
-        // its key sets may coincide: report what they are.
-        if (!sync) {
-            flatten_channels(p, verify_tan2, out);
-            bool same = true;
-            for (int c = 1; c < C; ++c) same = same && out.channels[c].indices == out.channels[0].indices;
-            out.synchronized = same;
-        }
+        // A per-channel result's still channels keep one key before it is compared; its key sets may
+        // coincide (flatten_channels reports what they are).
+        if (!sync) flatten_channels(p, verify_tan2, out);
         return true;
     };
 
@@ -169,9 +164,10 @@ ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, boo
     if (!forced_only && !run(true, meets ? per_channel.key_count() + 1 : kNone, best, false,
                              meets ? &pace : nullptr))
         return per_channel;
+    // (The per-channel result is flattened already, in run().)
     if (per_channel.key_count() < best.key_count() &&
         per_channel.max_error <= std::max(tolerance, best.max_error))
-        best = std::move(per_channel);
+        return per_channel;
     flatten_channels(p, verify_tan2, best);
     return best;
 }
@@ -243,8 +239,6 @@ ReducedKeys repair(const Problem& p, double tolerance, KeyInterpolation ipo, con
         out.channels = verify_and_repair(p, s, fitter, ipo, tan2_half(at.verify_angle), tan2_half(at.fit_angle), groups,
                                          out.max_error);
     }
-    out.synchronized = true;
-    for (int c = 1; c < C; ++c) out.synchronized = out.synchronized && s.keys[c] == s.keys[0];
     flatten_channels(p, tan2_half(at.verify_angle), out);
     return out;
 }

@@ -223,8 +223,8 @@ bool Fitter::fit(std::size_t i, std::size_t j, const int* chans, int nc, double 
         // within the limit fails the segment at any handle frames, and handle frames at which the
         // samples' intervals cannot all be met fail too (intervals_may_pass): there the thirds keep
         // only their plain fit (its worst decides on the other handle frames below), and other
-        // handle frames are not fitted. On the motion-capture clips at 0.1° (reduce_keys_proved)
-        // the same keys, bit for bit, and reduce_keys_proved 1,491 M → 1,258 M instructions.
+        // handle frames are not fitted. Neither test rejects a fit that could pass: the keys are
+        // those the fits alone would choose (docs/benchmarks.md has the instructions saved).
         const bool intervals = p_.kind == Kind::QUAT && nc == 1 && !force && !exact_param;
         if (intervals && !channel_intervals(i, j, limit)) return false;
         double worst0;

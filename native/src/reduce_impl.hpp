@@ -539,6 +539,17 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
                                               const std::vector<std::vector<int>>& groups,
                                               double& max_error);
 
+// A channel of keys (a result on p's samples) that a constant meets at every sample — every sample's
+// error within verify_tan2 with the other channels as they play — becomes one key at the first
+// sample holding that value (flat handles: Blender plays it at every frame, extrapolation included),
+// channel by channel in order, the value with the least largest error of a few candidates (the
+// channel's first and last key values, their mean, the middle of its samples' range; float32). Only
+// channels of two or three keys are tried, and only with p.single_key; max_error is updated, and
+// synchronized set to whether every channel has the same keys (same_keys).
+void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys);
+// Whether every channel has the same keys.
+bool same_keys(const std::vector<ReducedChannel>& chans);
+
 // ---- the whole reduction (reduce.cpp) --------------------------------------------------------------
 
 // The keys of Problem p (its forced and candidate samples as set) within `tolerance`: the stages
@@ -546,15 +557,6 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
 // so does reduce_proved.cpp, whose samples added by the proof are candidates of no key.
 // free_handle_frames: quaternion BEZIER segments may take the handle frames of kHandleFractions (from
 // kHandleFreeMinTolerance); false keeps every segment's at the thirds.
-// A channel of chans (a per-channel result on p's samples) that a constant meets at every sample —
-// every sample's error within verify_tan2 with the other channels as they play — becomes one key at
-// the first sample holding that value (flat handles: Blender plays it at every frame, extrapolation
-// included), channel by channel in order, the value with the least largest error of a few
-// candidates (the channel's first and last key values, their mean, the middle of its samples'
-// range; float32). Only channels of two or three keys are tried, and only with p.single_key;
-// max_error and synchronized are updated.
-void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys);
-
 ReducedKeys reduce(const Problem& p, double tolerance, KeyInterpolation ipo, bool synchronized,
                    bool free_handle_frames = true);
 

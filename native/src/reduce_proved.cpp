@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -19,15 +20,11 @@ namespace quatcurve {
 namespace {
 
 // The reducer matches the samples within this share of the tolerance: the rest is the room the proof
-// between samples needs. 93 % (where it was 90 %, as fit_through_keys leaves it, fit.cpp): on the
-// motion-capture clips at 0.1° 3,982 → 3,927 keys in the same time; on 300 random motions at uneven
-// key spacing (LINEAR originals) 27,173 → 26,948 keys in 4 % less time; on 12 bones of the 100-bone
-// benchmark (random SQUAD arcs baked at every frame) 225,054 → 220,335 keys in 9 % more time. 95 %
-// kept 3,889 keys on the clips (3 % more time) but took 27 % more time on the benchmark's bones (more
-// rounds); 97 %, 3,853 keys for 24 % more time on the clips. Below kTightTolerance the share is
+// between samples needs. A larger share keeps a few keys fewer for more rounds and time, a smaller
+// one more keys (docs/benchmarks.md has the figures). Below kTightTolerance the share is
 // kReduceShareTight: there the proof's fixed allowances (kArithmeticSlack, 2e-6 rad, and the
 // flat-segment steps) need the tenth of the tolerance (at 0.001°, 1.7e-6 rad: with 93 % bones of
-// both clips stayed unproved after every round).
+// both clips stay unproved after every round).
 constexpr double kReduceShare = 0.93;
 constexpr double kReduceShareTight = 0.9;
 constexpr double kTightTolerance = reduce_impl::kHandleFreeMinTolerance;  // 0.01°
@@ -69,6 +66,7 @@ struct Samples {
     std::vector<unsigned char> given;      // 1: a given sample, 0: added (midpoints, the proof's)
     std::vector<unsigned char> candidate;  // 1: may become a key (the given ones; added ones opened)
     std::vector<unsigned char> forced;     // 1: a key in every reduction (given samples only; empty: none)
+    bool single_key = false;               // a channel may keep one key (reduce_impl::flatten_channels)
 };
 
 // The reducer's Problem of the samples (its checks name times[k], quats[k], angles[k], values[k]).
@@ -94,11 +92,11 @@ reduce_impl::Problem make_problem(const Samples& s, const RotationMode& mode, Ke
 }
 
 // The reducer's Problem of the samples: their forced keys (no other key within min_gap of one) and
-// candidates set; single_key: a channel may keep one key (reduce_impl::flatten_channels).
+// candidates set.
 reduce_impl::Problem sample_problem(const Samples& s, const RotationMode& mode, KeyInterpolation ipo,
-                                    double min_gap, bool single_key) {
+                                    double min_gap) {
     reduce_impl::Problem p = make_problem(s, mode, ipo);
-    p.single_key = single_key;
+    p.single_key = s.single_key;
     std::vector<std::size_t> forced;
     for (std::size_t k = 0; k < s.forced.size(); ++k)
         if (s.forced[k]) forced.push_back(k);
@@ -108,8 +106,8 @@ reduce_impl::Problem sample_problem(const Samples& s, const RotationMode& mode, 
 }
 
 ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double tolerance, KeyInterpolation ipo,
-                           bool synchronized, double min_gap, bool free_handle_frames = true, bool single_key = false) {
-    return reduce_impl::reduce(sample_problem(s, mode, ipo, min_gap, single_key), tolerance, ipo, synchronized,
+                           bool synchronized, double min_gap, bool free_handle_frames = true) {
+    return reduce_impl::reduce(sample_problem(s, mode, ipo, min_gap), tolerance, ipo, synchronized,
                                free_handle_frames);
 }
 
@@ -122,18 +120,18 @@ ReducedKeys reduce_samples(const Samples& s, const RotationMode& mode, double to
 // for each: +46 %).
 ReducedKeys reduce_again(const Samples& s, const std::vector<double>& before, const ReducedKeys& previous,
                          const RotationMode& mode, double tolerance, KeyInterpolation ipo, bool synchronized,
-                         double min_gap, bool free_handle_frames, bool single_key) {
+                         double min_gap, bool free_handle_frames) {
     if (double(s.times.size() - before.size()) > kRepairAdded * double(before.size()))
-        return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames, single_key);
+        return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames);
     std::vector<std::size_t> index(before.size());
     for (std::size_t k = 0; k < before.size(); ++k)
         index[k] = static_cast<std::size_t>(std::lower_bound(s.times.begin(), s.times.end(), before[k]) - s.times.begin());
-    ReducedKeys repaired = reduce_impl::repair(sample_problem(s, mode, ipo, min_gap, single_key), tolerance, ipo,
+    ReducedKeys repaired = reduce_impl::repair(sample_problem(s, mode, ipo, min_gap), tolerance, ipo,
                                                previous, index, free_handle_frames);
     const double most = kRepairSlack * double(previous.key_count()) + double(previous.channels.size());
     if (!repaired.channels.empty() && repaired.max_error <= tolerance && double(repaired.key_count()) <= most)
         return repaired;
-    return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames, single_key);
+    return reduce_samples(s, mode, tolerance, ipo, synchronized, min_gap, free_handle_frames);
 }
 
 // Quaternion rows in place: each row negated where it disagrees in sign with the one before.
@@ -306,6 +304,7 @@ std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, s
     for (double& t : add) t = static_cast<float>(t);
     std::sort(add.begin(), add.end());
     Samples out;
+    out.single_key = s.single_key;
     out.times.reserve(times.size() + add.size());
     out.values.reserve(s.values.size() + C * add.size());
     out.given.reserve(times.size() + add.size());
@@ -347,6 +346,7 @@ std::size_t add_samples(const PlaybackBound& proof, const ValuesAt& values_at, s
 // reduction instead of 8, in half the time).
 void add_midpoints(const ValuesAt& values_at, std::size_t C, Samples& s) {
     Samples out;
+    out.single_key = s.single_key;
     out.times.reserve(2 * s.times.size());
     out.values.reserve(2 * s.values.size());
     out.given.reserve(2 * s.times.size());
@@ -458,7 +458,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
     ProvedKeys out;
     const std::size_t C = channel_count(mode);
     Samples s{times, std::move(values), std::vector<unsigned char>(times.size(), 1),
-              std::vector<unsigned char>(times.size(), 1), std::move(forced)};
+              std::vector<unsigned char>(times.size(), 1), std::move(forced), single_key};
     // The given samples checked as the reducer checks them, before any is added (errors name them).
     reduce_impl::check_float32_storage(make_problem(s, mode, ipo), tolerance);
     if (tolerance == 0.0) {
@@ -478,19 +478,18 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
     // the rounds again with every handle frame at the thirds, on the samples added so far (random
     // quaternion keys at uneven spacing: 2 of 40 ended unproved with the frames free, none with the
     // thirds).
+    const double share = reduce_share(tolerance) * tolerance;
     for (bool free_frames : {true, false}) {
         const int first_round = out.rounds + 1;
         std::vector<double> before;  // the samples of the last round, when its keys are to be repaired
         for (int round = first_round;; ++round) {
-            const double share = reduce_share(tolerance) * tolerance;
             if (before.empty()) {
-                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames, single_key);
+                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames);
             } else {
-                out.keys = reduce_again(s, before, out.keys, mode, share, ipo, synchronized, min_gap, free_frames,
-                                        single_key);
+                out.keys = reduce_again(s, before, out.keys, mode, share, ipo, synchronized, min_gap, free_frames);
             }
             if (out.keys.max_error > share && open_candidates(out.keys, mode, share, s))
-                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames, single_key);
+                out.keys = reduce_samples(s, mode, share, ipo, synchronized, min_gap, free_frames);
             out.rounds = round;
             out.proof = prove_pieces(out.keys, mode, reference, s.times, tolerance, pieces);
             if (out.proof.proven() || round - first_round + 1 >= kProofRounds) break;
@@ -508,7 +507,7 @@ ProvedKeys reduce_proved(const Motion& reference, const ReferenceOn& reference_o
             if (relift) relift(s.values);
         }
         const bool could_be_free = mode.kind == RotationMode::Kind::quaternion && ipo == KeyInterpolation::BEZIER &&
-                                   reduce_share(tolerance) * tolerance >= reduce_impl::kHandleFreeMinTolerance;
+                                   share >= reduce_impl::kHandleFreeMinTolerance;
         if (out.proof.proven() || !could_be_free) break;
     }
     if (!out.proof.proven()) out.proof = tighten_pieces(out.keys, mode, reference, s.times, pieces);
@@ -562,6 +561,28 @@ bool keyed_at(const std::vector<FCurveKeys>& original, float frame, bool all) {
     return all || any;
 }
 
+// The sample span [s0, s1] widened to the last sample at or before s0 and the first at or after s1
+// where every channel has a key (keyed_at; the range's first or last sample where there is none).
+void widen_to_common_keys(const std::vector<FCurveKeys>& original, const std::vector<double>& times, std::size_t& s0,
+                          std::size_t& s1) {
+    while (s0 > 0 && !keyed_at(original, static_cast<float>(times[s0]), true)) --s0;
+    while (s1 + 1 < times.size() && !keyed_at(original, static_cast<float>(times[s1]), true)) ++s1;
+}
+
+// Merges sample spans (overlapping or touching) in place, sorted.
+void merge_spans(std::vector<std::pair<std::size_t, std::size_t>>& spans) {
+    std::sort(spans.begin(), spans.end());
+    std::vector<std::pair<std::size_t, std::size_t>> out;
+    for (const auto& s : spans) {
+        if (!out.empty() && s.first <= out.back().second) {
+            out.back().second = std::max(out.back().second, s.second);
+        } else {
+            out.push_back(s);
+        }
+    }
+    spans = std::move(out);
+}
+
 // The sample spans [S0, S1] (indices into times) whose keys are copied. Blender leaves the
 // hemisphere-continuous path where two neighbouring samples lie in opposite hemispheres, and across
 // every segment between two neighbouring key frames (of any channel) whose ends do — there every
@@ -573,11 +594,8 @@ std::vector<std::pair<std::size_t, std::size_t>> flip_spans(const std::vector<FC
                                                             const std::vector<double>& times,
                                                             const std::vector<double>& rows) {
     const std::size_t n = times.size();
-    std::vector<unsigned char> common(n), keyed(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        common[i] = keyed_at(original, static_cast<float>(times[i]), true);
-        keyed[i] = keyed_at(original, static_cast<float>(times[i]), false);
-    }
+    std::vector<unsigned char> keyed(n);
+    for (std::size_t i = 0; i < n; ++i) keyed[i] = keyed_at(original, static_cast<float>(times[i]), false);
     const auto opposite = [&](std::size_t i, std::size_t j) {
         const double* a = &rows[4 * i];
         const double* b = &rows[4 * j];
@@ -592,15 +610,10 @@ std::vector<std::pair<std::size_t, std::size_t>> flip_spans(const std::vector<FC
         if (keyed[i]) last_key = i;
         if (s0 == n) continue;
         std::size_t s1 = i;
-        while (s0 > 0 && !common[s0]) --s0;
-        while (s1 + 1 < n && !common[s1]) ++s1;
-        if (!spans.empty() && s0 <= spans.back().second) {
-            spans.back().first = std::min(spans.back().first, s0);
-            spans.back().second = std::max(spans.back().second, s1);
-        } else {
-            spans.emplace_back(s0, s1);
-        }
+        widen_to_common_keys(original, times, s0, s1);
+        spans.emplace_back(s0, s1);
     }
+    merge_spans(spans);
     return spans;
 }
 
@@ -733,7 +746,6 @@ ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation
         if (unique.empty() || static_cast<float>(t) != static_cast<float>(unique.back())) unique.push_back(t);
     out.times = std::move(unique);
     std::vector<float> frames32(out.times.begin(), out.times.end());
-    out.keys.synchronized = true;
     for (std::size_t c = 0; c < channels.size(); ++c) {
         const std::vector<KeyRow>& rows = channels[c];
         ReducedChannel ch;
@@ -756,21 +768,21 @@ ProvedKeys join_pieces(const std::vector<FCurveKeys>& original, KeyInterpolation
             ch.handle_left = std::move(left);
             ch.handle_right = std::move(right);
         }
-        if (c > 0 && ch.indices != out.keys.channels[0].indices) out.keys.synchronized = false;
         out.keys.channels.push_back(std::move(ch));
     }
+    out.keys.synchronized = reduce_impl::same_keys(out.keys.channels);
     return out;
 }
 
-// The reduction, or the original's own keys when the reduction keeps more or ends unproved: a
-// reduction proved at every instant can need more keys than an original whose keys lie closer than
-// its samples can follow (keys a few float32 steps apart far from frame 0), or not be proved there
-// at all (add_failing_spans). The original's keys, copied whole as one
+// The reduction, or the original's own keys when the reduction keeps as many or more, or ends
+// unproved: a reduction proved at every instant can need more keys than an original whose keys lie
+// closer than its samples can follow (keys a few float32 steps apart far from frame 0), or not be
+// proved there at all (add_failing_spans). The original's keys, copied whole as one
 // span (join_pieces: each channel's keys bit for bit, a constant channel two keys), play as the
 // original does: bound 0.
 // Only where every channel's keys lie within the samples' range (the copy then changes nothing
 // outside it) and a tolerance above 0 (0 keeps every sample, proving nothing between them).
-ProvedKeys fewest_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& original,
+ProvedKeys or_original_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& original,
                        KeyInterpolation original_interpolation, const std::vector<double>& times, double tolerance,
                        KeyInterpolation interpolation) {
     if (!(tolerance > 0.0)) return reduced;
@@ -791,22 +803,8 @@ ProvedKeys fewest_keys(ProvedKeys reduced, const std::vector<FCurveKeys>& origin
 // a sample than a sample may be added): there the original's keys are copied too, as around its sign
 // flips, and the pieces between reduced again, each on its own; the copied spans grow (kFailReach)
 // until every piece is proved, and where they do not the original's keys are kept whole
-// (fewest_keys), whose playback is the original's.
+// (or_original_keys), whose playback is the original's.
 constexpr std::size_t kFailReach[] = {1, 4, 16};
-
-// Merges sample spans (overlapping or touching) in place, sorted.
-void merge_spans(std::vector<std::pair<std::size_t, std::size_t>>& spans) {
-    std::sort(spans.begin(), spans.end());
-    std::vector<std::pair<std::size_t, std::size_t>> out;
-    for (const auto& s : spans) {
-        if (!out.empty() && s.first <= out.back().second) {
-            out.back().second = std::max(out.back().second, s.second);
-        } else {
-            out.push_back(s);
-        }
-    }
-    spans = std::move(out);
-}
 
 // `spans` with the sample spans around every time the proof failed (its violations and unproven
 // intervals): the samples on either side of it, `reach` more on each side, widened to samples where
@@ -823,8 +821,7 @@ void add_failing_spans(const PlaybackBound& proof, const std::vector<FCurveKeys>
         std::size_t s0 = at == 0 ? 0 : at - 1, s1 = std::min(after, n - 1);
         s0 = s0 >= reach ? s0 - reach : 0;
         s1 = std::min(n - 1, s1 + reach);
-        while (s0 > 0 && !keyed_at(original, static_cast<float>(times[s0]), true)) --s0;
-        while (s1 + 1 < n && !keyed_at(original, static_cast<float>(times[s1]), true)) ++s1;
+        widen_to_common_keys(original, times, s0, s1);
         if (s1 > s0) spans.emplace_back(s0, s1);
     }
     merge_spans(spans);
@@ -854,7 +851,10 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         spans = flip_spans(original, times, rows);
         if (spans.empty()) make_continuous(rows);  // (the stored signs are continuous then)
     }
-    // The samples reduced and proved as a whole, or in pieces between copied spans.
+    // The samples reduced and proved as a whole, or in pieces between copied spans. A piece's samples
+    // and end values follow from its range alone (its ends are the copied spans' ends, or the range's),
+    // so a piece that the copied spans leave as it was is reduced once (`reduced`).
+    std::map<std::pair<std::size_t, std::size_t>, ProvedKeys> reduced;
     const auto reduce_around = [&](const std::vector<std::pair<std::size_t, std::size_t>>& copied) {
         if (copied.empty()) {
             ProvedKeys out = reduce_proved(playback, reference_on, values_at, mode, times, rows, tolerance,
@@ -864,23 +864,23 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         }
         std::vector<double> pinned = rows;
         for (const auto& span : copied)  // the copied keys' values exactly, where the pieces beside them end
-            for (std::size_t i : {span.first, span.second}) {
-                std::vector<double> v(C);
-                playback.values(times[i], v.data());
-                std::copy(v.begin(), v.end(), pinned.begin() + static_cast<std::ptrdiff_t>(C * i));
-            }
+            for (std::size_t i : {span.first, span.second}) playback.values(times[i], &pinned[C * i]);
         std::vector<ProvedKeys> pieces;
         std::vector<std::pair<std::size_t, std::size_t>> piece_of;
         std::size_t begin = 0;
         for (std::size_t s = 0; s <= copied.size(); ++s) {
             const std::size_t end = s < copied.size() ? copied[s].first : times.size() - 1;
             if (end > begin) {
-                const std::vector<double> t(times.begin() + static_cast<std::ptrdiff_t>(begin),
-                                            times.begin() + static_cast<std::ptrdiff_t>(end) + 1);
-                std::vector<double> v(pinned.begin() + static_cast<std::ptrdiff_t>(C * begin),
-                                      pinned.begin() + static_cast<std::ptrdiff_t>(C * end + C));
-                pieces.push_back(reduce_proved(playback, reference_on, values_at, mode, t, std::move(v), tolerance,
-                                               interpolation, synchronized));
+                auto [at, fresh] = reduced.try_emplace({begin, end});
+                if (fresh) {
+                    const std::vector<double> t(times.begin() + static_cast<std::ptrdiff_t>(begin),
+                                                times.begin() + static_cast<std::ptrdiff_t>(end) + 1);
+                    std::vector<double> v(pinned.begin() + static_cast<std::ptrdiff_t>(C * begin),
+                                          pinned.begin() + static_cast<std::ptrdiff_t>(C * end + C));
+                    at->second = reduce_proved(playback, reference_on, values_at, mode, t, std::move(v), tolerance,
+                                               interpolation, synchronized);
+                }
+                pieces.push_back(at->second);
                 piece_of.emplace_back(begin, end);
             }
             if (s < copied.size()) begin = copied[s].second;
@@ -893,7 +893,7 @@ ProvedKeys reduce_keys_proved(const std::vector<FCurveKeys>& original, KeyInterp
         add_failing_spans(out.proof, original, times, reach, spans);
         out = reduce_around(spans);
     }
-    return fewest_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
+    return or_original_keys(std::move(out), original, original_interpolation, times, tolerance, interpolation);
 }
 
 ProvedKeys reduce_curve_proved(const Curve& curve, const RotationMode& mode, const std::vector<double>& times,

@@ -14,10 +14,25 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpolation ipo) {
+// One key at sample `index` (frame, value float32) with flat handles a frame to either side: Blender
+// plays it at every frame, extrapolation included.
+ReducedChannel one_key_channel(std::size_t index, double frame, double value, KeyInterpolation ipo) {
     ReducedChannel ch;
+    ch.indices = {index};
+    ch.frames = {frame};
+    ch.values = {value};
+    if (ipo == KeyInterpolation::BEZIER) {
+        ch.handle_left = {f32(frame - 1.0), value};
+        ch.handle_right = {f32(frame + 1.0), value};
+    }
+    return ch;
+}
+
+ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpolation ipo) {
     const std::vector<std::size_t>& keys = s.keys[c];
     const std::size_t K = keys.size();
+    if (K == 1) return one_key_channel(keys[0], p.t[keys[0]], f32(p.y[keys[0] * p.C + c]), ipo);
+    ReducedChannel ch;
     ch.indices = keys;
     ch.frames.resize(K);
     ch.values.resize(K);
@@ -38,12 +53,7 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
             ch.handle_left[2 * (a + 1) + 1] = f32(s.h2[i * p.C + c]);
         }
         // Outer handles mirror the inner ones (they only shape extrapolation, which is constant).
-        if (K == 1) {
-            ch.handle_left[0] = f32(ch.frames[0] - 1.0);
-            ch.handle_left[1] = ch.values[0];
-            ch.handle_right[0] = f32(ch.frames[0] + 1.0);
-            ch.handle_right[1] = ch.values[0];
-        } else {
+        if (K > 1) {
             ch.handle_left[0] = f32(2.0 * ch.frames[0] - ch.handle_right[0]);
             ch.handle_left[1] = f32(2.0 * ch.values[0] - ch.handle_right[1]);
             const std::size_t L = K - 1;
@@ -52,6 +62,27 @@ ReducedChannel make_channel(const Problem& p, const State& s, int c, KeyInterpol
         }
     }
     return ch;
+}
+
+// The error (tan²(θ/2)) at sample k of the channel values f as Blender plays them: its normalize_qt
+// turns an exactly zero quaternion into (0, 1, 0, 0) (f is changed so).
+double played_error(const Problem& p, std::size_t k, double* f) {
+    if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0) f[1] = 1.0;
+    return error_tan2(p, k, f);
+}
+
+// The largest angle of the errors err (tan²(θ/2)), from the largest tan²: angle_of_tan2 rises with
+// it, so only samples near the largest need the arctangent. Below half of it (at most 1e20, ~1e-10
+// rad short of π) the angle is smaller by far more than atan's rounding (< 1 ulp), so none of them
+// can come out larger; beyond, and for non-finite errors (π), every sample is converted.
+double largest_angle(const std::vector<double>& err) {
+    double worst = 0.0;
+    for (double e : err) worst = std::max(worst, e < kInf ? e : kInf);
+    const double below = worst <= 1e20 ? 0.5 * worst : -1.0;
+    double angle = 0.0;
+    for (double e : err)
+        if (!(e < below)) angle = std::max(angle, angle_of_tan2(e));
+    return angle;
 }
 
 // Errors (tan²(θ/2)) of every sample under Blender's evaluation of the current keys. Consecutive
@@ -74,13 +105,7 @@ void emulate_errors(const Problem& p, const std::vector<ReducedChannel>& chans,
         c += count;
     }
     err.resize(p.n);
-    for (std::size_t k = 0; k < p.n; ++k) {
-        double* f = &vals[k * C];
-        // Blender's normalize_qt turns an exactly zero quaternion into (0, 1, 0, 0).
-        if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0)
-            f[1] = 1.0;
-        err[k] = error_tan2(p, k, f);
-    }
+    for (std::size_t k = 0; k < p.n; ++k) err[k] = played_error(p, k, &vals[k * C]);
 }
 
 // Index a with keys[a] < k < keys[a+1], or kNone when k is a key.
@@ -195,20 +220,13 @@ std::vector<ReducedChannel> verify_and_repair(const Problem& p, State& s, Fitter
         }
         if (!changed) break;
     }
-    // The largest angle, from the largest tan²: angle_of_tan2 rises with it, so only samples near the
-    // largest need the arctangent. Below half of it (at most 1e20, ~1e-10 rad short of π) the angle is
-    // smaller by far more than atan's rounding (< 1 ulp), so none of them can come out larger;
-    // beyond, and for non-finite errors (π), every sample is converted as before.
-    double worst = 0.0;
-    for (std::size_t k = 0; k < p.n; ++k) worst = std::max(worst, err[k] < kInf ? err[k] : kInf);
-    const double below = worst <= 1e20 ? 0.5 * worst : -1.0;
-    max_error = 0.0;
-    for (std::size_t k = 0; k < p.n; ++k)
-        if (!(err[k] < below)) max_error = std::max(max_error, angle_of_tan2(err[k]));
+    max_error = largest_angle(err);
     return chans;
 }
 
-void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys) {
+namespace {
+
+void flatten_still(const Problem& p, double verify_tan2, ReducedKeys& keys) {
     const int C = p.C;
     const KeyInterpolation ipo = keys.interpolation;
     std::vector<ReducedChannel>& chans = keys.channels;
@@ -231,8 +249,7 @@ void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys) {
             double f[kMaxChannels];
             std::copy(&vals[k * C], &vals[k * C] + C, f);
             f[c] = value;
-            if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0) f[1] = 1.0;
-            worst = std::max(worst, error_tan2(p, k, f));
+            worst = std::max(worst, played_error(p, k, f));
         }
         return worst;
     };
@@ -256,27 +273,27 @@ void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys) {
             }
         }
         if (!(best <= verify_tan2)) continue;
-        ReducedChannel one;
-        one.frames = {ch.frames.front()};
-        one.values = {value};
-        one.indices = {0};
-        if (ipo == KeyInterpolation::BEZIER) {
-            one.handle_left = {f32(one.frames[0] - 1.0), value};
-            one.handle_right = {f32(one.frames[0] + 1.0), value};
-        }
-        chans[c] = std::move(one);
+        chans[c] = one_key_channel(0, ch.frames.front(), value, ipo);
         for (std::size_t k = 0; k < p.n; ++k) vals[k * C + c] = value;
         changed = true;
     }
     if (!changed) return;
-    keys.max_error = 0.0;
-    for (std::size_t k = 0; k < p.n; ++k) {
-        double* f = &vals[k * C];
-        if (p.kind == Kind::QUAT && f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0 && f[3] == 0.0) f[1] = 1.0;
-        keys.max_error = std::max(keys.max_error, angle_of_tan2(error_tan2(p, k, f)));
-    }
-    keys.synchronized = true;
-    for (int c = 1; c < C; ++c) keys.synchronized = keys.synchronized && chans[c].indices == chans[0].indices;
+    std::vector<double> err(p.n);
+    for (std::size_t k = 0; k < p.n; ++k) err[k] = played_error(p, k, &vals[k * C]);
+    keys.max_error = largest_angle(err);
+}
+
+}  // namespace
+
+bool same_keys(const std::vector<ReducedChannel>& chans) {
+    for (const ReducedChannel& ch : chans)
+        if (ch.indices != chans.front().indices) return false;
+    return true;
+}
+
+void flatten_channels(const Problem& p, double verify_tan2, ReducedKeys& keys) {
+    flatten_still(p, verify_tan2, keys);
+    keys.synchronized = same_keys(keys.channels);
 }
 
 }  // namespace quatcurve::reduce_impl

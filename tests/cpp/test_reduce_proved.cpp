@@ -317,7 +317,7 @@ TEST(ReduceProved, SparseKeysFlippingBetweenKeysAreCopiedWholeSegments) {
     std::normal_distribution<double> nd(0.0, 0.25);
     // Keys every 6 frames on a slow turn; the stored sign flips at keys 3, 5 and 6 (of 9). Then a key
     // at every frame to frame 300 on a smooth turn, which the reduction thins: the result keeps fewer
-    // keys than the original (else it would be the original's keys, fewest_keys).
+    // keys than the original (else it would be the original's keys, or_original_keys).
     std::vector<double> key_t = {1, 7, 13, 19, 25, 31, 37, 43, 49};
     const int signs[] = {1, 1, 1, -1, -1, 1, -1, -1, -1};
     std::vector<Quat> key_q;
@@ -530,8 +530,8 @@ TEST(ReduceProved, AChannelOneValueMeetsKeepsOneKey) {
 }
 
 // Keys 0.05 frame apart on a fast turn at 0.02°: the playback just outside key 2.55's snap zone
-// (2.5499, 2.5501) is above the tolerance after every round, nearer the key than a sample may be
-// added (before: unproved, 0.028°). The original's keys are copied around it, bit for bit, and the
+// (2.5499, 2.5501) is above the tolerance after every round (0.028°), nearer the key than a sample
+// may be added. The original's keys are copied around it, bit for bit, and the
 // pieces beside them reduced: proved within the tolerance, no more keys than the original, and
 // 64 points per frame, random times and every float32 frame around each key's snap zone find
 // nothing above the bound. Per channel and synchronized.

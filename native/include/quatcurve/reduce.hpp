@@ -142,9 +142,9 @@ ReducedKeys fit_keys_axis_angle(const std::vector<double>& times, const std::vec
 // time — the original keys' own playback (Blender's evaluation of them, bound.hpp's PlaybackMotion),
 // or a method's curve — and prove with prove_within (bound.hpp) that the reduced keys' playback
 // stays within `tolerance` of it at EVERY time from the first sample to the last:
-//   1. reduce the samples as reduce_keys* does, at 93% of the tolerance (90% below 0.01°) (the rest is the room the
-//      proof between samples needs, as fit_through_keys leaves it), with the reference midway
-//      between each two samples as a further sample;
+//   1. reduce the samples as reduce_keys* does, at 93% of the tolerance (90% below 0.01°; the rest
+//      is the room the proof between samples needs), with the reference midway between each two
+//      samples as a further sample;
 //   2. prove the reduced playback against the reference between the samples;
 //   3. where that fails — the times where the angle is above the tolerance, and the middle of every
 //      interval left unproven — add samples (there and at the quarters of the sample intervals
