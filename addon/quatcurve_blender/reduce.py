@@ -29,11 +29,10 @@ interpolation; FREE handles, so Blender keeps them), which is why they are withi
 The pieces between are reduced as above, each in the hemisphere of its own stored signs, ending on
 the copied keys (`TargetResult.copied` lists the spans). Where a reduction stays unproved after
 all its rounds (keys a few hundredths of a frame apart), the original's keys are copied there too,
-in spans that grow until the pieces between are proved. Where the reduction would keep more keys
-than the original has, or stays unproved, the original's keys stay, copied whole (the result line
-says so). Otherwise
-the reduction holds at frames and keys (`reduce_values`) and the result line says why between frames
-is not proved.
+in spans that grow until the pieces between are proved; where it would keep more keys than the
+original has, or the pieces stay unproved, the original's keys stay, copied whole (the result line
+says so). Where the playback cannot be emulated, the reduction holds at frames and keys
+(`reduce_values`) and the result line says why between frames is not proved.
 Rotation modes: quaternion, the six Euler orders and axis-angle (the bound is on the rotation Blender
 builds; axis-angle channels are kept as Blender evaluates them, a zero axis is refused). F-curves
 with modifiers are refused (the bound is for the keys alone), except a loop's (cycles.py): its period
@@ -487,7 +486,8 @@ def reduce(found, settings):
         bound = item.reduced.bound
         text = item.reduced.error_text(settings.tolerance)
         if item.reduced.kept_original(item.frames):
-            text += " — the original's keys kept as they are: a reduction within the tolerance needs more keys"
+            text += (" — the original's keys kept as they are: no reduction within the tolerance was proved "
+                     "with fewer keys")
         elif item.reduced.copied is not None and len(item.reduced.copied):
             text += " — the original's keys kept over frames %s (%s)" % (
                 ", ".join("%s–%s" % (num(a), num(b)) for a, b in item.reduced.copied),
