@@ -17,10 +17,11 @@
 // (their coupling to w_{S−1} moved to the right-hand side as three more columns), then row S−1
 // gives w_{S−1} from one 3×3 block.
 //
-// The solve is checked: Newton stops when its step is below 1e-12 of the largest knot velocity, and
-// must get there within 50 iterations with every residual below 1e-9 of its terms' size; a pivot
-// block that is singular or not finite, or a solve that does not converge, throws InvalidArgument
-// naming the keys around the knot (the curve is not built half-way). Preconditions: every knot
+// The solve is checked: Newton stops when its step is below 1e-12 of the largest knot velocity; where
+// 50 whole steps do not get there (or meet a singular pivot block), it starts again with damped
+// steps (solve_spline). A solve that ends neither converged nor with every residual below 1e-9 of its
+// terms' size, or whose damped steps meet a pivot block that is singular or not finite, throws
+// InvalidArgument naming the keys around the knot (the curve is not built half-way). Preconditions: every knot
 // segment turns at most π (Curve splits longer ones), so J_r⁻¹ exists; knot times increase.
 #include <cmath>
 #include <string>
@@ -96,94 +97,202 @@ void make_spline_segments(Curve::Impl& m, const std::vector<double>& h, const st
     }
 }
 
-// A loop's spline (see the top): Newton on the S rows of the cyclic system, each step solved by
-// bordering.
-void build_periodic_spline(Curve::Impl& m, const std::vector<double>& h, const std::vector<Mat3>& E,
-                           const std::vector<Mat3>& Jr, const std::vector<JacCoeffs>& jc) {
-    const std::size_t S = m.kr.size();
-    auto prev = [&](std::size_t j) { return j == 0 ? S - 1 : j - 1; };
-    std::vector<Vec3> w(S + 1);
-    for (std::size_t j = 0; j < S; ++j) w[j] = (m.kr[prev(j)] + m.kr[j]) / (h[prev(j)] + h[j]);
-    w[S] = w[0];
-    std::vector<Mat3> L(S), D(S), U(S);
-    std::vector<Vec3> F(S);
-    bool converged = false;
-    double residual = 0.0;
-    std::size_t worst = 0;
-    for (int iter = 0; iter < 50 && !converged; ++iter) {
+// The system of the C2 condition (see the top) at knot velocities w: one row per interior knot of an
+// open spline (knots 1 … S−1; w_0 and w_S fixed), one per knot of a loop (knots 0 … S−1; w_S = w_0).
+// Row r: F_r = G − S_j at its knot j, and the blocks of its Jacobian, L_r (∂/∂w_{j−1}), D_r (∂/∂w_j),
+// U_r (∂/∂w_{j+1}).
+struct C2System {
+    std::vector<double> h;
+    std::vector<Mat3> E, Jr;
+    std::vector<JacCoeffs> jc;
+};
+struct C2Rows {
+    std::vector<Mat3> L, D, U;
+    std::vector<Vec3> F;
+    double residual = 0.0;  // the largest |F_r| relative to its terms' size
+    std::size_t worst = 0;  // its knot
+    double merit = 0.0;     // Σ|F_r|²
+};
+
+void c2_rows(const Curve::Impl& m, const C2System& sys, const std::vector<Vec3>& w, C2Rows& out) {
+    const std::size_t S = m.kr.size(), R = m.cyclic ? S : S - 1;
+    const std::vector<double>& h = sys.h;
+    out.L.resize(R);
+    out.D.resize(R);
+    out.U.resize(R);
+    out.F.resize(R);
+    out.residual = 0.0;
+    out.worst = m.cyclic ? 0 : 1;
+    out.merit = 0.0;
+    for (std::size_t r = 0; r < R; ++r) {
+        const std::size_t j = m.cyclic ? r : r + 1;  // the knot
+        const std::size_t i = j == 0 ? S - 1 : j - 1;  // the segment arriving at it (across a loop's seam)
+        const Vec3& rv = m.kr[i];
+        const Vec3 a = h[i] * w[i], b = h[i] * (sys.E[i] * w[j]);
+        const NTerm nt = n_term(rv, b, sys.jc[i]);
+        const Vec3 G = (nt.value + sys.Jr[i] * (-6.0 * rv + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
+        const Vec3& r1 = m.kr[j];
+        const Vec3 a1 = h[j] * w[j], b1 = h[j] * (sys.E[j] * w[j + 1]);
+        const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
+        out.F[r] = G - Sj;
+        const double size = glm::length(G) + glm::length(Sj);
+        const double rel = size > 0.0 ? glm::length(out.F[r]) / size : 0.0;
+        if (!(rel <= out.residual)) {
+            out.residual = rel;
+            out.worst = j;
+        }
+        out.merit += glm::dot(out.F[r], out.F[r]);
+        out.L[r] = (2.0 / h[i]) * sys.Jr[i];
+        out.D[r] = (1.0 / h[i]) * (nt.jac * sys.E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
+        out.U[r] = (2.0 / h[j]) * sys.E[j];
+    }
+}
+
+// Newton's step: J·x = −F, x_r the change of row r's knot velocity. An open spline's J is block
+// tridiagonal (block Thomas); a loop's is cyclic: L_r multiplies x_{r−1}, U_r x_{r+1} (mod S), solved
+// by bordering.
+std::vector<Vec3> c2_step(const Curve::Impl& m, const C2Rows& rows) {
+    const std::vector<Mat3>&L = rows.L, &D = rows.D, &U = rows.U;
+    const std::vector<Vec3>& F = rows.F;
+    const std::size_t R = F.size();
+    std::vector<Vec3> x(R);
+    if (!m.cyclic) {
+        const std::size_t n = R;
+        std::vector<Mat3> Dinv(n);
+        std::vector<Vec3> y(n);
+        Dinv[0] = checked_inverse(D[0], m, 1);
+        y[0] = -F[0];
+        for (std::size_t k = 1; k < n; ++k) {
+            const Mat3 f = L[k] * Dinv[k - 1];
+            Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k + 1);
+            y[k] = -F[k] - f * y[k - 1];
+        }
+        x[n - 1] = Dinv[n - 1] * y[n - 1];
+        for (std::size_t k = n - 1; k-- > 0;) x[k] = Dinv[k] * (y[k] - U[k] * x[k + 1]);
+        return x;
+    }
+    if (R == 1) {
+        x[0] = checked_inverse(L[0] + D[0] + U[0], m, 0) * -F[0];
+        return x;
+    }
+    const std::size_t n = R - 1;  // rows 0 … S−2, unknowns x_0 … x_{S−2}; x_{S−1} = z
+    // Row k's coefficient of z: L[0] in row 0, U[n−1] in row n−1 (both when n = 1).
+    std::vector<Mat3> C(n, Mat3(0.0));
+    C[0] += L[0];
+    C[n - 1] += U[n - 1];
+    // Thomas on [−F | −C]: x_k = p_k + P_k·z.
+    std::vector<Mat3> Dinv(n), Y(n);
+    std::vector<Vec3> y(n);
+    Dinv[0] = checked_inverse(D[0], m, 0);
+    y[0] = -F[0];
+    Y[0] = -C[0];
+    for (std::size_t k = 1; k < n; ++k) {
+        const Mat3 f = L[k] * Dinv[k - 1];
+        Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k);
+        y[k] = -F[k] - f * y[k - 1];
+        Y[k] = -C[k] - f * Y[k - 1];
+    }
+    std::vector<Vec3> p(n);
+    std::vector<Mat3> P(n);
+    p[n - 1] = Dinv[n - 1] * y[n - 1];
+    P[n - 1] = Dinv[n - 1] * Y[n - 1];
+    for (std::size_t k = n - 1; k-- > 0;) {
+        p[k] = Dinv[k] * (y[k] - U[k] * p[k + 1]);
+        P[k] = Dinv[k] * (Y[k] - U[k] * P[k + 1]);
+    }
+    // Row S−1: L·x_{S−2} + D·z + U·x_0 = −F.
+    const Mat3 A = D[n] + L[n] * P[n - 1] + U[n] * P[0];
+    const Vec3 z = checked_inverse(A, m, n) * (-F[n] - L[n] * p[n - 1] - U[n] * p[0]);
+    for (std::size_t k = 0; k < n; ++k) x[k] = p[k] + P[k] * z;
+    x[n] = z;
+    return x;
+}
+
+// w + α·x: row r's knot (r + 1 open, r in a loop, whose w_S follows w_0).
+std::vector<Vec3> c2_moved(const Curve::Impl& m, const std::vector<Vec3>& w, const std::vector<Vec3>& x, double alpha) {
+    std::vector<Vec3> out = w;
+    const std::size_t first = m.cyclic ? 0 : 1;
+    for (std::size_t r = 0; r < x.size(); ++r) out[first + r] += alpha * x[r];
+    if (m.cyclic) out[out.size() - 1] = out[0];
+    return out;
+}
+
+// Newton's method on the C2 system from w: true when its step falls below 1e-12 of the largest knot
+// velocity within `iterations`. Plain (`damped` false): whole steps. Damped: each step halved until
+// Σ|F|² falls (Armijo's rule; at most 40 halvings), which keeps a start far from the solution, as
+// keys a hundredth of a frame apart beside turns of 100° make it, from cycling or running off.
+// Unless it converged, `rows` ends as the system at the last w.
+bool c2_newton(const Curve::Impl& m, const C2System& sys, std::vector<Vec3>& w, bool damped, int iterations,
+               C2Rows& rows) {
+    c2_rows(m, sys, w, rows);
+    C2Rows trial;
+    for (int iter = 0; iter < iterations; ++iter) {
         double wmax = 0.0;
         for (const Vec3& v : w) wmax = std::fmax(wmax, glm::length(v));
-        residual = 0.0;
-        for (std::size_t j = 0; j < S; ++j) {
-            const std::size_t i = prev(j);  // the segment arriving at knot j (across the seam at 0)
-            const Vec3& r = m.kr[i];
-            const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[j]);
-            const NTerm nt = n_term(r, b, jc[i]);
-            const Vec3 G = (nt.value + Jr[i] * (-6.0 * r + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
-            const Vec3& r1 = m.kr[j];
-            const Vec3 a1 = h[j] * w[j], b1 = h[j] * (E[j] * w[j + 1]);
-            const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
-            F[j] = G - Sj;
-            const double size = glm::length(G) + glm::length(Sj);
-            const double rel = size > 0.0 ? glm::length(F[j]) / size : 0.0;
-            if (!(rel <= residual)) {
-                residual = rel;
-                worst = j;
-            }
-            L[j] = (2.0 / h[i]) * Jr[i];
-            D[j] = (1.0 / h[i]) * (nt.jac * E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
-            U[j] = (2.0 / h[j]) * E[j];
-        }
-        // J·Δ = −F, J cyclic: L[j] multiplies Δ_{j−1}, U[j] Δ_{j+1} (mod S).
-        std::vector<Vec3> x(S);
-        if (S == 1) {
-            x[0] = checked_inverse(L[0] + D[0] + U[0], m, 0) * -F[0];
-        } else {
-            const std::size_t n = S - 1;  // rows 0 … S−2, unknowns Δ_0 … Δ_{S−2}; Δ_{S−1} = z
-            // Row k's coefficient of z: L[0] in row 0, U[n−1] in row n−1 (both when n = 1).
-            std::vector<Mat3> C(n, Mat3(0.0));
-            C[0] += L[0];
-            C[n - 1] += U[n - 1];
-            // Thomas on [−F | −C]: Δ_k = p_k + P_k·z.
-            std::vector<Mat3> Dinv(n), Y(n);
-            std::vector<Vec3> y(n);
-            Dinv[0] = checked_inverse(D[0], m, 0);
-            y[0] = -F[0];
-            Y[0] = -C[0];
-            for (std::size_t k = 1; k < n; ++k) {
-                const Mat3 f = L[k] * Dinv[k - 1];
-                Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k);
-                y[k] = -F[k] - f * y[k - 1];
-                Y[k] = -C[k] - f * Y[k - 1];
-            }
-            std::vector<Vec3> p(n);
-            std::vector<Mat3> P(n);
-            p[n - 1] = Dinv[n - 1] * y[n - 1];
-            P[n - 1] = Dinv[n - 1] * Y[n - 1];
-            for (std::size_t k = n - 1; k-- > 0;) {
-                p[k] = Dinv[k] * (y[k] - U[k] * p[k + 1]);
-                P[k] = Dinv[k] * (Y[k] - U[k] * P[k + 1]);
-            }
-            // Row S−1: L·Δ_{S−2} + D·z + U·Δ_0 = −F.
-            const Mat3 A = D[n] + L[n] * P[n - 1] + U[n] * P[0];
-            const Vec3 z = checked_inverse(A, m, n) * (-F[n] - L[n] * p[n - 1] - U[n] * p[0]);
-            for (std::size_t k = 0; k < n; ++k) x[k] = p[k] + P[k] * z;
-            x[n] = z;
-        }
+        const std::vector<Vec3> x = c2_step(m, rows);
         double step = 0.0;
+        for (const Vec3& v : x) step = std::fmax(step, glm::length(v));
+        if (!std::isfinite(step)) return false;
+        if (!damped) {
+            w = c2_moved(m, w, x, 1.0);
+            if (step <= 1e-12 * wmax) return true;
+            c2_rows(m, sys, w, rows);
+            continue;
+        }
+        double alpha = 1.0;
+        std::vector<Vec3> next = c2_moved(m, w, x, alpha);
+        c2_rows(m, sys, next, trial);
+        for (int half = 0; !(trial.merit <= (1.0 - 1e-4 * alpha) * rows.merit); ++half) {
+            if (half == 40) return false;
+            alpha *= 0.5;
+            next = c2_moved(m, w, x, alpha);
+            c2_rows(m, sys, next, trial);
+        }
+        w = std::move(next);
+        std::swap(rows, trial);
+        if (alpha * step <= 1e-12 * wmax) return true;
+    }
+    return false;
+}
+
+// The knot velocities of the spline, then its segments. Newton starts from the chord averages with
+// whole steps; where 50 do not converge, it starts again damped (at most 200 steps). Either way the
+// solve must end with its step below 1e-12 of the largest knot velocity or every residual below 1e-9
+// of its terms' size.
+void solve_spline(Curve::Impl& m, const C2System& sys) {
+    const std::size_t S = m.kr.size();
+    const std::vector<double>& h = sys.h;
+    std::vector<Vec3> w(S + 1);
+    if (m.cyclic) {
         for (std::size_t j = 0; j < S; ++j) {
-            w[j] += x[j];
-            step = std::fmax(step, glm::length(x[j]));
+            const std::size_t i = j == 0 ? S - 1 : j - 1;
+            w[j] = (m.kr[i] + m.kr[j]) / (h[i] + h[j]);
         }
         w[S] = w[0];
-        if (!std::isfinite(step)) throw InvalidArgument("SPLINE_C2: the C2 solve diverged near " + knot_name(m, worst));
-        converged = step <= 1e-12 * wmax;
+    } else {
+        // ends fixed at the end segments' slerp velocities, interior from the chord average
+        w[0] = m.kr[0] / h[0];
+        w[S] = m.kr[S - 1] / h[S - 1];
+        for (std::size_t j = 1; j < S; ++j) w[j] = (m.kr[j - 1] + m.kr[j]) / (h[j - 1] + h[j]);
     }
-    if (!converged && !(residual <= 1e-9))
-        throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 50 Newton steps; the angular "
-                              "acceleration at " + knot_name(m, worst) + " still jumps by " +
-                              std::to_string(residual) + " of its size");
-    make_spline_segments(m, h, E, w);
+    if (m.cyclic || S > 1) {
+        const std::vector<Vec3> start = w;
+        C2Rows rows;
+        bool solved;
+        try {
+            solved = c2_newton(m, sys, w, false, 50, rows) || rows.residual <= 1e-9;
+        } catch (const InvalidArgument&) {  // a singular pivot on the way: the damped steps may avoid it
+            solved = false;
+        }
+        if (!solved) {
+            w = start;
+            if (!c2_newton(m, sys, w, true, 200, rows) && !(rows.residual <= 1e-9))
+                throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 250 Newton steps; the angular "
+                                      "acceleration at " + knot_name(m, rows.worst) + " still jumps by " +
+                                      std::to_string(rows.residual) + " of its size");
+        }
+    }
+    make_spline_segments(m, h, sys.E, w);
 }
 
 }  // namespace
@@ -193,84 +302,18 @@ void build_spline(Curve::Impl& m) {
     for (std::size_t i = 0; i < S; ++i)
         QUATCURVE_EXPECTS(glm::length(m.kr[i]) <= kPi * (1.0 + 1e-9) && m.kt[i + 1] > m.kt[i],
                           "build_spline: knot segments turn at most π, knot times increase");
-    std::vector<double> h(S);
-    std::vector<Mat3> E(S), Jr(S);
-    std::vector<JacCoeffs> jc(S);
+    C2System sys;
+    sys.h.resize(S);
+    sys.E.resize(S);
+    sys.Jr.resize(S);
+    sys.jc.resize(S);
     for (std::size_t i = 0; i < S; ++i) {
-        h[i] = m.kt[i + 1] - m.kt[i];
-        E[i] = jr_inv_matrix(m.kr[i]);
-        Jr[i] = jr_matrix(m.kr[i]);
-        jc[i] = jac_coeffs(glm::dot(m.kr[i], m.kr[i]), false);
+        sys.h[i] = m.kt[i + 1] - m.kt[i];
+        sys.E[i] = jr_inv_matrix(m.kr[i]);
+        sys.Jr[i] = jr_matrix(m.kr[i]);
+        sys.jc[i] = jac_coeffs(glm::dot(m.kr[i], m.kr[i]), false);
     }
-    if (m.cyclic) {
-        build_periodic_spline(m, h, E, Jr, jc);
-        return;
-    }
-    // knot velocities: ends fixed, interior from the chord average, then Newton
-    std::vector<Vec3> w(S + 1);
-    w[0] = m.kr[0] / h[0];
-    w[S] = m.kr[S - 1] / h[S - 1];
-    for (std::size_t j = 1; j < S; ++j) w[j] = (m.kr[j - 1] + m.kr[j]) / (h[j - 1] + h[j]);
-
-    const std::size_t n = S - 1;  // interior unknowns w[1..S-1]
-    if (n > 0) {
-        std::vector<Mat3> L(n), D(n), U(n);
-        std::vector<Vec3> F(n);
-        bool converged = false;
-        double residual = 0.0;
-        std::size_t worst = 1;
-        for (int iter = 0; iter < 50 && !converged; ++iter) {
-            double wmax = 0.0;
-            for (const Vec3& v : w) wmax = std::fmax(wmax, glm::length(v));
-            // residuals and Jacobian blocks of F_j = G_{j−1} − S_j (row m = j − 1)
-            residual = 0.0;
-            for (std::size_t j = 1; j < S; ++j) {
-                const std::size_t i = j - 1;  // segment arriving at knot j
-                const Vec3& r = m.kr[i];
-                const Vec3 a = h[i] * w[i], b = h[i] * (E[i] * w[j]);
-                const NTerm nt = n_term(r, b, jc[i]);
-                const Vec3 G = (nt.value + Jr[i] * (-6.0 * r + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
-                const Vec3& r1 = m.kr[j];
-                const Vec3 a1 = h[j] * w[j], b1 = h[j] * (E[j] * w[j + 1]);
-                const Vec3 Sj = (6.0 * r1 - 4.0 * a1 - 2.0 * b1) / (h[j] * h[j]);
-                F[j - 1] = G - Sj;
-                const double size = glm::length(G) + glm::length(Sj);
-                const double rel = size > 0.0 ? glm::length(F[j - 1]) / size : 0.0;
-                if (!(rel <= residual)) {
-                    residual = rel;
-                    worst = j;
-                }
-                L[j - 1] = (2.0 / h[i]) * Jr[i];
-                D[j - 1] = (1.0 / h[i]) * (nt.jac * E[i]) + Mat3(4.0 * (1.0 / h[i] + 1.0 / h[j]));
-                U[j - 1] = (2.0 / h[j]) * E[j];
-            }
-            // block Thomas: J·Δ = −F
-            std::vector<Mat3> Dinv(n);
-            std::vector<Vec3> y(n);
-            Dinv[0] = checked_inverse(D[0], m, 1);
-            y[0] = -F[0];
-            for (std::size_t k = 1; k < n; ++k) {
-                const Mat3 f = L[k] * Dinv[k - 1];
-                Dinv[k] = checked_inverse(D[k] - f * U[k - 1], m, k + 1);
-                y[k] = -F[k] - f * y[k - 1];
-            }
-            double step = 0.0;
-            Vec3 x = Dinv[n - 1] * y[n - 1];
-            for (std::size_t k = n; k-- > 0;) {
-                if (k < n - 1) x = Dinv[k] * (y[k] - U[k] * x);
-                w[k + 1] += x;
-                step = std::fmax(step, glm::length(x));
-            }
-            if (!std::isfinite(step))
-                throw InvalidArgument("SPLINE_C2: the C2 solve diverged near " + knot_name(m, worst));
-            converged = step <= 1e-12 * wmax;
-        }
-        if (!converged && !(residual <= 1e-9))
-            throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 50 Newton steps; the angular "
-                                  "acceleration at " + knot_name(m, worst) + " still jumps by " +
-                                  std::to_string(residual) + " of its size");
-    }
-    make_spline_segments(m, h, E, w);
+    solve_spline(m, sys);
 }
 
 // Per run of times in one segment, four samples at a time (curve_simd.hpp): v(s) = Q·(0, ρ(s)) by
