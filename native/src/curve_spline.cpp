@@ -19,9 +19,9 @@
 //
 // The solve is checked: Newton stops when its step is below 1e-12 of the largest knot velocity; where
 // 50 whole steps do not get there (or meet a singular pivot block), it starts again with damped
-// steps (solve_spline). A solve that ends neither converged nor with every residual below 1e-9 of its
-// terms' size, or whose damped steps meet a pivot block that is singular or not finite, throws
-// InvalidArgument naming the keys around the knot (the curve is not built half-way). Preconditions: every knot
+// steps, then by continuation in the D-term (solve_spline). A solve that ends neither converged nor
+// with every residual below 1e-9 of its terms' size throws InvalidArgument naming the keys around the
+// knot (the curve is not built half-way). Preconditions: every knot
 // segment turns at most π (Curve splits longer ones), so J_r⁻¹ exists; knot times increase.
 #include <cmath>
 #include <string>
@@ -105,6 +105,7 @@ struct C2System {
     std::vector<double> h;
     std::vector<Mat3> E, Jr;
     std::vector<JacCoeffs> jc;
+    double share = 1.0;  // of the D-term (solve_spline's continuation; the condition itself at 1)
 };
 struct C2Rows {
     std::vector<Mat3> L, D, U;
@@ -129,7 +130,11 @@ void c2_rows(const Curve::Impl& m, const C2System& sys, const std::vector<Vec3>&
         const std::size_t i = j == 0 ? S - 1 : j - 1;  // the segment arriving at it (across a loop's seam)
         const Vec3& rv = m.kr[i];
         const Vec3 a = h[i] * w[i], b = h[i] * (sys.E[i] * w[j]);
-        const NTerm nt = n_term(rv, b, sys.jc[i]);
+        NTerm nt = n_term(rv, b, sys.jc[i]);
+        if (sys.share != 1.0) {
+            nt.value *= sys.share;
+            nt.jac *= sys.share;
+        }
         const Vec3 G = (nt.value + sys.Jr[i] * (-6.0 * rv + 2.0 * a + 4.0 * b)) / (h[i] * h[i]);
         const Vec3& r1 = m.kr[j];
         const Vec3 a1 = h[j] * w[j], b1 = h[j] * (sys.E[j] * w[j + 1]);
@@ -256,9 +261,10 @@ bool c2_newton(const Curve::Impl& m, const C2System& sys, std::vector<Vec3>& w, 
 }
 
 // The knot velocities of the spline, then its segments. Newton starts from the chord averages with
-// whole steps; where 50 do not converge, it starts again damped (at most 200 steps). Either way the
-// solve must end with its step below 1e-12 of the largest knot velocity or every residual below 1e-9
-// of its terms' size.
+// whole steps; where 50 do not converge, it starts again damped (at most 200 steps); where that stalls
+// too (at a local minimum of Σ|F|²), the D-term is brought in by shares from 0, the linear system
+// (continuation). Each solve must end with its step below 1e-12 of the largest knot velocity or every
+// residual below 1e-9 of its terms' size.
 void solve_spline(Curve::Impl& m, const C2System& sys) {
     const std::size_t S = m.kr.size();
     const std::vector<double>& h = sys.h;
@@ -286,10 +292,39 @@ void solve_spline(Curve::Impl& m, const C2System& sys) {
         }
         if (!solved) {
             w = start;
-            if (!c2_newton(m, sys, w, true, 200, rows) && !(rows.residual <= 1e-9))
-                throw InvalidArgument("SPLINE_C2: the C2 solve did not converge in 250 Newton steps; the angular "
-                                      "acceleration at " + knot_name(m, rows.worst) + " still jumps by " +
-                                      std::to_string(rows.residual) + " of its size");
+            solved = c2_newton(m, sys, w, true, 200, rows) || rows.residual <= 1e-9;
+        }
+        if (!solved) {
+            // Continuation: the D-term brought in by shares, each solve (damped) starting from the
+            // last share's solution; a share that fails is approached in smaller steps.
+            w = start;
+            C2System part = sys;
+            double share = 0.0, stride = 0.125;
+            for (int stage = 0; stage < 64 && share < 1.0 && stride >= 1.0 / 1024.0; ++stage) {
+                part.share = std::fmin(1.0, share + stride);
+                std::vector<Vec3> tried = w;
+                bool ok;
+                try {
+                    ok = c2_newton(m, part, tried, true, 50, rows) || rows.residual <= 1e-9;
+                } catch (const InvalidArgument&) {
+                    ok = false;
+                }
+                if (ok) {
+                    w = std::move(tried);
+                    share = part.share;
+                    stride = std::fmin(0.5, 2.0 * stride);
+                } else {
+                    stride *= 0.5;
+                }
+            }
+            solved = share == 1.0;
+            if (!solved) {
+                part.share = 1.0;
+                c2_rows(m, part, w, rows);
+                throw InvalidArgument("SPLINE_C2: the C2 solve did not converge (Newton's steps, damped, and "
+                                      "brought in by steps); the angular acceleration at " + knot_name(m, rows.worst) +
+                                      " still jumps by " + std::to_string(rows.residual) + " of its size");
+            }
         }
     }
     make_spline_segments(m, h, sys.E, w);
