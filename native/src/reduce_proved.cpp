@@ -232,6 +232,18 @@ std::vector<Piece> make_pieces(const std::vector<double>& times, const Reference
     return pieces;
 }
 
+// The samples of a piece: those whose float32 frames lie within its ends (float32 frames). A sample
+// time that is not a float32 frame (3.3 + 40 × 0.25 in doubles) rounds to the frame Blender shows
+// there, which may be a piece's end: compared as doubles it fell outside, and the interval between
+// it and the piece's last sample inside was proved by neither piece.
+std::vector<double> piece_span(const std::vector<double>& samples, const Piece& piece) {
+    const auto from = std::lower_bound(samples.begin(), samples.end(), piece.t0,
+                                       [](double s, double t0) { return static_cast<float>(s) < t0; });
+    const auto to = std::upper_bound(samples.begin(), samples.end(), piece.t1,
+                                     [](double t1, double s) { return t1 < static_cast<float>(s); });
+    return std::vector<double>(from, to);
+}
+
 // The reduced keys' playback against the reference over every piece (`samples`: the samples of the
 // reduction, whose times inside a piece are the proof's evaluated times there); pieces whose keys
 // are those proved last keep their proof.
@@ -242,9 +254,7 @@ PlaybackBound prove_pieces(const ReducedKeys& keys, const RotationMode& mode, co
         std::vector<FCurveKeys> sliced;
         for (const ReducedChannel& ch : keys.channels) sliced.push_back(slice_keys(ch, piece.t0, piece.t1));
         if (!piece.proved || !same_keys(sliced, piece.keys)) {
-            const auto from = std::lower_bound(samples.begin(), samples.end(), piece.t0);
-            const auto to = std::upper_bound(samples.begin(), samples.end(), piece.t1);
-            const std::vector<double> span(from, to);
+            const std::vector<double> span = piece_span(samples, piece);
             const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * span.size());
             const PlaybackMotion reduced(sliced, keys.interpolation, mode);
             const Motion& reference = piece.reference ? *piece.reference : whole_reference;
@@ -267,9 +277,7 @@ PlaybackBound tighten_pieces(const ReducedKeys& keys, const RotationMode& mode, 
     for (Piece& piece : pieces) {
         PlaybackBound& proof = piece.proof;
         if (!proof.proven()) {
-            const auto from = std::lower_bound(samples.begin(), samples.end(), piece.t0);
-            const auto to = std::upper_bound(samples.begin(), samples.end(), piece.t1);
-            const std::vector<double> span(from, to);
+            const std::vector<double> span = piece_span(samples, piece);
             const std::size_t cap = std::max(kMinEvaluations, kEvaluationsPerSample * span.size());
             const PlaybackMotion reduced(piece.keys, keys.interpolation, mode);
             tighten_proof(reduced, piece.reference ? *piece.reference : whole_reference, span, kMinStep, cap, proof);

@@ -785,6 +785,50 @@ TEST(ReduceProved, ConversionIsProvedAgainstTheOriginalModesPlayback) {
                    "channels");
 }
 
+// Samples at times that are not float32 frames (the add-on's 3.3 + k/4 in doubles: 43.29999995 where
+// Blender shows 43.2999992): the proof's pieces end at float32 frames, and a sample just above a
+// piece's end was left out of it, so the interval from the piece's last sample inside to its end was
+// proved by no piece. Axis-angle LINEAR keys turning 2 rad a frame (a random test scene, seed 438),
+// converted to XYZ: before, "proved within 0.05°" while the playback left it by 0.065° at frame
+// 43.24, inside such an interval; now every bound holds at 64 points per frame.
+TEST(ReduceProved, SampleTimesOffFloat32FramesAreProvedToThePiecesEnds) {
+    std::mt19937 rng(29);
+    const double tol = 0.05 * kDeg;
+    const RotationMode from = parse_rotation_mode("AXIS_ANGLE"), to = parse_rotation_mode("XYZ");
+    const double key_frames[] = {3.3, 11.3, 17.3, 26.3, 32.3, 42.3, 50.3};
+    const double keys[][4] = {{0.5535327326208721, -0.37828509705564234, 0.7118003614530043, -0.32117016045476765},
+                              {-3.1401498459411843, -0.3502923295443603, 0.37700815539832083, 0.06877390984656094},
+                              {5.813096876731867, 0.540931014415736, -1.8689673602982722, -0.16124672739047974},
+                              {-8.086207522345843, -1.3393258604777873, -0.3325337773115098, 0.997769290267673},
+                              {2.992794465226982, -1.2167181678000902, 0.07753812324376615, -0.6839548044433332},
+                              {8.680379348485921, -0.4161041120300296, 0.7809987763937948, -1.0793958152779584},
+                              {-7.360291248313001, 0.32797971066708875, -0.02262184420023024, 0.7536989443933644}};
+    std::vector<FCurveKeys> channels(4);
+    for (std::size_t c = 0; c < 4; ++c)
+        for (std::size_t k = 0; k < 7; ++k) {
+            channels[c].frames.push_back(static_cast<float>(key_frames[k]));
+            channels[c].values.push_back(static_cast<float>(keys[k][c]));
+        }
+    const PlaybackMotion original(channels, KeyInterpolation::LINEAR, from);
+    std::vector<double> times;
+    std::vector<Quat> q;
+    std::vector<std::size_t> forced;
+    for (std::size_t k = 0; k <= 188; ++k) {
+        times.push_back(static_cast<double>(static_cast<float>(3.3)) + 0.25 * static_cast<double>(k));
+        q.push_back(original.at(times.back()));
+        for (std::size_t j = 0; j < 7; ++j)
+            if (static_cast<float>(times.back()) == static_cast<float>(key_frames[j])) forced.push_back(k);
+    }
+    ASSERT_EQ(forced.size(), 7u);
+    ASSERT_NE(static_cast<double>(static_cast<float>(times[160])), times[160]);  // 43.29999995: not a float32 frame
+    const ProvedKeys r = convert_keys_proved(channels, KeyInterpolation::LINEAR, from, to, times,
+                                             quats_to_channels(q, to), forced, tol, 0.01);
+    double where = 0.0;
+    const double d = dense_max(r.keys, to, original, dense_times(times.front(), times.back(), 64, rng), {}, &where);
+    EXPECT_LE(d, r.proof.bound) << d / kDeg << "° at frame " << where << ", proved " << r.proof.bound / kDeg << "°";
+    EXPECT_LE(r.proof.bound, tol);
+}
+
 // A bake's reduction to Euler channels (reduce_curve_proved): SQUAD and SLERP through random keys
 // 10-20 frames apart, reduced to XYZ and ZXY at 0.05°. Paths that swing past gimbal lock between
 // frames change Euler branch between two samples unless the rows are chained again after the proof
