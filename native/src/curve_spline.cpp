@@ -24,6 +24,7 @@
 // knot (the curve is not built half-way). Preconditions: every knot
 // segment turns at most π (Curve splits longer ones), so J_r⁻¹ exists; knot times increase.
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <type_traits>
 
@@ -64,6 +65,13 @@ std::string knot_name(const Curve::Impl& m, std::size_t j) {
     const int seg = m.kseg[j - 1];
     return "the sub-key at frame " + std::to_string(m.kt[j]) + " between keys " + std::to_string(seg) + " and " +
            std::to_string(seg + 1);
+}
+
+// A residual for a message, to three significant digits (a small one is not "0.000000").
+std::string three_digits(double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", x);
+    return text;
 }
 
 // Inverse of a 3×3 pivot block, refused when singular or not finite.
@@ -323,7 +331,7 @@ void solve_spline(Curve::Impl& m, const C2System& sys) {
                 c2_rows(m, part, w, rows);
                 throw InvalidArgument("SPLINE_C2: the C2 solve did not converge (Newton's steps, damped, and "
                                       "brought in by steps); the angular acceleration at " + knot_name(m, rows.worst) +
-                                      " still jumps by " + std::to_string(rows.residual) + " of its size");
+                                      " still jumps by " + three_digits(rows.residual) + " of its size");
             }
         }
     }
