@@ -736,12 +736,17 @@ double Fitter::evaluate_t(std::size_t i, std::size_t j, const int* chans, const 
         }
         err_[k] = e;
         worst = std::max(worst, e);
-        if (worst > give_up) return worst;  // the caller rejects the fit without looking further
+        if (worst > give_up) {  // the caller rejects the fit without looking further
+            buf_end_ = k + 1;
+            return worst;
+        }
         if (norm_failed) {
+            buf_end_ = k + 1;
             between_failed_ = true;
             return std::numeric_limits<double>::infinity();
         }
     }
+    buf_end_ = j;
     if (guard && (worst <= limit || give_up == std::numeric_limits<double>::infinity())) {
         // tan of half the allowed angle: tan(a + b) = (tan a + tan b)/(1 − tan a·tan b).
         const double* between_limits = this->between_limits(limit);
@@ -804,6 +809,13 @@ void Fitter::commit(std::size_t i, std::size_t j, const int* chans, int nc, cons
     for (int a = 0; a < nc; ++a) {
         const int c = chans[a];
         if (nc < C) {  // F: only fits of fewer than all channels read it (State)
+            // A forced fit whose evaluation stopped early (the norm dipped): the values it left out.
+            for (std::size_t k = std::max(buf_end_, i + 1); k < j; ++k) {
+                const double yi = p_.y[i * C + c], yj = p_.y[j * C + c];
+                const double* b = basis(k);
+                buf_[k * C + c] = ipo_ == KeyInterpolation::LINEAR ? yi + (yj - yi) * param(k)
+                                                                   : b[0] * yi + b[1] * p1[a] + b[2] * p2[a] + b[3] * yj;
+            }
             for (std::size_t k = i + 1; k < j; ++k) s_.F[k * C + c] = buf_[k * C + c];
             s_.F[i * C + c] = p_.y[i * C + c];
             s_.F[j * C + c] = p_.y[j * C + c];

@@ -483,6 +483,9 @@ private:
     // few hundred short fits, and zero-filling them was ~9% of its instructions): fitted values (n·C),
     // parameters, weights, errors (n each).
     std::unique_ptr<double[]> buf_, u_, w_, err_;
+    // The end of buf_'s samples the last evaluate() wrote (it stops early at a fit it rejects, or
+    // where the norm dips): commit() computes the rest of a forced fit's values there.
+    std::size_t buf_end_ = 0;
     // BEZIER: the cubic's basis at each interior sample of the segment being fitted (n·4), computed
     // once per fit for all its solves and evaluations.
     std::unique_ptr<double[]> bern_;

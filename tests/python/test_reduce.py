@@ -393,3 +393,34 @@ def test_bad_interpolation():
         quatcurve.reduce_keys(GOOD_T, GOOD_Q, 0.1, "CUBIC")
     with pytest.raises(ValueError, match=r"interpolation"):
         quatcurve.reduce_keys_euler(GOOD_T, GOOD_E, "XYZ", 0.1, interpolation="linear")
+
+
+def test_forced_fit_keeps_defined_values_on_a_heap_of_nans():
+    """A forced fit (one the reducer keeps though it fails) whose evaluation stops early where an axis
+    dips leaves F defined at every sample: before, the samples after the stop kept whatever the heap
+    held, and a later channel's fit read them. With the heap filled with NaN before each call, a
+    SPLINE_C2 bake's reduction of axis-angle keys 0.0125 frame apart (a random test scene, seed 438)
+    failed in every call with 'handle_left[2, 1]: non-finite value'."""
+    keys = np.array([[1.0, -2.980268754079165, 0.06302478871197625, 1.9540329861598387, -0.2306897867089503],
+                     [1.0125000476837158, 6.64834022546668, -0.9233224483255322, 1.2164236000160473,
+                      0.2827292308825601],
+                     [3.012500047683716, -2.2510773692427546, 0.32058283030823403, 0.9746505857346903,
+                      -0.5908557644553475],
+                     [5.012499809265137, 8.640639864043312, -2.3501250817594292, 0.820325180371622,
+                      1.2369785207146804],
+                     [10.012499809265137, -2.807068141441519, -0.46336573508467116, -0.8801893466864883,
+                      -1.7539080810661385],
+                     [13.012499809265137, 6.437512317670247, -0.9258367169293836, 0.24894727039236625,
+                      -0.6185043826671529]])
+    values = keys[:, 1:].astype(np.float32).astype(np.float64)
+    curve = quatcurve.Curve.from_axis_angle(keys[:, 0], values, "SPLINE_C2")
+    frames = np.arange(1.0, 15.0)
+    samples = quatcurve.quats_to_channels(curve.sample(frames), "AXIS_ANGLE", values[0])
+    results = set()
+    for _ in range(10):
+        junk = [np.full(n, np.nan) for n in range(16, 4096, 7)]  # freed: the allocator hands it out again
+        del junk
+        proved = quatcurve.reduce_curve_proved(curve, "AXIS_ANGLE", frames, samples, 0.1 * DEG, "BEZIER", False)
+        results.add(tuple(np.concatenate([np.ravel(ch.handle_left) for ch in proved.keys.channels])))
+    assert len(results) == 1
+    assert np.isfinite(next(iter(results))).all()
