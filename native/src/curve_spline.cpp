@@ -329,8 +329,8 @@ void solve_spline(Curve::Impl& m, const C2System& sys) {
             if (!solved) {
                 part.share = 1.0;
                 c2_rows(m, part, w, rows);
-                throw InvalidArgument("SPLINE_C2: the C2 solve did not converge (Newton's steps, damped, and "
-                                      "brought in by steps); the angular acceleration at " + knot_name(m, rows.worst) +
+                throw InvalidArgument("SPLINE_C2: the C2 solve did not converge (whole, damped and continued "
+                                      "Newton steps); the angular acceleration at " + knot_name(m, rows.worst) +
                                       " still jumps by " + three_digits(rows.residual) + " of its size");
             }
         }
